@@ -1,0 +1,52 @@
+"""trajkit: time-optimal, jerk-limited motion planning for robots and CNC machines.
+
+The public API is re-exported here; see :data:`__all__`.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from .errors import (
+    InfeasibleError,
+    InvalidInputError,
+    SafetyFault,
+    TrajkitError,
+    UnreachableError,
+)
+from .limits import AxisLimits
+from .profiles import (
+    PHASE_NAMES,
+    MoveBatch,
+    Profile,
+    ProfileSample,
+    min_duration,
+    plan_move,
+    plan_moves,
+)
+from .trajectory import SYNC_MODES, Trajectory, TrajectorySample, plan_ptp
+
+__version__ = "0.1.0"
+
+logging.getLogger("trajkit").addHandler(logging.NullHandler())
+
+__all__ = [
+    "__version__",
+    "TrajkitError",
+    "InvalidInputError",
+    "InfeasibleError",
+    "UnreachableError",
+    "SafetyFault",
+    "AxisLimits",
+    "PHASE_NAMES",
+    "Profile",
+    "ProfileSample",
+    "MoveBatch",
+    "plan_move",
+    "plan_moves",
+    "min_duration",
+    "Trajectory",
+    "TrajectorySample",
+    "plan_ptp",
+    "SYNC_MODES",
+]

@@ -1,0 +1,141 @@
+"""Per-axis kinematic limits."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from ._validate import axis_label, check_positive
+from .errors import InvalidInputError
+
+__all__ = ["AxisLimits"]
+
+
+@dataclass(frozen=True)
+class AxisLimits:
+    """Kinematic limits of one axis, validated at construction.
+
+    The *accel* limits (``a_max``, ``j_max``) apply while the axis speeds up
+    (|v| grows), the *decel* limits (``a_max_decel``, ``j_max_decel``) while it
+    slows down (|v| shrinks), whatever the direction of motion (seed 001:
+    J1, A1 versus J2, A2).
+
+    Parameters
+    ----------
+    v_max : float
+        Velocity limit [unit/s], > 0; ``math.inf`` for none.
+    a_max : float
+        Acceleration limit while speeding up [unit/s^2], > 0; ``math.inf``
+        allowed only with a finite ``j_max``.
+    j_max : float
+        Jerk limit while speeding up [unit/s^3], > 0; ``math.inf`` gives the
+        acceleration-limited (trapezoidal) profile.
+    a_max_decel, j_max_decel : float or None
+        The same while slowing down; ``None`` means "same as the accel leg".
+    position_min, position_max : float
+        Position range [unit]; ``-inf``/``inf`` for none.
+    name : str or int or None
+        Axis name used in error messages (e.g. ``"B"`` or ``2``).
+
+    Raises
+    ------
+    InvalidInputError
+        For a non-positive or NaN limit, for ``a`` and ``j`` both infinite on
+        one leg, or for ``position_min > position_max``. The message names the
+        field, the axis and the value.
+    """
+
+    v_max: float
+    a_max: float
+    j_max: float
+    a_max_decel: float | None = None
+    j_max_decel: float | None = None
+    position_min: float = -math.inf
+    position_max: float = math.inf
+    name: str | int | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        ax = self.name
+        v = check_positive(self.v_max, "maximum velocity limit v_max", ax, allow_inf=True)
+        a = check_positive(self.a_max, "maximum acceleration limit a_max", ax, allow_inf=True)
+        j = check_positive(self.j_max, "maximum jerk limit j_max", ax, allow_inf=True)
+        ad = a if self.a_max_decel is None else check_positive(
+            self.a_max_decel, "maximum deceleration limit a_max_decel", ax, allow_inf=True
+        )
+        jd = j if self.j_max_decel is None else check_positive(
+            self.j_max_decel, "maximum deceleration jerk limit j_max_decel", ax, allow_inf=True
+        )
+        if math.isinf(a) and math.isinf(j):
+            raise InvalidInputError(
+                f"a_max and j_max{axis_label(ax)} cannot both be infinite "
+                "(the velocity would jump)"
+            )
+        if math.isinf(ad) and math.isinf(jd):
+            raise InvalidInputError(
+                f"a_max_decel and j_max_decel{axis_label(ax)} cannot both be infinite "
+                "(the velocity would jump)"
+            )
+        try:
+            pmin = float(self.position_min)
+            pmax = float(self.position_max)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"position range{axis_label(ax)} must be numbers, got "
+                f"[{self.position_min!r}, {self.position_max!r}]"
+            ) from None
+        if math.isnan(pmin) or math.isnan(pmax):
+            raise InvalidInputError(
+                f"position range{axis_label(ax)} must not be NaN, got [{pmin}, {pmax}]"
+            )
+        if pmin == math.inf or pmax == -math.inf:
+            raise InvalidInputError(
+                f"position range{axis_label(ax)} is empty: [{pmin}, {pmax}]"
+            )
+        if pmin > pmax:
+            raise InvalidInputError(
+                f"position_min {pmin} is above position_max {pmax}{axis_label(ax)}"
+            )
+        object.__setattr__(self, "v_max", v)
+        object.__setattr__(self, "a_max", a)
+        object.__setattr__(self, "j_max", j)
+        object.__setattr__(self, "a_max_decel", ad)
+        object.__setattr__(self, "j_max_decel", jd)
+        object.__setattr__(self, "position_min", pmin)
+        object.__setattr__(self, "position_max", pmax)
+
+    @property
+    def symmetric(self) -> bool:
+        """True when the decel leg has the same limits as the accel leg."""
+        return self.a_max == self.a_max_decel and self.j_max == self.j_max_decel
+
+    def with_name(self, name: str | int | None) -> "AxisLimits":
+        """Return a copy carrying ``name`` for error messages."""
+        return AxisLimits(
+            self.v_max, self.a_max, self.j_max, self.a_max_decel, self.j_max_decel,
+            self.position_min, self.position_max, name,
+        )
+
+    def scaled(self, factor: float) -> "AxisLimits":
+        """Return limits for a coordinate scaled by ``factor`` > 0 (unit change).
+
+        Velocity, acceleration, jerk and the range are all multiplied by
+        ``factor``; e.g. ``limits_deg.scaled(math.pi / 180)`` gives radians.
+        """
+        f = check_positive(factor, "scale factor")
+        return AxisLimits(
+            self.v_max * f, self.a_max * f, self.j_max * f,
+            self.a_max_decel * f, self.j_max_decel * f,
+            self.position_min * f, self.position_max * f, self.name,
+        )
+
+    def check_position(self, value: float, field_name: str = "position") -> float:
+        """Raise unless ``value`` is finite and inside the position range."""
+        x = float(value)
+        if not math.isfinite(x):
+            raise InvalidInputError(f"{field_name}{axis_label(self.name)} must be finite, got {x!r}")
+        if x < self.position_min or x > self.position_max:
+            raise InvalidInputError(
+                f"{field_name} {x!r}{axis_label(self.name)} is outside the position range "
+                f"[{self.position_min}, {self.position_max}]"
+            )
+        return x

@@ -1,0 +1,390 @@
+"""One-axis rest-to-rest profiles: :class:`Profile` and :func:`plan_move`."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._constants import DURATION_RTOL, PHASE_EPS
+from .._validate import axis_label
+from ..errors import InfeasibleError, InvalidInputError
+from ..limits import AxisLimits
+from . import _scalar as K
+
+__all__ = ["Profile", "ProfileSample", "plan_move", "PHASE_NAMES"]
+
+#: Names of the seven phases, in order.
+PHASE_NAMES = (
+    "jerk_up",        # accel leg: jerk +J1 (acceleration builds up)
+    "const_accel",    # accel leg: constant acceleration A1
+    "jerk_down",      # accel leg: jerk -J1 (acceleration back to zero)
+    "cruise",         # constant velocity
+    "decel_jerk_in",  # decel leg: jerk -J2
+    "const_decel",    # decel leg: constant deceleration A2
+    "decel_jerk_out", # decel leg: jerk +J2
+)
+
+
+@dataclass(frozen=True)
+class ProfileSample:
+    """Kinematic state sampled at one or more times.
+
+    Each attribute is a float64 array shaped like the time argument
+    (a 0-d array for a scalar time).
+
+    Attributes
+    ----------
+    position : ndarray [unit]
+    velocity : ndarray [unit/s]
+    acceleration : ndarray [unit/s^2]
+    jerk : ndarray [unit/s^3]
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray
+
+
+class Profile:
+    """A rest-to-rest, piecewise-constant-jerk profile of one axis.
+
+    Build it with :func:`plan_move`. Seven phases (some may last zero): jerk
+    up, constant acceleration, jerk down, cruise, then the same mirrored for
+    the deceleration leg (with its own jerk and acceleration).
+
+    Attributes
+    ----------
+    start, goal : float
+        Start and goal position [unit].
+    duration : float
+        Total duration [s].
+    min_duration : float
+        Minimum duration of this move under its limits [s]; equals
+        ``duration`` unless a longer duration was requested.
+    phase_durations : tuple of 7 float
+        Duration of each phase [s] (see :data:`PHASE_NAMES`).
+    jerks : tuple of 7 float
+        Constant jerk in each phase [unit/s^3] (signed; zero for a phase of
+        zero duration and for the infinite-jerk legs of a trapezoid).
+    peak_velocity : float
+        Largest speed reached, signed with the direction [unit/s].
+    peak_acceleration, peak_deceleration : float
+        Largest |acceleration| in the accel leg and the decel leg [unit/s^2].
+    limits : AxisLimits
+        The limits the profile was planned under.
+    """
+
+    __slots__ = (
+        "start", "goal", "duration", "min_duration", "phase_durations", "jerks",
+        "peak_velocity", "peak_acceleration", "peak_deceleration", "limits",
+        "_cache",
+    )
+
+    def __init__(
+        self,
+        start: float,
+        goal: float,
+        duration: float,
+        min_duration: float,
+        phase_durations: tuple[float, ...],
+        jerks: tuple[float, ...],
+        peak_velocity: float,
+        peak_acceleration: float,
+        peak_deceleration: float,
+        limits: AxisLimits,
+    ) -> None:
+        self.start = start
+        self.goal = goal
+        self.duration = duration
+        self.min_duration = min_duration
+        self.phase_durations = phase_durations
+        self.jerks = jerks
+        self.peak_velocity = peak_velocity
+        self.peak_acceleration = peak_acceleration
+        self.peak_deceleration = peak_deceleration
+        self.limits = limits
+        self._cache: Any = None
+
+    # ------------------------------------------------------------------ info
+    @property
+    def distance(self) -> float:
+        """Signed displacement ``goal - start`` [unit]."""
+        return self.goal - self.start
+
+    @property
+    def direction(self) -> float:
+        """+1.0, -1.0, or 0.0 for a zero move."""
+        d = self.goal - self.start
+        return 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
+
+    @property
+    def reached(self) -> frozenset[str]:
+        """Names of the limits that the profile reaches (its shape).
+
+        A subset of ``{"v_max", "a_max", "a_max_decel"}``: ``"v_max"`` when
+        it cruises at the velocity limit, ``"a_max"`` / ``"a_max_decel"`` when
+        the accel / decel leg has a constant-acceleration phase at its limit.
+        """
+        out = set()
+        lim = self.limits
+        if self.phase_durations[3] > 0.0 and abs(self.peak_velocity) >= lim.v_max * (1 - 1e-12):
+            out.add("v_max")
+        if self.peak_acceleration >= lim.a_max * (1 - 1e-12):
+            out.add("a_max")
+        if self.peak_deceleration >= lim.a_max_decel * (1 - 1e-12):
+            out.add("a_max_decel")
+        return frozenset(out)
+
+    @property
+    def shape(self) -> str:
+        """Short name of the profile shape, e.g. ``"7-phase"`` or ``"no-cruise"``.
+
+        One of ``"zero"`` (no motion), ``"7-phase"`` (every phase present),
+        or the phases that are absent joined by ``+``:
+        ``"no-cruise"``, ``"no-const-accel"``, ``"no-const-decel"``, and
+        combinations like ``"no-const-accel+no-const-decel+no-cruise"``.
+        """
+        if self.goal == self.start:
+            return "zero"
+        eps = PHASE_EPS * self.duration
+        t = self.phase_durations
+        missing = []
+        if t[1] <= eps:
+            missing.append("no-const-accel")
+        if t[5] <= eps:
+            missing.append("no-const-decel")
+        if t[3] <= eps:
+            missing.append("no-cruise")
+        return "+".join(missing) if missing else "7-phase"
+
+    @property
+    def phase_times(self) -> np.ndarray:
+        """Phase boundary times, shape (8,) [s]: 0, end of phase 1, ..., duration."""
+        return self._boundaries()[0].copy()
+
+    def boundary_states(self) -> np.ndarray:
+        """Exact state at every phase boundary.
+
+        Returns
+        -------
+        ndarray, shape (8, 3)
+            Rows: the 8 boundary times; columns: position, velocity,
+            acceleration (the acceleration is the value *entering* the next
+            phase; for an infinite-jerk trapezoid it jumps there).
+        """
+        tb, p, v, a, _ = self._boundaries()
+        out = np.empty((8, 3))
+        out[:7, 0], out[:7, 1], out[:7, 2] = p, v, a
+        out[7] = (self.goal, 0.0, 0.0)
+        return out
+
+    def _boundaries(self):
+        c = self._cache
+        if c is not None:
+            return c
+        s = self.direction
+        t = self.phase_durations
+        j = self.jerks
+        a1 = s * self.peak_acceleration
+        a2 = -s * self.peak_deceleration
+        acc = (0.0, a1, a1, 0.0, 0.0, a2, a2)
+        tb = np.empty(8)
+        p = np.empty(7)
+        v = np.empty(7)
+        pk, vk, tk = self.start, 0.0, 0.0
+        for k in range(7):
+            tb[k] = tk
+            p[k] = pk
+            v[k] = vk
+            dt, ak, jk = t[k], acc[k], j[k]
+            pk = pk + dt * (vk + dt * (0.5 * ak + dt * jk / 6.0))
+            vk = vk + dt * (ak + 0.5 * dt * jk)
+            tk += dt
+        tb[7] = self.duration
+        c = (tb, p, v, np.array(acc), np.array(j, dtype=float))
+        self._cache = c
+        return c
+
+    # -------------------------------------------------------------- sampling
+    def sample(self, t: Any) -> ProfileSample:
+        """Evaluate the profile at time(s) ``t`` [s] by exact integration.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (n,)
+            Times [s]. Times before 0 hold the start state, times after
+            ``duration`` hold the goal (exactly).
+
+        Returns
+        -------
+        ProfileSample
+            Arrays shaped like ``t``.
+        """
+        tb, P, V, A, J = self._boundaries()
+        tt = np.asarray(t, dtype=np.float64)
+        tc = np.clip(tt, 0.0, self.duration)
+        idx = np.searchsorted(tb[1:7], tc, side="right")
+        dt = tc - tb[idx]
+        a = A[idx]
+        j = J[idx]
+        v = V[idx]
+        pos = P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+        vel = v + dt * (a + 0.5 * dt * j)
+        acc = a + dt * j
+        after = tt >= self.duration
+        before = tt < 0.0
+        if np.any(after) or np.any(before):
+            pos = np.where(after, self.goal, np.where(before, self.start, pos))
+            vel = np.where(after | before, 0.0, vel)
+            acc = np.where(after | before, 0.0, acc)
+            j = np.where(after | before, 0.0, j)
+        return ProfileSample(pos, vel, acc, j)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (SI / axis units)."""
+        return {
+            "start": self.start,
+            "goal": self.goal,
+            "duration_s": self.duration,
+            "min_duration_s": self.min_duration,
+            "shape": self.shape,
+            "reached": sorted(self.reached),
+            "peak_velocity": self.peak_velocity,
+            "peak_acceleration": self.peak_acceleration,
+            "peak_deceleration": self.peak_deceleration,
+            "phases": [
+                {"name": n, "duration_s": d, "jerk": j}
+                for n, d, j in zip(PHASE_NAMES, self.phase_durations, self.jerks)
+            ],
+        }
+
+    def __repr__(self) -> str:
+        return (
+            f"Profile(start={self.start!r}, goal={self.goal!r}, duration={self.duration!r}, "
+            f"shape={self.shape!r})"
+        )
+
+
+def _build(start, goal, limits, d, vc, duration, min_duration, sign):
+    a1, j1 = limits.a_max, limits.j_max
+    a2, j2 = limits.a_max_decel, limits.j_max_decel
+    tj1, ta1, ap1 = K.leg_phases(vc, a1, j1)
+    tj2, ta2, ap2 = K.leg_phases(vc, a2, j2)
+    ramps = 2.0 * tj1 + ta1 + 2.0 * tj2 + ta2
+    if duration is None:
+        tv = (d - 0.5 * vc * (2.0 * tj1 + ta1 + 2.0 * tj2 + ta2)) / vc if vc > 0.0 else 0.0
+        if tv < 0.0:
+            tv = 0.0
+        duration = ramps + tv
+    else:
+        tv = duration - ramps
+        if tv < 0.0:
+            tv = 0.0
+    jj1 = sign * j1 if tj1 > 0.0 else 0.0
+    jj2 = sign * j2 if tj2 > 0.0 else 0.0
+    return Profile(
+        start, goal, duration, min_duration if min_duration is not None else duration,
+        (tj1, ta1, tj1, tv, tj2, ta2, tj2),
+        (jj1, 0.0, -jj1, 0.0, -jj2, 0.0, jj2),
+        sign * vc, ap1, ap2, limits,
+    )
+
+
+def min_duration(distance: float, limits: AxisLimits) -> float:
+    """Minimum duration [s] of a rest-to-rest move over ``distance`` [unit]."""
+    d = abs(float(distance))
+    if d == 0.0:
+        return 0.0
+    a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
+    vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2)
+    t = K.leg_time(vp, a1, j1) + K.leg_time(vp, a2, j2)
+    if vp == limits.v_max:
+        t += (d - 0.5 * vp * t) / vp
+    return t
+
+
+def plan_move(
+    start: float, goal: float, limits: AxisLimits, duration: float | None = None
+) -> Profile:
+    """Plan a rest-to-rest, jerk-limited move of one axis.
+
+    With ``duration=None`` the profile is time-optimal: it reaches the
+    velocity limit if the distance allows (7 phases), else the highest peak
+    velocity the distance allows, with or without constant-acceleration
+    phases in either leg (seeds 000 and 001; asymmetric limits supported).
+    With ``duration=T`` the cruise velocity is lowered so that the profile
+    lasts exactly ``T`` while keeping every limit.
+
+    Parameters
+    ----------
+    start, goal : float
+        Positions [unit]; must be finite and inside the limits' range.
+    limits : AxisLimits
+        Velocity, acceleration and jerk limits (accel and decel legs).
+    duration : float, optional
+        Requested duration [s] (>= the minimum duration).
+
+    Returns
+    -------
+    Profile
+
+    Raises
+    ------
+    InvalidInputError
+        NaN/inf positions, positions outside the range, a bad duration.
+    InfeasibleError
+        ``duration`` below the minimum duration (the message and
+        ``error.minimum`` give the minimum).
+
+    Examples
+    --------
+    >>> from trajkit import AxisLimits, plan_move
+    >>> p = plan_move(0.0, 1.0, AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0))
+    >>> round(p.duration, 6)
+    1.7
+    """
+    if not isinstance(limits, AxisLimits):
+        raise InvalidInputError(
+            f"limits must be an AxisLimits, got {type(limits).__name__}"
+        )
+    s = limits.check_position(start, "start")
+    g = limits.check_position(goal, "goal")
+    if duration is not None:
+        try:
+            T = float(duration)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"duration must be a number of seconds, got {duration!r}") from None
+        if not math.isfinite(T) or T < 0.0:
+            raise InvalidInputError(
+                f"duration{axis_label(limits.name)} must be finite and >= 0 s, got {T!r}"
+            )
+    return _plan_unchecked(s, g, limits, duration if duration is None else T)
+
+
+def _plan_unchecked(s: float, g: float, limits: AxisLimits, T: float | None) -> Profile:
+    d = g - s
+    sign = 1.0 if d > 0 else -1.0
+    d = abs(d)
+    if d == 0.0:
+        dur = 0.0 if T is None else T
+        return Profile(s, g, dur, 0.0, (0.0, 0.0, 0.0, dur, 0.0, 0.0, 0.0),
+                       (0.0,) * 7, 0.0, 0.0, 0.0, limits)
+    a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
+    vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2)
+    tmin = K.leg_time(vp, a1, j1) + K.leg_time(vp, a2, j2)
+    if vp == limits.v_max:
+        tmin += max(d - 0.5 * vp * tmin, 0.0) / vp
+    if T is None or T <= tmin:
+        if T is not None and T < tmin * (1.0 - DURATION_RTOL):
+            raise InfeasibleError(
+                f"duration {T!r} s{axis_label(limits.name)} is below the minimum "
+                f"duration {tmin!r} s for a move of {d!r}",
+                minimum=tmin,
+            )
+        return _build(s, g, limits, d, vp, tmin, tmin, sign)
+    vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2)
+    return _build(s, g, limits, d, vc, T, tmin, sign)

@@ -1,0 +1,297 @@
+"""Multi-axis trajectories: synchronised point-to-point motion (:func:`plan_ptp`)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from ._validate import check_array, check_positive
+from .errors import InvalidInputError
+from .limits import AxisLimits
+from .profiles.profile import Profile, _plan_unchecked, min_duration
+
+__all__ = ["Trajectory", "TrajectorySample", "plan_ptp", "SYNC_MODES"]
+
+#: Accepted values of ``plan_ptp(..., sync=...)``.
+SYNC_MODES = ("time", "phase", "none")
+
+
+@dataclass(frozen=True)
+class TrajectorySample:
+    """States of all axes at the sampled times.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Times [s].
+    position, velocity, acceleration, jerk : ndarray, shape (n, n_axes)
+        Per-axis values [unit, unit/s, unit/s^2, unit/s^3].
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray
+
+
+class Trajectory:
+    """A multi-axis trajectory made of one :class:`Profile` per axis.
+
+    Attributes
+    ----------
+    axes : tuple of Profile
+        The per-axis profiles (all start at t = 0).
+    duration : float
+        The longest axis duration [s].
+    sync : str
+        How the axes were synchronised ("time", "phase" or "none").
+    names : tuple of str
+        Axis names (for export headers).
+    """
+
+    def __init__(self, axes: Sequence[Profile], sync: str = "none",
+                 names: Sequence[str] | None = None) -> None:
+        self.axes = tuple(axes)
+        self.sync = sync
+        self.duration = max((p.duration for p in self.axes), default=0.0)
+        if names is None:
+            names = [
+                str(p.limits.name) if p.limits.name is not None else f"q{i}"
+                for i, p in enumerate(self.axes)
+            ]
+        self.names = tuple(names)
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.axes)
+
+    @property
+    def start(self) -> np.ndarray:
+        """Start positions, shape (n_axes,)."""
+        return np.array([p.start for p in self.axes])
+
+    @property
+    def goal(self) -> np.ndarray:
+        """Goal positions, shape (n_axes,)."""
+        return np.array([p.goal for p in self.axes])
+
+    def sample(self, t: Any) -> TrajectorySample:
+        """Sample every axis at times ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (n,)
+            Times [s]; outside an axis' duration the axis holds its start or
+            goal state.
+
+        Returns
+        -------
+        TrajectorySample
+            Arrays of shape (n, n_axes) (n = 1 for a scalar ``t``).
+        """
+        tt = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        n = tt.shape[0]
+        out = np.empty((4, n, self.n_axes))
+        for k, prof in enumerate(self.axes):
+            s = prof.sample(tt)
+            out[0, :, k] = s.position
+            out[1, :, k] = s.velocity
+            out[2, :, k] = s.acceleration
+            out[3, :, k] = s.jerk
+        return TrajectorySample(tt, out[0], out[1], out[2], out[3])
+
+    def times(self, period: float) -> np.ndarray:
+        """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``."""
+        dt = check_positive(period, "period")
+        n = int(math.floor(self.duration / dt + 1e-9))
+        t = np.arange(n + 1) * dt
+        if t[-1] < self.duration:
+            t = np.append(t, self.duration)
+        return t
+
+    def to_dict(self) -> dict:
+        """JSON-ready description: duration, sync mode and per-axis profiles."""
+        return {
+            "duration_s": self.duration,
+            "sync": self.sync,
+            "axes": [dict(name=nm, **p.to_dict()) for nm, p in zip(self.names, self.axes)],
+        }
+
+    def to_json(self, path: str | os.PathLike | None = None, indent: int = 2) -> str:
+        """Return (and optionally write to ``path``) the JSON description."""
+        text = json.dumps(self.to_dict(), indent=indent)
+        if path is not None:
+            _atomic_write(path, text)
+        return text
+
+    def to_csv(self, path: str | os.PathLike | None = None, period: float = 0.001) -> str:
+        """Samples at a fixed period as CSV text (and optionally to ``path``).
+
+        Columns: ``t`` [s], then ``<axis>_pos``, ``<axis>_vel``, ``<axis>_acc``
+        for each axis.
+        """
+        t = self.times(period)
+        s = self.sample(t)
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        header = ["t"]
+        for nm in self.names:
+            header += [f"{nm}_pos", f"{nm}_vel", f"{nm}_acc"]
+        w.writerow(header)
+        cols = [t]
+        for k in range(self.n_axes):
+            cols += [s.position[:, k], s.velocity[:, k], s.acceleration[:, k]]
+        for row in np.column_stack(cols):
+            w.writerow([repr(float(x)) for x in row])
+        text = buf.getvalue()
+        if path is not None:
+            _atomic_write(path, text)
+        return text
+
+    def __repr__(self) -> str:
+        return f"Trajectory(n_axes={self.n_axes}, duration={self.duration!r}, sync={self.sync!r})"
+
+
+def _atomic_write(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` via a temporary file, so nothing half-written remains."""
+    path = os.fspath(path)
+    tmp = f"{path}.tmp-{os.getpid()}"
+    try:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+
+
+def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[AxisLimits]:
+    if isinstance(limits, AxisLimits):
+        return [limits.with_name(i) if limits.name is None else limits for i in range(n)]
+    try:
+        lims = list(limits)
+    except TypeError:
+        raise InvalidInputError(
+            f"limits must be an AxisLimits or a sequence of them, got {type(limits).__name__}"
+        ) from None
+    if len(lims) != n:
+        raise InvalidInputError(
+            f"limits has {len(lims)} entries but start/goal have {n} axes"
+        )
+    out = []
+    for i, lim in enumerate(lims):
+        if not isinstance(lim, AxisLimits):
+            raise InvalidInputError(
+                f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}"
+            )
+        out.append(lim.with_name(i) if lim.name is None else lim)
+    return out
+
+
+def plan_ptp(
+    start: Any,
+    goal: Any,
+    limits: AxisLimits | Sequence[AxisLimits],
+    sync: str = "time",
+    duration: float | None = None,
+) -> Trajectory:
+    """Plan a synchronised, jerk-limited point-to-point move of several axes.
+
+    Parameters
+    ----------
+    start, goal : array_like, shape (n_axes,)
+        Positions per axis [axis unit].
+    limits : AxisLimits or sequence of n_axes AxisLimits
+        One set of limits for every axis, or one per axis.
+    sync : {"time", "phase", "none"}
+        ``"time"``: every axis starts and arrives together at the slowest
+        axis' minimum time (seed 002's synchronisation, with S-curves), each
+        keeping its own limits. ``"phase"``: every axis follows the same
+        normalised profile, so the motion is a straight line in joint space,
+        within every axis' limits. ``"none"``: each axis at its own minimum
+        time.
+    duration : float, optional
+        With ``"time"`` or ``"phase"``: stretch the motion to exactly this
+        duration [s] (must be >= the synchronised minimum).
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    InvalidInputError
+        NaN/inf positions, mismatched axis counts, positions outside an
+        axis' range, an unknown ``sync``.
+    InfeasibleError
+        ``duration`` below the minimum.
+    """
+    if sync not in SYNC_MODES:
+        raise InvalidInputError(f"sync must be one of {SYNC_MODES}, got {sync!r}")
+    s = check_array(start, "start", ndim=1)
+    g = check_array(goal, "goal", ndim=1)
+    if s.shape != g.shape:
+        raise InvalidInputError(
+            f"start has {s.size} axes but goal has {g.size}"
+        )
+    n = s.size
+    if n == 0:
+        raise InvalidInputError("start and goal must have at least one axis")
+    lims = _coerce_limits(limits, n)
+    sl = [lim.check_position(x, "start") for lim, x in zip(lims, s.tolist())]
+    gl = [lim.check_position(x, "goal") for lim, x in zip(lims, g.tolist())]
+    if duration is not None:
+        duration = float(duration)
+        if not math.isfinite(duration) or duration < 0:
+            raise InvalidInputError(f"duration must be finite and >= 0 s, got {duration!r}")
+        if sync == "none":
+            raise InvalidInputError('duration cannot be given with sync="none"')
+
+    if sync == "none":
+        return Trajectory([_plan_unchecked(a, b, lim, None) for a, b, lim in zip(sl, gl, lims)], "none")
+
+    if sync == "time":
+        tmin = max(min_duration(b - a, lim) for a, b, lim in zip(sl, gl, lims))
+        T = tmin if duration is None else duration
+        if duration is not None and duration < tmin * (1.0 - 1e-12):
+            from .errors import InfeasibleError
+            raise InfeasibleError(
+                f"duration {duration!r} s is below the minimum synchronised duration {tmin!r} s",
+                minimum=tmin,
+            )
+        axes = [_plan_unchecked(a, b, lim, T) for a, b, lim in zip(sl, gl, lims)]
+        return Trajectory(axes, "time")
+
+    # phase: one normalised profile u(t) in [0, 1]; axis k = s_k + D_k u(t).
+    dist = [abs(b - a) for a, b in zip(sl, gl)]
+    moving = [k for k in range(n) if dist[k] > 0.0]
+    if not moving:
+        T = 0.0 if duration is None else duration
+        return Trajectory([_plan_unchecked(a, b, lim, T) for a, b, lim in zip(sl, gl, lims)], "phase")
+    vn = min(lims[k].v_max / dist[k] for k in moving)
+    an = min(lims[k].a_max / dist[k] for k in moving)
+    jn = min(lims[k].j_max / dist[k] for k in moving)
+    adn = min(lims[k].a_max_decel / dist[k] for k in moving)
+    jdn = min(lims[k].j_max_decel / dist[k] for k in moving)
+    unit = AxisLimits(vn, an, jn, adn, jdn, name="path")
+    u = _plan_unchecked(0.0, 1.0, unit, duration)
+    axes = []
+    for a, b, lim in zip(sl, gl, lims):
+        d = b - a
+        sgn = 1.0 if d > 0 else -1.0
+        ad = abs(d)
+        axes.append(Profile(
+            a, b, u.duration, u.min_duration if ad > 0 else 0.0,
+            u.phase_durations if ad > 0 else (0.0, 0.0, 0.0, u.duration, 0.0, 0.0, 0.0),
+            tuple(sgn * ad * jj for jj in u.jerks),
+            d * u.peak_velocity, ad * u.peak_acceleration, ad * u.peak_deceleration, lim,
+        ))
+    return Trajectory(axes, "phase")
