@@ -25,6 +25,7 @@ _COMMAND_MODULES = (
     "trajkit.cli._core",
     "trajkit.cli._paths",
     "trajkit.cli._pallet",
+    "trajkit.cli._run",
 )
 
 
