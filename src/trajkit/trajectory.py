@@ -12,6 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ._atomicio import atomic_write
 from ._validate import check_array, check_positive
 from .errors import InvalidInputError
 from .limits import AxisLimits
@@ -161,16 +162,8 @@ class Trajectory:
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file, so nothing half-written remains."""
-    path = os.fspath(path)
-    tmp = f"{path}.tmp-{os.getpid()}"
-    try:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    """Write ``text`` to ``path`` atomically (see :func:`trajkit._atomicio.atomic_write`)."""
+    atomic_write(path, text)
 
 
 def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[AxisLimits]:
