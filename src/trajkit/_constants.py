@@ -22,3 +22,11 @@ GOAL_RTOL = 1e-9
 #: Phase durations below this fraction of the total duration are treated as
 #: absent when naming the profile shape.
 PHASE_EPS = 1e-12
+
+#: A peak velocity / acceleration within this fraction below its limit counts
+#: as "reaching" that limit (``Profile.reached``).
+REACHED_RTOL = 1e-12
+
+#: Sample times ``k * period`` within this fraction of a period of the
+#: duration count as landing on it (``Trajectory.times``).
+PERIOD_RTOL = 1e-9

@@ -86,6 +86,6 @@ def check_array(
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         where = idx[0] if len(idx) == 1 else idx
         raise InvalidInputError(
-            f"{field}[{where}] must be finite, got {arr[idx]!r}"
+            f"{field}[{where}] must be finite, got {float(arr[idx])!r}"
         )
     return arr

@@ -13,6 +13,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._atomicio import atomic_write
+from ._constants import DURATION_RTOL, PERIOD_RTOL
 from ._validate import check_array, check_positive
 from .errors import InvalidInputError
 from .limits import AxisLimits
@@ -112,7 +113,7 @@ class Trajectory:
     def times(self, period: float) -> np.ndarray:
         """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``."""
         dt = check_positive(period, "period")
-        n = int(math.floor(self.duration / dt + 1e-9))
+        n = int(math.floor(self.duration / dt + PERIOD_RTOL))
         t = np.arange(n + 1) * dt
         if t[-1] < self.duration:
             t = np.append(t, self.duration)
@@ -254,10 +255,10 @@ def plan_ptp(
     if sync == "time":
         tmin = max(min_duration(b - a, lim) for a, b, lim in zip(sl, gl, lims))
         T = tmin if duration is None else duration
-        if duration is not None and duration < tmin * (1.0 - 1e-12):
+        if duration is not None and duration < tmin * (1.0 - DURATION_RTOL):
             from .errors import InfeasibleError
             raise InfeasibleError(
-                f"duration {duration!r} s is below the minimum synchronised duration {tmin!r} s",
+                f"duration {duration!r} s is below the minimum synchronised duration {tmin:.15g} s",
                 minimum=tmin,
             )
         axes = [_plan_unchecked(a, b, lim, T) for a, b, lim in zip(sl, gl, lims)]

@@ -151,7 +151,7 @@ def cruise_velocity(
         lo == 0.0 or 0.5 * (leg_time(lo, a1, j1) + leg_time(lo, a2, j2)) + d / lo > t
     ):
         if hi < v_peak and hi != _inf and (
-            0.5 * (leg_time(hi, a1, j1) + leg_time(hi, a2, j2)) + d / hi > t
+            hi == 0.0 or 0.5 * (leg_time(hi, a1, j1) + leg_time(hi, a2, j2)) + d / hi > t
         ):
             # both saturated: p v^2 - (t - q) v + d = 0, smaller root
             p = 0.5 * (1.0 / a1 + 1.0 / a2)

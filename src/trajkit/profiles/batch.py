@@ -228,8 +228,16 @@ class MoveBatch:
         )
 
 
+def _float_array(value, name):
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} must be a number or an array of numbers, "
+                                f"got {value!r}") from None
+
+
 def _limit_array(value, name, n, allow_inf=True):
-    arr = np.asarray(value, dtype=np.float64)
+    arr = _float_array(value, name)
     try:
         arr = np.broadcast_to(arr, (n,))
     except ValueError:
@@ -240,7 +248,7 @@ def _limit_array(value, name, n, allow_inf=True):
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise InvalidInputError(
-            f"{name}[{i}] should be larger than zero, got {arr[i]!r}"
+            f"{name}[{i}] should be larger than zero, got {float(arr[i])!r}"
         )
     return np.ascontiguousarray(arr)
 
@@ -303,7 +311,7 @@ def plan_moves(
             raise InvalidInputError(f"{an}[{i}] and {jn}[{i}] cannot both be infinite")
     T = None
     if durations is not None:
-        T = np.asarray(durations, dtype=np.float64)
+        T = _float_array(durations, "durations")
         try:
             T = np.ascontiguousarray(np.broadcast_to(T, (n,)))
         except ValueError:
@@ -313,7 +321,7 @@ def plan_moves(
         bad = ~np.isfinite(T) | (T < 0.0)
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s, got {T[i]!r}")
+            raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s, got {float(T[i])!r}")
 
     diff = g - s
     sign = np.where(diff > 0, 1.0, -1.0)
@@ -341,7 +349,7 @@ def plan_moves(
         if low.any():
             i = int(np.flatnonzero(low)[0])
             raise InfeasibleError(
-                f"durations[{i}] = {T[i]!r} s is below the minimum duration {tmin[i]!r} s",
+                f"durations[{i}] = {float(T[i])!r} s is below the minimum duration {tmin[i]:.15g} s",
                 minimum=float(tmin[i]),
             )
         fixed = moving & (T > tmin)

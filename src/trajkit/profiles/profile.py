@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._constants import DURATION_RTOL, PHASE_EPS
+from .._constants import DURATION_RTOL, PHASE_EPS, REACHED_RTOL
 from .._validate import axis_label
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
@@ -131,11 +131,12 @@ class Profile:
         """
         out = set()
         lim = self.limits
-        if self.phase_durations[3] > 0.0 and abs(self.peak_velocity) >= lim.v_max * (1 - 1e-12):
+        tol = 1.0 - REACHED_RTOL
+        if self.phase_durations[3] > 0.0 and abs(self.peak_velocity) >= lim.v_max * tol:
             out.add("v_max")
-        if self.peak_acceleration >= lim.a_max * (1 - 1e-12):
+        if self.peak_acceleration >= lim.a_max * tol:
             out.add("a_max")
-        if self.peak_deceleration >= lim.a_max_decel * (1 - 1e-12):
+        if self.peak_deceleration >= lim.a_max_decel * tol:
             out.add("a_max_decel")
         return frozenset(out)
 
@@ -147,19 +148,32 @@ class Profile:
         or the phases that are absent joined by ``+``:
         ``"no-cruise"``, ``"no-const-accel"``, ``"no-const-decel"``, and
         combinations like ``"no-const-accel+no-const-decel+no-cruise"``.
+        A leg without jerk phases (infinite jerk limit: the acceleration
+        jumps) is named instead: ``"trapezoid"`` when both legs are
+        jerk-free (``"trapezoid+no-cruise"`` for the triangle), else
+        ``"jerk-free-accel"`` / ``"jerk-free-decel"`` joined to the rest.
         """
         if self.goal == self.start:
             return "zero"
         eps = PHASE_EPS * self.duration
         t = self.phase_durations
-        missing = []
-        if t[1] <= eps:
-            missing.append("no-const-accel")
-        if t[5] <= eps:
-            missing.append("no-const-decel")
+        free1 = t[0] <= eps and t[1] > eps
+        free2 = t[4] <= eps and t[5] > eps
+        parts = []
+        if free1 and free2:
+            parts.append("trapezoid")
+        else:
+            if free1:
+                parts.append("jerk-free-accel")
+            elif t[1] <= eps:
+                parts.append("no-const-accel")
+            if free2:
+                parts.append("jerk-free-decel")
+            elif t[5] <= eps:
+                parts.append("no-const-decel")
         if t[3] <= eps:
-            missing.append("no-cruise")
-        return "+".join(missing) if missing else "7-phase"
+            parts.append("no-cruise")
+        return "+".join(parts) if parts else "7-phase"
 
     @property
     def phase_times(self) -> np.ndarray:
@@ -176,9 +190,9 @@ class Profile:
             acceleration (the acceleration is the value *entering* the next
             phase; for an infinite-jerk trapezoid it jumps there).
         """
-        tb, p, v, a, _ = self._boundaries()
+        tb, x, v, a, _ = self._boundaries()
         out = np.empty((8, 3))
-        out[:7, 0], out[:7, 1], out[:7, 2] = p, v, a
+        out[:7, 0], out[:7, 1], out[:7, 2] = self.start + x, v, a
         out[7] = (self.goal, 0.0, 0.0)
         return out
 
@@ -192,10 +206,12 @@ class Profile:
         a1 = s * self.peak_acceleration
         a2 = -s * self.peak_deceleration
         acc = (0.0, a1, a1, 0.0, 0.0, a2, a2)
+        # positions are kept as displacements from the start, so that their
+        # round-off scales with the distance and not with |start|
         tb = np.empty(8)
         p = np.empty(7)
         v = np.empty(7)
-        pk, vk, tk = self.start, 0.0, 0.0
+        pk, vk, tk = 0.0, 0.0, 0.0
         for k in range(7):
             tb[k] = tk
             p[k] = pk
@@ -232,7 +248,7 @@ class Profile:
         a = A[idx]
         j = J[idx]
         v = V[idx]
-        pos = P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+        pos = self.start + (P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0)))
         vel = v + dt * (a + 0.5 * dt * j)
         acc = a + dt * j
         after = tt >= self.duration
@@ -303,7 +319,7 @@ def min_duration(distance: float, limits: AxisLimits) -> float:
     vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2)
     t = K.leg_time(vp, a1, j1) + K.leg_time(vp, a2, j2)
     if vp == limits.v_max:
-        t += (d - 0.5 * vp * t) / vp
+        t += max(d - 0.5 * vp * t, 0.0) / vp
     return t
 
 
@@ -382,7 +398,7 @@ def _plan_unchecked(s: float, g: float, limits: AxisLimits, T: float | None) -> 
         if T is not None and T < tmin * (1.0 - DURATION_RTOL):
             raise InfeasibleError(
                 f"duration {T!r} s{axis_label(limits.name)} is below the minimum "
-                f"duration {tmin!r} s for a move of {d!r}",
+                f"duration {tmin:.15g} s for a move of distance {d!r}",
                 minimum=tmin,
             )
         return _build(s, g, limits, d, vp, tmin, tmin, sign)

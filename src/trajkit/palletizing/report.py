@@ -1,0 +1,75 @@
+"""Summaries of planned jobs beside seed 000's table 1."""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+from .planners import CyclePlan
+
+__all__ = ["PAPER_TABLE1", "PAPER_BOXES", "summarize", "table_rows", "TABLE_COLUMNS"]
+
+#: Seed 000, table 1 (25 boxes): planned and measured times [s]; per box is
+#: the measured time / 25 as printed in the paper.
+PAPER_TABLE1 = {
+    "ptp": {"planned_s": 107.854, "measured_s": 112.997, "per_box_measured_s": 4.520},
+    "merged": {"planned_s": 91.850, "measured_s": 96.973, "per_box_measured_s": 3.879},
+}
+
+#: Number of boxes of the paper's experiment.
+PAPER_BOXES = 25
+
+TABLE_COLUMNS = ("plan", "total (s)", "per box (s)", "reduction", "paper planned (s)",
+                 "paper per box (s)", "paper reduction", "vs paper")
+
+
+def summarize(plans: Mapping[str, CyclePlan], baseline: str = "ptp") -> dict:
+    """JSON-ready summary of several plans of the same scenario.
+
+    Returns
+    -------
+    dict
+        ``{"boxes": N, "plans": {name: {"total_s", "per_box_s",
+        "reduction_pct", "paper_planned_s", "paper_per_box_s", ...}}}``;
+        ``reduction_pct`` is relative to ``baseline`` (when present); the
+        paper's figures are included only for plans the paper has.
+    """
+    names = list(plans)
+    n = next(iter(plans.values())).n_boxes if plans else 0
+    base = plans[baseline].total_s if baseline in plans else None
+    paper_base = PAPER_TABLE1[baseline]["planned_s"] if baseline in PAPER_TABLE1 else None
+    out: dict = {"boxes": n, "plans": {}}
+    for name in names:
+        p = plans[name]
+        d = {"total_s": p.total_s, "per_box_s": p.per_box_s}
+        if base is not None:
+            d["reduction_pct"] = 100.0 * (1.0 - p.total_s / base)
+        if name in PAPER_TABLE1:
+            paper = PAPER_TABLE1[name]
+            d["paper_planned_s"] = paper["planned_s"]
+            d["paper_planned_per_box_s"] = paper["planned_s"] / PAPER_BOXES
+            d["paper_measured_s"] = paper["measured_s"]
+            if paper_base is not None:
+                d["paper_reduction_pct"] = 100.0 * (1.0 - paper["planned_s"] / paper_base)
+            if n == PAPER_BOXES:
+                d["vs_paper_pct"] = 100.0 * (p.total_s / paper["planned_s"] - 1.0)
+        out["plans"][name] = d
+    return out
+
+
+def table_rows(summary: dict) -> list[list]:
+    """Rows for :data:`TABLE_COLUMNS` from a :func:`summarize` result (strings/floats)."""
+    rows = []
+    for name, d in summary["plans"].items():
+        def pct(key):
+            return f"{d[key]:.1f} %" if key in d else "-"
+        rows.append([
+            name,
+            f"{d['total_s']:.3f}",
+            f"{d['per_box_s']:.3f}",
+            pct("reduction_pct"),
+            f"{d['paper_planned_s']:.3f}" if "paper_planned_s" in d else "-",
+            f"{d['paper_planned_per_box_s']:.3f}" if "paper_planned_per_box_s" in d else "-",
+            pct("paper_reduction_pct"),
+            f"{d['vs_paper_pct']:+.2f} %" if "vs_paper_pct" in d else "-",
+        ])
+    return rows

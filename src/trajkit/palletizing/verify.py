@@ -1,0 +1,235 @@
+"""Independent checks of a :class:`CyclePlan`: limits, ranges, places, clearance.
+
+The checks do not trust the planner's bookkeeping: they read the plan's
+timeline (exact phase-boundary states and dense samples) and recompute the
+clearance crossing times by inverting B's profiles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._constants import GOAL_RTOL, LIMIT_RTOL
+from ..errors import TrajkitError
+from ._crossing import time_at_position
+from .planners import HORIZONTAL_JOINTS, CyclePlan
+
+__all__ = ["VerificationReport", "verify_plan", "PlanVerificationError"]
+
+#: Absolute position tolerance [m or rad] for "place reached" and "joint at rest".
+POSITION_ATOL = 1e-9
+
+#: Velocity [m/s or rad/s] and acceleration below which a joint counts as at
+#: rest (absorbs the round-off of absolute piece start times, ~1e-16 s).
+REST_ATOL = 1e-9
+
+#: Default number of dense samples per second of plan.
+SAMPLES_PER_S = 500
+
+_B = 1
+
+
+class PlanVerificationError(TrajkitError):
+    """A plan broke a limit, a range, a place or the clearance rule."""
+
+
+@dataclass
+class VerificationReport:
+    """Result of :func:`verify_plan`.
+
+    Attributes
+    ----------
+    ok : bool
+    violations : list of str
+        One line per problem found (empty when ``ok``).
+    checks : dict
+        Counts of what was checked (samples, boundaries, places, crossings)
+        and the worst ratios |value| / limit per joint.
+    """
+
+    violations: list = field(default_factory=list)
+    checks: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return not self.violations
+
+    def raise_if_failed(self) -> None:
+        """Raise :class:`PlanVerificationError` with the first violations."""
+        if self.violations:
+            more = f" (and {len(self.violations) - 3} more)" if len(self.violations) > 3 else ""
+            raise PlanVerificationError("; ".join(self.violations[:3]) + more)
+
+
+def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> VerificationReport:
+    """Check a plan against the robot, the places and the clearance rule.
+
+    Checks
+
+    * every piece's limits exactly at its phase boundaries (velocity,
+      acceleration per leg, jerk per phase, position range) and on dense
+      samples of the whole timeline;
+    * each place is reached exactly (joints and forward-kinematics pose) and
+      the robot rests there; the job ends back at the pick;
+    * the clearance rule: A, C, D rest at their start values while B is below
+      ``Z1`` on the way up and at their goal values while B is below ``Z2``
+      on the way down, on dense samples and exactly at the crossing times
+      (recomputed by inverting B's profiles).
+
+    Parameters
+    ----------
+    plan : CyclePlan
+    samples_per_s : float
+        Density of the dense samples [1/s].
+
+    Returns
+    -------
+    VerificationReport
+    """
+    rep = VerificationReport()
+    rob = plan.scenario.robot
+    tl = plan.timeline
+    v = rep.violations
+    worst = {n: {"velocity": 0.0, "acceleration": 0.0, "jerk": 0.0} for n in rob.joint_names}
+
+    # --- limits at the exact phase boundaries of every piece
+    n_bound = 0
+    for k, lim in enumerate(rob.limits):
+        jn = rob.joint_names[k]
+        for i, pc in enumerate(tl.pieces[k]):
+            p = pc.profile
+            bs = p.boundary_states()
+            n_bound += bs.shape[0]
+            tol = 1.0 + LIMIT_RTOL
+            if np.any(np.abs(bs[:, 1]) > lim.v_max * tol):
+                v.append(f"joint {jn} piece {i} at t={pc.t0:.4f} s: velocity "
+                         f"{np.abs(bs[:, 1]).max():.6g} above v_max {lim.v_max:.6g}")
+            acc_legs = np.abs(bs[1:3, 2]).max(), np.abs(bs[4:7, 2]).max()
+            if acc_legs[0] > lim.a_max * tol or acc_legs[1] > lim.a_max_decel * tol:
+                v.append(f"joint {jn} piece {i} at t={pc.t0:.4f} s: acceleration "
+                         f"{acc_legs} above ({lim.a_max:.6g}, {lim.a_max_decel:.6g})")
+            jr = np.abs(np.array(p.jerks))
+            if jr[:3].max() > lim.j_max * tol or jr[4:].max() > lim.j_max_decel * tol:
+                v.append(f"joint {jn} piece {i}: jerk {jr.max():.6g} above the limit")
+            lo, hi = lim.position_min, lim.position_max
+            if bs[:, 0].min() < lo - POSITION_ATOL or bs[:, 0].max() > hi + POSITION_ATOL:
+                v.append(f"joint {jn} piece {i}: position outside its range [{lo}, {hi}]")
+            worst[jn]["velocity"] = max(worst[jn]["velocity"], float(np.abs(bs[:, 1]).max()) / lim.v_max)
+            worst[jn]["acceleration"] = max(worst[jn]["acceleration"],
+                                            acc_legs[0] / lim.a_max, acc_legs[1] / lim.a_max_decel)
+            worst[jn]["jerk"] = max(worst[jn]["jerk"], jr[:3].max() / lim.j_max,
+                                    jr[4:].max() / lim.j_max_decel)
+
+    # --- dense samples of the whole job
+    n = max(2, int(np.ceil(tl.duration * samples_per_s)) + 1)
+    t = np.linspace(0.0, tl.duration, n)
+    t = np.unique(np.concatenate([t, tl.segment_boundaries()]))
+    s = tl.sample(t)
+    for k, lim in enumerate(rob.limits):
+        jn = rob.joint_names[k]
+        tol = 1.0 + LIMIT_RTOL
+        if np.abs(s.velocity[:, k]).max() > lim.v_max * tol:
+            v.append(f"joint {jn}: sampled velocity above v_max")
+        if np.abs(s.acceleration[:, k]).max() > max(lim.a_max, lim.a_max_decel) * tol:
+            v.append(f"joint {jn}: sampled acceleration above the limit")
+        if (s.position[:, k].min() < lim.position_min - POSITION_ATOL
+                or s.position[:, k].max() > lim.position_max + POSITION_ATOL):
+            v.append(f"joint {jn}: sampled position outside its range")
+
+    # --- places reached exactly, at rest
+    places = plan.scenario.place_poses()
+    q_places = plan.scenario.place_joints()
+    ends = plan.trip_starts + plan.trip_times()
+    n_places = 0
+    for tp, te in zip(plan.trips, ends):
+        st = tl.sample(np.array([te]))
+        q = st.position[0]
+        target = tp.spec.q_goal
+        scale = np.maximum(1.0, np.abs(target))
+        if np.any(np.abs(q - target) > np.maximum(POSITION_ATOL, GOAL_RTOL * scale)):
+            v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: ends at {q.tolist()}, "
+                     f"not at {target.tolist()}")
+        if np.any(np.abs(st.velocity[0]) > REST_ATOL) or np.any(np.abs(st.acceleration[0]) > REST_ATOL):
+            v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: not at rest at its end")
+        if tp.spec.kind == "load":
+            n_places += 1
+            if np.any(np.abs(q - q_places[tp.spec.box]) > POSITION_ATOL):
+                v.append(f"box {tp.spec.box}: placed at joints {q.tolist()}, planned "
+                         f"{q_places[tp.spec.box].tolist()}")
+            pose = rob.pose_from_joints(q)
+            dyaw = (pose[3] - places[tp.spec.box, 3]) % np.pi
+            dyaw = min(dyaw, np.pi - dyaw)
+            if np.any(np.abs(pose[:3] - places[tp.spec.box, :3]) > POSITION_ATOL) or dyaw > POSITION_ATOL:
+                v.append(f"box {tp.spec.box}: gripper pose {pose.tolist()} is not the place "
+                         f"{places[tp.spec.box].tolist()}")
+    if np.any(np.abs(tl.goal - plan.scenario.pick_joints()) > POSITION_ATOL):
+        v.append(f"the job ends at {tl.goal.tolist()}, not back at the pick")
+
+    # --- clearance rule, dense samples and exact crossing times
+    n_cross = 0
+    h = list(HORIZONTAL_JOINTS)
+    for tp, ts, te in zip(plan.trips, plan.trip_starts, ends):
+        z0, z1, z2, z3 = tp.spec.z_levels
+        qa, qb = tp.spec.q_start[h], tp.spec.q_goal[h]
+        m = (s.t >= ts) & (s.t <= te)
+        tt, zb, qh = s.t[m], s.position[m, _B], s.position[m][:, h]
+        vh = s.velocity[m][:, h]
+        zpk = zb.max()
+        at_pk = np.flatnonzero(zb >= zpk - POSITION_ATOL)
+        t_pk0, t_pk1 = tt[at_pk[0]], tt[at_pk[-1]]
+        going_up = (tt <= t_pk0) & (zb < z1 - POSITION_ATOL)
+        coming_down = (tt >= t_pk1) & (zb < z2 - POSITION_ATOL)
+        for mask, ref, label in ((going_up, qa, f"below Z1={z1 * 1000:.1f} mm going up"),
+                                 (coming_down, qb, f"below Z2={z2 * 1000:.1f} mm coming down")):
+            if mask.any() and (np.abs(qh[mask] - ref).max() > POSITION_ATOL
+                               or np.abs(vh[mask]).max() > REST_ATOL):
+                i = int(np.flatnonzero(mask & (np.abs(qh - ref).max(axis=1) > POSITION_ATOL))[0]) \
+                    if np.any(mask & (np.abs(qh - ref).max(axis=1) > POSITION_ATOL)) \
+                    else int(np.flatnonzero(mask)[0])
+                v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: a horizontal joint moves "
+                         f"at t={tt[i]:.4f} s while B is {label}")
+        # exact crossings: invert B's pieces inside this trip
+        t_up, t_dn = _crossings(tl, ts, te, z1, z2)
+        for tc, ref, zc, label in ((t_up, qa, z1, "Z1 going up"), (t_dn, qb, z2, "Z2 coming down")):
+            if tc is None:
+                v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: B never passes {label}")
+                continue
+            n_cross += 1
+            sc = tl.sample(np.array([tc]))
+            if abs(sc.position[0, _B] - zc) > POSITION_ATOL:
+                v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: B at {label} crossing is "
+                         f"{sc.position[0, _B]!r}, not {zc!r}")
+            qhc = sc.position[0, h]
+            if np.abs(qhc - ref).max() > POSITION_ATOL or np.abs(sc.velocity[0, h]).max() > REST_ATOL:
+                v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: horizontal joints not at "
+                         f"rest at their {'start' if ref is qa else 'goal'} when B passes {label} "
+                         f"(t={tc:.6f} s)")
+    rep.checks = {"samples": int(t.size), "phase_boundaries": n_bound, "places": n_places,
+                  "crossings": n_cross, "worst_ratio": worst}
+    return rep
+
+
+def _crossings(tl, ts: float, te: float, z1: float, z2: float):
+    """First time B reaches ``z1`` and last time B leaves ``z2`` within [ts, te]."""
+    pcs = [pc for pc in tl.pieces[_B] if pc.t0 >= ts - POSITION_ATOL and pc.t1 <= te + POSITION_ATOL]
+    if not pcs:
+        return None, None
+    t_up = t_dn = None
+    zpos = pcs[0].profile.start
+    if zpos >= z1:
+        t_up = ts
+    for pc in pcs:
+        p = pc.profile
+        if t_up is None and p.goal >= z1 > p.start:
+            t_up = pc.t0 + time_at_position(p, z1)
+    for pc in reversed(pcs):
+        p = pc.profile
+        if p.start >= z2 > p.goal:
+            t_dn = pc.t0 + time_at_position(p, z2)
+            break
+    else:
+        if pcs[-1].profile.goal >= z2:
+            t_dn = te
+    return t_up, t_dn

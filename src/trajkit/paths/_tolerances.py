@@ -1,0 +1,45 @@
+"""Named tolerances of the paths and interpolation layers (SI units)."""
+
+from __future__ import annotations
+
+#: Arc points whose cross product |(p2-p1) x (p3-p1)| is below this fraction of
+#: |p2-p1| |p3-p1| are collinear (the sine of the angle at p1); no arc.
+COLLINEAR_SIN = 1e-9
+
+#: Two points closer than this [m] coincide (zero-length line, repeated arc point).
+COINCIDENT_DIST = 1e-12
+
+#: Consecutive segments of a composite path must meet within this distance [m].
+JOIN_DIST = 1e-9
+
+#: Tangent jump [rad] above which a composite-path junction is a corner where
+#: the feed must stop.
+CORNER_ANGLE = 1e-6
+
+#: Relative accuracy promised for saddle arc lengths (checked at construction
+#: by comparing two Gauss-Legendre tables of different size).
+SADDLE_LENGTH_RTOL = 1e-12
+
+#: Newton iterations converge when the arc-length residual is below this
+#: fraction of the path length.
+ARC_INVERSION_RTOL = 1e-14
+
+#: Maximum Newton iterations when mapping arc length to the curve parameter.
+ARC_INVERSION_MAX_ITER = 40
+
+#: Gauss-Legendre order used inside each table interval.
+GAUSS_ORDER = 16
+
+#: Relative slack allowed on an arc-length argument outside [0, length]
+#: (round-off); beyond it the argument is an error.
+S_RANGE_RTOL = 1e-12
+
+#: Fraction of the tolerance that the adaptive chord stepper aims at (the
+#: rest absorbs the curvature sampling error; violators are split).
+CHORD_TARGET_FRACTION = 0.98
+
+#: Samples per chord of the dense chord-error check (before the local refinement).
+CHORD_CHECK_SAMPLES = 33
+
+#: Golden-section iterations of the local refinement of a chord's deviation.
+CHORD_REFINE_ITER = 40

@@ -1,0 +1,621 @@
+"""Scalar kernels for profiles between arbitrary states (one axis).
+
+Pure-float code; validation happens in :mod:`trajkit.profiles.state`.
+
+Representation
+--------------
+A profile is a list of phases ``(dt, j, a_start)``: duration [s], constant
+jerk [unit/s^3] and the acceleration at the start of the phase [unit/s^2]
+(stored so that an infinite-jerk limit can make the acceleration jump between
+phases). Integration is exact: ``p + dt*(v + dt*(a/2 + dt*j/6))``.
+
+Limits are the tuple ``L = (V, A1, J1, A2, J2)``: velocity limit, the
+acceleration and jerk limits while |v| grows (accel leg) and while |v|
+shrinks (decel leg).
+
+Building blocks
+---------------
+* :func:`ramp` -- acceleration from ``a_s`` to ``a_e`` at the largest jerk,
+  split at ``a = 0`` where the regime (speeding up / slowing down) changes.
+* :func:`bump` -- the minimum-time velocity change from ``(v0, a0)`` to
+  ``(v1, a1)``: one acceleration "bump" (ramp to a peak ``ap``, an optional
+  plateau at the acceleration limit, ramp to ``a1``). The change of velocity
+  over a bump is ``k*ap**2 + c`` on each branch of ``ap``, so each branch has
+  a closed-form peak; the fastest branch wins.
+* Families for the full problem (position, velocity, acceleration):
+  ``F1`` two bumps through a velocity extremum ``(vc, a=0)`` with an optional
+  cruise at ``vc = +-V``; ``F2`` a bump then a single ramp joined at an
+  acceleration valley/peak ``am`` (velocity monotone through it). The
+  minimum time is the fastest *verified* candidate of all families; every
+  candidate is checked exactly (:func:`verify`) before it may win.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .._constants import GOAL_RTOL, LIMIT_RTOL
+
+_inf = math.inf
+_sqrt = math.sqrt
+
+#: Points per family scan (velocity or acceleration parameter).
+SCAN_POINTS = 40
+
+#: Offsets (fractions of the scan width) of extra grid points around the
+#: special parameter values, where legs change shape (square-root behaviour).
+MARK_OFFSETS = (1e-7, 1e-3)
+
+#: Relative x-tolerance of the scalar root finder on a family parameter.
+SCAN_XRTOL = 1e-15
+
+#: Maximum bisection/secant steps in :func:`_root`.
+SCAN_MAX_ITER = 200
+
+#: Absolute floor (relative to the problem's natural scale) used by the
+#: verification to accept round-off at zero-valued limits comparisons.
+VERIFY_ATOL_SCALE = 1e-12
+
+
+# ------------------------------------------------------------------ phases
+def integrate(phases, p, v, a):
+    """Exact end state ``(p, v, a)`` after ``phases`` from ``(p, v, a)``."""
+    for dt, j, a_s in phases:
+        a = a_s
+        p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+        v = v + dt * (a + 0.5 * dt * j)
+        a = a + dt * j
+    return p, v, a
+
+
+def integrate_va(phases, v, a):
+    """Exact end velocity and acceleration after ``phases``."""
+    for dt, j, a_s in phases:
+        v = v + dt * (a_s + 0.5 * dt * j)
+        a = a_s + dt * j
+    return v, a
+
+
+def total_time(phases):
+    t = 0.0
+    for dt, _, _ in phases:
+        t += dt
+    return t
+
+
+def negate(phases):
+    """Mirror a phase list (p, v, a, j -> -p, -v, -a, -j)."""
+    return [(dt, -j, -a) for dt, j, a in phases]
+
+
+# ------------------------------------------------------------------- ramps
+def ramp(a_s, a_e, J1, J2, out):
+    """Append the fastest ramp ``a_s -> a_e`` (positive-velocity frame).
+
+    In the frame where the velocity is >= 0, a positive acceleration speeds
+    up (jerk limit ``J1``) and a negative one slows down (``J2``); the ramp
+    is split at zero. Returns ``(dv, dt)``.
+    """
+    if a_s == a_e:
+        return 0.0, 0.0
+    pts = (a_s, 0.0, a_e) if (a_s < 0.0 < a_e or a_e < 0.0 < a_s) else (a_s, a_e)
+    up = a_e > a_s
+    dv = 0.0
+    tt = 0.0
+    for x, y in zip(pts[:-1], pts[1:]):
+        m = x + y
+        J = J1 if m > 0.0 else J2
+        if J == _inf:
+            continue  # acceleration jumps; the next phase carries a_start
+        dt = abs(y - x) / J
+        out.append((dt, J if up else -J, x))
+        dv += 0.5 * (x + y) * dt
+        tt += dt
+    return dv, tt
+
+
+def _part(x, y, J1, J2):
+    J = J1 if x + y > 0.0 else J2
+    if J == _inf:
+        return 0.0, 0.0
+    dt = abs(y - x) / J
+    return 0.5 * (x + y) * dt, dt
+
+
+def ramp_dv_dt(a_s, a_e, J1, J2):
+    """``(dv, dt)`` of :func:`ramp` without building phases."""
+    if a_s == a_e:
+        return 0.0, 0.0
+    if a_s * a_e < 0.0:
+        dv1, t1 = _part(a_s, 0.0, J1, J2)
+        dv2, t2 = _part(0.0, a_e, J1, J2)
+        return dv1 + dv2, t1 + t2
+    return _part(a_s, a_e, J1, J2)
+
+
+def ramp_dv(a_s, a_e, J1, J2):
+    """Velocity change of :func:`ramp` without building phases."""
+    return ramp_dv_dt(a_s, a_e, J1, J2)[0]
+
+
+def _bump_phases(a0, ap, a1, tp, J1, J2):
+    out = []
+    ramp(a0, ap, J1, J2, out)
+    if tp > 0.0:
+        out.append((tp, 0.0, ap))
+    ramp(ap, a1, J1, J2, out)
+    return out
+
+
+def _bump_dv(a0, ap, a1, J1, J2):
+    return ramp_dv_dt(a0, ap, J1, J2)[0] + ramp_dv_dt(ap, a1, J1, J2)[0]
+
+
+def _bump_dt(a0, ap, a1, tp, J1, J2):
+    return ramp_dv_dt(a0, ap, J1, J2)[1] + tp + ramp_dv_dt(ap, a1, J1, J2)[1]
+
+
+def _bump_frame(dv, a0, a1, A1, J1, A2, J2):
+    """Fastest bump in the positive-velocity frame; list of phases or None.
+
+    Four branches of the peak ``ap``, each with ``dv(ap) = k ap^2 + c``:
+
+    1. up-bump, ``ap in [max(a0, a1, 0), A1]``, ``k = +1/J1``, plateau at A1;
+    2. up-bump, ``ap in [max(a0, a1), 0]`` (both ends negative), ``k = +1/J2``;
+    3. down-bump, ``ap in [-A2, min(a0, a1, 0)]``, ``k = -1/J2``, plateau at -A2;
+    4. down-bump, ``ap in [0, min(a0, a1)]`` (both ends positive), ``k = -1/J1``.
+
+    ``dv`` is monotone in ``|ap|`` on every branch, so each has at most one
+    solution; the fastest wins.
+    """
+    best = None
+    best_t = _inf
+    hi = max(a0, a1)
+    lo = min(a0, a1)
+    branches = []  # (inner end, outer end, regime jerk, k sign, ap side, plateau)
+    if hi <= A1:
+        branches.append((max(hi, 0.0), A1, J1, +1.0, +1.0, A1))
+    if hi < 0.0:
+        branches.append((0.0, hi, J2, +1.0, -1.0, None))
+    if lo >= -A2:
+        branches.append((min(lo, 0.0), -A2, J2, -1.0, -1.0, -A2))
+    if lo > 0.0:
+        branches.append((0.0, lo, J1, -1.0, +1.0, None))
+    for inner, outer, J, ksign, side, plat in branches:
+        if abs(outer) < abs(inner):
+            continue
+        ap = None
+        tp = 0.0
+        if J != _inf:
+            k = ksign / J
+            f_in = _bump_dv(a0, inner, a1, J1, J2)
+            c = f_in - k * inner * inner
+            s2 = (dv - c) / k
+            in2 = inner * inner
+            if s2 >= in2 * (1.0 - 4e-16) or s2 >= in2 - 1e-300:
+                r = _sqrt(max(s2, in2))
+                if r <= abs(outer) * (1.0 + 4e-16):
+                    ap = side * min(r, abs(outer))
+        if ap is None and plat is not None and math.isfinite(plat):
+            f_p = _bump_dv(a0, plat, a1, J1, J2)
+            tp = (dv - f_p) / plat
+            if tp >= 0.0:
+                ap = plat
+            else:
+                tp = 0.0
+        if ap is None:
+            continue
+        t = _bump_dt(a0, ap, a1, tp, J1, J2)
+        if t < best_t:
+            best, best_t = (ap, tp), t
+    if best is None:
+        return None
+    return _bump_phases(a0, best[0], a1, best[1], J1, J2)
+
+
+def bump(v0, a0, v1, a1, L):
+    """Fastest phases from ``(v0, a0)`` to ``(v1, a1)`` (position free).
+
+    The regime frame is the sign of the velocity; a bump whose velocity
+    changes sign uses the tighter of both legs' limits (conservative).
+    Returns a phase list or ``None``.
+    """
+    V, A1, J1, A2, J2 = L
+    s = 1.0 if (v0 + v1) > 0.0 or (v0 + v1 == 0.0 and (a0 + a1) >= 0.0) else -1.0
+    if (v0 >= 0.0 and v1 >= 0.0) or (v0 <= 0.0 and v1 <= 0.0):
+        ph = _bump_frame(s * (v1 - v0), s * a0, s * a1, A1, J1, A2, J2)
+        if ph is not None and _same_sign(ph, s * v0, s):
+            return ph if s > 0 else negate(ph)
+    Am, Jm = min(A1, A2), min(J1, J2)
+    ph = _bump_frame(s * (v1 - v0), s * a0, s * a1, Am, Jm, Am, Jm)
+    if ph is None:
+        return None
+    return ph if s > 0 else negate(ph)
+
+
+def _same_sign(ph, v, s):
+    """True when the velocity (frame) never goes negative along ``ph``."""
+    scale = abs(v)
+    for dt, j, a in ph:
+        v = v + dt * (a + 0.5 * dt * j)
+        scale = max(scale, abs(v))
+        if v < -VERIFY_ATOL_SCALE * scale:
+            return False
+    return True
+
+
+# ------------------------------------------------------------- verification
+def verify(phases, p0, v0, a0, L, goal, rtol=LIMIT_RTOL, check_goal=True):
+    """Exact check of limits and goal; returns ``None`` or a reason string.
+
+    Limits are checked at every phase boundary and at every in-phase
+    extremum or regime change: the velocity at ``a = 0``, the acceleration
+    and jerk on both sides of every ``v = 0`` crossing (the speeding-up /
+    slowing-down regime decides which limits apply).
+    """
+    V, A1, J1, A2, J2 = L
+    p, v, a = p0, v0, a0
+    vscale = max(abs(v0), abs(goal[1]), 1e-300)
+    ascale = max(abs(a0), abs(goal[2]), 1e-300)
+    vtol = V * rtol if V != _inf else 0.0
+    for dt, j, a_s in phases:
+        a = a_s
+        if dt < 0.0 or not math.isfinite(dt):
+            return f"negative or non-finite phase duration {dt!r}"
+        # split points: a = 0 and v = 0 inside the phase
+        ts = [0.0, dt]
+        if j != 0.0:
+            tz = -a / j
+            if 0.0 < tz < dt:
+                ts.append(tz)
+        # v(t) = v + a t + j t^2/2 = 0
+        for tr in _quad_roots(0.5 * j, a, v):
+            if 0.0 < tr < dt:
+                ts.append(tr)
+        ts.sort()
+        for k in range(len(ts)):
+            t = ts[k]
+            vt = v + t * (a + 0.5 * t * j)
+            if V != _inf and abs(vt) > V + vtol:
+                return f"velocity {vt!r} exceeds v_max {V!r}"
+        for k in range(len(ts) - 1):
+            t0, t1 = ts[k], ts[k + 1]
+            if t1 <= t0:
+                continue
+            tm = 0.5 * (t0 + t1)
+            vm = v + tm * (a + 0.5 * tm * j)
+            am = a + tm * j
+            speeding = vm * am > 0.0 or vm == 0.0
+            A = A1 if speeding else A2
+            J = J1 if speeding else J2
+            for t in (t0, t1):
+                at = a + t * j
+                if abs(at) > A * (1.0 + rtol) + VERIFY_ATOL_SCALE * ascale:
+                    return f"acceleration {at!r} exceeds {'a_max' if speeding else 'a_max_decel'} {A!r}"
+            if am != 0.0 and abs(j) > J * (1.0 + rtol):
+                return f"jerk {j!r} exceeds {'j_max' if speeding else 'j_max_decel'} {J!r}"
+            if am == 0.0 and j != 0.0 and abs(j) > max(J1, J2) * (1.0 + rtol):
+                return f"jerk {j!r} exceeds the jerk limits"
+        p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+        v = v + dt * (a + 0.5 * dt * j)
+        a = a + dt * j
+        vscale = max(vscale, abs(v))
+        ascale = max(ascale, abs(a))
+    if check_goal:
+        pg, vg, ag = goal
+        pscale = max(abs(pg - p0), abs(p0), abs(pg), vscale * total_time(phases), 1e-300)
+        if abs(p - pg) > GOAL_RTOL * pscale:
+            return f"goal position missed by {p - pg!r}"
+        if abs(v - vg) > GOAL_RTOL * vscale:
+            return f"goal velocity missed by {v - vg!r}"
+        if abs(a - ag) > GOAL_RTOL * max(ascale, A1 if A1 != _inf else 0.0):
+            return f"goal acceleration missed by {a - ag!r}"
+    return None
+
+
+def _quad_roots(qa, qb, qc):
+    """Real roots of ``qa x^2 + qb x + qc`` (stable formula)."""
+    if qa == 0.0:
+        if qb == 0.0:
+            return ()
+        return (-qc / qb,)
+    disc = qb * qb - 4.0 * qa * qc
+    if disc < 0.0:
+        return ()
+    sq = _sqrt(disc)
+    q = -0.5 * (qb + math.copysign(sq, qb))
+    if q == 0.0:
+        return (0.0,)
+    return (q / qa, qc / q)
+
+
+# ----------------------------------------------------------------- families
+def f1_profile(vc, start, goal, L, cruise=0.0):
+    """F1: bump to ``(vc, 0)``, cruise ``cruise`` s, bump to the goal state."""
+    _, v0, a0 = start
+    _, vf, af = goal
+    b1 = bump(v0, a0, vc, 0.0, L)
+    if b1 is None:
+        return None
+    b2 = bump(vc, 0.0, vf, af, L)
+    if b2 is None:
+        return None
+    if cruise > 0.0:
+        return b1 + [(cruise, 0.0, 0.0)] + b2
+    return b1 + b2
+
+
+def f2_profile(am, start, goal, L, first_is_ramp):
+    """F2: a bump and a single ramp joined at acceleration ``am``.
+
+    ``first_is_ramp=False``: bump ``(v0, a0) -> (vm, am)`` then the ramp
+    ``am -> af``; ``True``: ramp ``a0 -> am`` then a bump to the goal.
+    """
+    V, A1, J1, A2, J2 = L
+    _, v0, a0 = start
+    _, vf, af = goal
+    if not first_is_ramp:
+        s = 1.0 if vf > 0.0 or (vf == 0.0 and af - am < 0.0) else -1.0
+        r = []
+        dv, _ = ramp(s * am, s * af, J1, J2, r)
+        vm = vf - s * dv
+        if vm * s < 0.0:
+            return None
+        b = bump(v0, a0, vm, am, L)
+        if b is None:
+            return None
+        return b + (r if s > 0 else negate(r))
+    s = 1.0 if v0 > 0.0 or (v0 == 0.0 and am - a0 > 0.0) else -1.0
+    r = []
+    dv, _ = ramp(s * a0, s * am, J1, J2, r)
+    vm = v0 + s * dv
+    if vm * s < 0.0:
+        return None
+    b = bump(vm, am, vf, af, L)
+    if b is None:
+        return None
+    return (r if s > 0 else negate(r)) + b
+
+
+def _root(fun, x0, f0, x1, f1):
+    """Bracketed root (Illinois regula falsi + bisection safeguard)."""
+    if f0 == 0.0:
+        return x0
+    if f1 == 0.0:
+        return x1
+    side = 0
+    for _ in range(SCAN_MAX_ITER):
+        if abs(x1 - x0) <= SCAN_XRTOL * max(abs(x0), abs(x1)) + 1e-300:
+            break
+        x = (x0 * f1 - x1 * f0) / (f1 - f0)
+        if not (min(x0, x1) < x < max(x0, x1)):
+            x = 0.5 * (x0 + x1)
+        fx = fun(x)
+        if fx is None:
+            x = 0.5 * (x0 + x1)
+            fx = fun(x)
+            if fx is None:
+                return None
+        if fx == 0.0:
+            return x
+        if (fx > 0.0) == (f0 > 0.0):
+            x0, f0 = x, fx
+            if side == -1:
+                f1 *= 0.5
+            side = -1
+        else:
+            x1, f1 = x, fx
+            if side == 1:
+                f0 *= 0.5
+            side = 1
+    return x0 if abs(f0) < abs(f1) else x1
+
+
+def scan_roots(fun, grid):
+    """All sign changes of ``fun`` on ``grid``, refined to roots."""
+    vals = []
+    for x in grid:
+        vals.append((x, fun(x)))
+    roots = []
+    prev = None
+    for x, fx in vals:
+        if fx is None:
+            prev = None
+            continue
+        if fx == 0.0:
+            roots.append(x)
+        if prev is not None:
+            xp, fp = prev
+            if fp != 0.0 and fx != 0.0 and (fp > 0.0) != (fx > 0.0):
+                r = _root(fun, xp, fp, x, fx)
+                if r is not None:
+                    roots.append(r)
+        prev = (x, fx)
+    return roots
+
+
+def _grid(lo, hi, marks, n=SCAN_POINTS):
+    """Scan grid on ``[lo, hi]``: uniform points plus clustered marks."""
+    pts = {lo, hi}
+    w = hi - lo
+    for k in range(1, n):
+        pts.add(lo + w * k / n)
+    for m in marks:
+        if lo <= m <= hi:
+            pts.add(m)
+            for e in MARK_OFFSETS:
+                for sgn in (-1.0, 1.0):
+                    x = m + sgn * e * w
+                    if lo <= x <= hi:
+                        pts.add(x)
+    return sorted(pts)
+
+
+def natural_scale(start, goal, L):
+    """A velocity and acceleration scale of the problem (for grids)."""
+    V, A1, J1, A2, J2 = L
+    _, v0, a0 = start
+    _, vf, af = goal
+    Am = max(A1 if A1 != _inf else 0.0, A2 if A2 != _inf else 0.0, abs(a0), abs(af))
+    Jm = min(J1, J2)
+    vn0 = v0 + a0 * abs(a0) / (2.0 * Jm) if Jm != _inf else v0
+    vnf = vf - af * abs(af) / (2.0 * Jm) if Jm != _inf else vf
+    return Am, vn0, vnf
+
+
+def candidates_min_time(start, goal, L):
+    """Every verified candidate profile of the minimum-time problem.
+
+    Returns a list of ``(duration, family, phases)``.
+    """
+    V, A1, J1, A2, J2 = L
+    p0, v0, a0 = start
+    pf, vf, af = goal
+    out = []
+
+    def add(ph, fam):
+        if ph is None:
+            return
+        if verify(ph, p0, v0, a0, L, goal) is None:
+            out.append((total_time(ph), fam, ph))
+
+    Am, vn0, vnf = natural_scale(start, goal, L)
+    # ---- F1: velocity extremum vc with a = 0
+    if V != _inf:
+        lo, hi = -V, V
+    else:
+        w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), 1e-300)
+        lo, hi = -2.0 * w, 2.0 * w
+
+    def r1(vc):
+        ph = f1_profile(vc, start, goal, L)
+        if ph is None:
+            return None
+        return integrate(ph, p0, v0, a0)[0] - pf
+
+    if V == _inf:
+        # widen until the residual brackets the goal on both sides
+        for _ in range(200):
+            rl, rh = r1(lo), r1(hi)
+            if rl is not None and rh is not None and rl < 0.0 < rh:
+                break
+            lo *= 2.0
+            hi *= 2.0
+    marks = [v0, vf, vn0, vnf, 0.0]
+    for vc in scan_roots(r1, _grid(lo, hi, marks)):
+        add(f1_profile(vc, start, goal, L), "F1")
+    if V != _inf:
+        for vc in (V, -V):
+            ph = f1_profile(vc, start, goal, L)
+            if ph is None:
+                continue
+            rem = pf - integrate(ph, p0, v0, a0)[0]
+            tc = rem / vc
+            if tc >= 0.0:
+                add(f1_profile(vc, start, goal, L, cruise=tc), "F1-cruise")
+    # ---- F2: bump + ramp joined at an acceleration extremum am
+    if Am > 0.0:
+        A_lo = -(A2 if A2 != _inf else Am)
+        A_hi = (A1 if A1 != _inf else Am)
+        A_lo, A_hi = min(A_lo, -A_hi), max(A_hi, -A_lo)
+        amarks = [a0, af, 0.0, A1, -A1, A2, -A2]
+        for first in (False, True):
+            def r2(am, first=first):
+                ph = f2_profile(am, start, goal, L, first)
+                if ph is None:
+                    return None
+                return integrate(ph, p0, v0, a0)[0] - pf
+            for am in scan_roots(r2, _grid(A_lo, A_hi, amarks)):
+                add(f2_profile(am, start, goal, L, first), "F2")
+    return out
+
+
+def fixed_time_profile(start, goal, L, T):
+    """A verified profile of exactly ``T`` s, or ``None``.
+
+    F1 with a cruise at ``vc`` (``|vc| <= V``) filling the time left by the
+    two bumps; the position is monotone in ``vc`` on each connected set of
+    feasible ``vc``, so a bracketed root gives it. Where the goal lies in a
+    gap between two such sets, the convex combination of the two nearest
+    profiles (same duration, same start and goal velocity/acceleration) is
+    exact and kept if it verifies.
+    """
+    V, A1, J1, A2, J2 = L
+    p0, v0, a0 = start
+    pf, vf, af = goal
+    Am, vn0, vnf = natural_scale(start, goal, L)
+
+    def prof(vc):
+        b1 = bump(v0, a0, vc, 0.0, L)
+        if b1 is None:
+            return None
+        b2 = bump(vc, 0.0, vf, af, L)
+        if b2 is None:
+            return None
+        tc = T - total_time(b1) - total_time(b2)
+        if tc < -1e-15 * T:
+            return None
+        return b1 + [(max(tc, 0.0), 0.0, 0.0)] + b2
+
+    def r(vc):
+        ph = prof(vc)
+        if ph is None:
+            return None
+        return integrate(ph, p0, v0, a0)[0] - pf
+
+    if V != _inf:
+        lo, hi = -V, V
+    else:
+        w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), abs(pf - p0) / max(T, 1e-300), 1e-300)
+        lo, hi = -4.0 * w, 4.0 * w
+    grid = _grid(lo, hi, [v0, vf, vn0, vnf, 0.0], n=2 * SCAN_POINTS)
+    vals = [(x, r(x)) for x in grid]
+    best = None
+    for vc in scan_roots(r, grid):
+        ph = prof(vc)
+        if ph is not None and verify(ph, p0, v0, a0, L, goal) is None:
+            return ph
+    # blend across a gap
+    below = [(fx, x) for x, fx in vals if fx is not None and fx < 0.0]
+    above = [(fx, x) for x, fx in vals if fx is not None and fx > 0.0]
+    if below and above:
+        fb, xb = max(below)
+        fa, xa = min(above)
+        ph = blend(prof(xb), prof(xa), fa / (fa - fb))
+        if verify(ph, p0, v0, a0, L, goal) is None:
+            best = ph
+    return best
+
+
+def blend(pa, pb, lam):
+    """Exact convex combination ``lam*pa + (1-lam)*pb`` of two phase lists.
+
+    Both must last the same time and start from the same state; the jerk
+    (and acceleration offsets) combine linearly on the merged breakpoints.
+    """
+    ta = [0.0]
+    for dt, _, _ in pa:
+        ta.append(ta[-1] + dt)
+    tb = [0.0]
+    for dt, _, _ in pb:
+        tb.append(tb[-1] + dt)
+    T = min(ta[-1], tb[-1])
+    cuts = sorted(set([t for t in ta + tb if t < T] + [T]))
+    out = []
+
+    def state_at(ph, tt, t):
+        # phase index and local acceleration/jerk at time t (right-continuous)
+        for k in range(len(ph)):
+            if tt[k] <= t < tt[k + 1] or (k == len(ph) - 1):
+                dt = t - tt[k]
+                return ph[k][2] + dt * ph[k][1], ph[k][1]
+        return 0.0, 0.0
+
+    for k in range(len(cuts) - 1):
+        t0, t1 = cuts[k], cuts[k + 1]
+        if t1 <= t0:
+            continue
+        aa, ja = state_at(pa, ta, t0)
+        ab, jb = state_at(pb, tb, t0)
+        out.append((t1 - t0, lam * ja + (1.0 - lam) * jb, lam * aa + (1.0 - lam) * ab))
+    return out

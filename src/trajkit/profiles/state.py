@@ -1,0 +1,692 @@
+"""One-axis profiles between arbitrary states (position, velocity, acceleration).
+
+:func:`plan_state_to_state` plans the minimum-time, jerk-limited motion from
+a moving start state to a moving goal state (ruckig's problem, with
+trajkit's asymmetric limits), or one of exactly a requested duration;
+:func:`plan_velocity` reaches a velocity and acceleration with the position
+free (jogging, feed override, controlled stop). Both return a
+:class:`StateProfile`, which samples like :class:`~trajkit.profiles.Profile`.
+
+Limit semantics (see :class:`~trajkit.limits.AxisLimits`): while ``|v|``
+grows (``v*a > 0``, or ``v = 0``) the accel leg's ``a_max`` / ``j_max``
+apply, while ``|v|`` shrinks (``v*a < 0``) the decel leg's ``a_max_decel`` /
+``j_max_decel``; ``|v| <= v_max`` always. The method and its limits are
+described in ``docs/state-profiles.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from .._constants import DURATION_RTOL
+from .._validate import axis_label, check_finite
+from ..errors import InfeasibleError, InvalidInputError
+from ..limits import AxisLimits
+from . import _state_kernel as K
+from .profile import ProfileSample
+
+__all__ = [
+    "StateProfile",
+    "BlockedDurationError",
+    "plan_state_to_state",
+    "plan_velocity",
+    "min_state_duration",
+]
+
+#: Relative step used to bracket the end of a blocked duration interval.
+BLOCKED_SEARCH_RTOL = 1e-12
+
+#: Maximum doublings when searching for the end of a blocked interval.
+BLOCKED_SEARCH_MAX = 80
+
+
+class BlockedDurationError(InfeasibleError):
+    """A requested duration lies in a blocked interval of a state-to-state move.
+
+    Between moving states the set of feasible durations is not always
+    ``[T_min, inf)``: e.g. an axis moving fast away from its goal can arrive
+    at ``T_min`` by turning back at once, but cannot arrive a little later
+    without violating a limit, yet can again with a longer detour.
+
+    Attributes
+    ----------
+    minimum : float
+        The minimum duration [s].
+    interval : tuple of float
+        ``(lower, upper)`` [s]: the blocked interval containing the request,
+        with ``upper`` the next feasible duration (to ``BLOCKED_SEARCH_RTOL``).
+    """
+
+    def __init__(self, message: str, minimum: float, interval: tuple[float, float]):
+        super().__init__(message, minimum=minimum)
+        self.interval = interval
+
+
+class StateProfile:
+    """A piecewise-constant-jerk profile of one axis between two states.
+
+    Built by :func:`plan_state_to_state` or :func:`plan_velocity`.
+
+    Attributes
+    ----------
+    start_state, goal_state : tuple of 3 float
+        ``(position [unit], velocity [unit/s], acceleration [unit/s^2])`` at
+        ``t = 0`` and ``t = duration``. For :func:`plan_velocity` the goal
+        position is where the profile ends.
+    start, goal : float
+        Start and goal positions [unit] (as on :class:`Profile`).
+    duration : float
+        Total duration [s], including any brake pre-phase.
+    min_duration : float
+        Minimum duration of this motion [s] (``duration`` unless a longer one
+        was requested).
+    brake_duration : float
+        Length of the brake pre-phase [s] (0 when the start state is within
+        the limits). The first ``n_brake_phases`` phases form it.
+    n_brake_phases : int
+        Number of phases of the brake pre-phase.
+    phase_durations : tuple of float
+        Duration of each phase [s] (their number varies with the shape).
+    jerks : tuple of float
+        Constant jerk of each phase [unit/s^3].
+    phase_accelerations : tuple of float
+        Acceleration at the start of each phase [unit/s^2] (continuous unless
+        a jerk limit is infinite).
+    family : str
+        Which profile family won: ``"F1"`` (two acceleration bumps through a
+        velocity extremum), ``"F1-cruise"`` (with a cruise at ``+-v_max``),
+        ``"F2"`` (a bump and a ramp through an acceleration extremum),
+        ``"fixed"`` / ``"fixed-blend"`` (fixed duration), ``"velocity"``
+        (:func:`plan_velocity`), ``"none"`` (already at the goal).
+    limits : AxisLimits
+    """
+
+    __slots__ = (
+        "start_state", "goal_state", "duration", "min_duration", "brake_duration",
+        "n_brake_phases", "phase_durations", "jerks", "phase_accelerations", "family",
+        "limits", "_tb", "_P", "_V", "_A", "_J",
+    )
+
+    def __init__(self, start_state, goal_state, phases, min_duration, n_brake_phases,
+                 family, limits):
+        self.start_state = tuple(float(x) for x in start_state)
+        self.goal_state = tuple(float(x) for x in goal_state)
+        self.phase_durations = tuple(float(p[0]) for p in phases)
+        self.jerks = tuple(float(p[1]) for p in phases)
+        self.phase_accelerations = tuple(float(p[2]) for p in phases)
+        self.n_brake_phases = int(n_brake_phases)
+        self.brake_duration = float(sum(self.phase_durations[:n_brake_phases]))
+        self.duration = float(sum(self.phase_durations))
+        self.min_duration = float(min_duration)
+        self.family = family
+        self.limits = limits
+        n = len(phases)
+        tb = np.empty(n + 1)
+        P = np.empty(n)
+        Vv = np.empty(n)
+        p, v, _ = self.start_state
+        t = 0.0
+        for k, (dt, j, a) in enumerate(phases):
+            tb[k] = t
+            P[k], Vv[k] = p, v
+            p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+            v = v + dt * (a + 0.5 * dt * j)
+            t += dt
+        tb[n] = self.duration
+        self._tb = tb
+        self._P = P
+        self._V = Vv
+        self._A = np.array(self.phase_accelerations, dtype=float)
+        self._J = np.array(self.jerks, dtype=float)
+
+    # ------------------------------------------------------------------ info
+    @property
+    def start(self) -> float:
+        """Start position [unit]."""
+        return self.start_state[0]
+
+    @property
+    def goal(self) -> float:
+        """Goal position [unit]."""
+        return self.goal_state[0]
+
+    @property
+    def n_phases(self) -> int:
+        return len(self.phase_durations)
+
+    @property
+    def phase_times(self) -> np.ndarray:
+        """Phase boundary times, shape (n_phases + 1,) [s]."""
+        return self._tb.copy()
+
+    def boundary_states(self) -> np.ndarray:
+        """Exact state at every phase boundary.
+
+        Returns
+        -------
+        ndarray, shape (n_phases + 1, 3)
+            Position, velocity, acceleration at each boundary time (the
+            acceleration is the value entering the next phase); the last row
+            is the goal state.
+        """
+        n = self.n_phases
+        out = np.empty((n + 1, 3))
+        out[:n, 0] = self._P
+        out[:n, 1] = self._V
+        out[:n, 2] = self._A
+        out[n] = self.goal_state
+        return out
+
+    # -------------------------------------------------------------- sampling
+    def sample(self, t: Any) -> ProfileSample:
+        """Evaluate the profile at time(s) ``t`` [s] by exact integration.
+
+        Parameters
+        ----------
+        t : float or array_like, shape (n,)
+            Times [s]. Before 0 the start state is held (its position,
+            velocity and acceleration, jerk 0); after ``duration`` the goal
+            state is continued at constant goal acceleration
+            (``p = pf + vf dt + af dt^2/2``, ``v = vf + af dt``, ``a = af``,
+            jerk 0), which is what an axis does when the next segment is late.
+
+        Returns
+        -------
+        ProfileSample
+            Arrays shaped like ``t``.
+        """
+        tt = np.asarray(t, dtype=np.float64)
+        n = self.n_phases
+        pf, vf, af = self.goal_state
+        if n == 0:
+            dt = np.maximum(tt, 0.0)
+            p0, v0, a0 = self.start_state
+            return ProfileSample(
+                np.where(tt < 0, p0, pf + dt * (vf + 0.5 * af * dt)),
+                np.where(tt < 0, v0, vf + af * dt),
+                np.where(tt < 0, a0, af + 0 * dt),
+                np.zeros_like(dt),
+            )
+        tb = self._tb
+        tc = np.clip(tt, 0.0, self.duration)
+        idx = np.searchsorted(tb[1:n], tc, side="right")
+        dt = tc - tb[idx]
+        a = self._A[idx]
+        j = self._J[idx]
+        v = self._V[idx]
+        pos = self._P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+        vel = v + dt * (a + 0.5 * dt * j)
+        acc = a + dt * j
+        after = tt >= self.duration
+        before = tt < 0.0
+        if np.any(after) or np.any(before):
+            p0, v0, a0 = self.start_state
+            da = np.where(after, tt - self.duration, 0.0)
+            pos = np.where(after, pf + da * (vf + 0.5 * af * da), np.where(before, p0, pos))
+            vel = np.where(after, vf + af * da, np.where(before, v0, vel))
+            acc = np.where(after, af, np.where(before, a0, acc))
+            j = np.where(after | before, 0.0, j)
+        return ProfileSample(pos, vel, acc, j)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (axis units)."""
+        return {
+            "start_state": list(self.start_state),
+            "goal_state": list(self.goal_state),
+            "start": self.start,
+            "goal": self.goal,
+            "duration_s": self.duration,
+            "min_duration_s": self.min_duration,
+            "brake_duration_s": self.brake_duration,
+            "family": self.family,
+            "phases": [
+                {"duration_s": d, "jerk": j, "start_acceleration": a}
+                for d, j, a in zip(self.phase_durations, self.jerks, self.phase_accelerations)
+            ],
+        }
+
+    def __repr__(self) -> str:
+        return (
+            f"StateProfile(start_state={self.start_state!r}, goal_state={self.goal_state!r}, "
+            f"duration={self.duration!r}, family={self.family!r})"
+        )
+
+
+# ------------------------------------------------------------ validation
+def _limits_tuple(limits: AxisLimits):
+    return (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel)
+
+
+def _check_limits(limits: Any) -> AxisLimits:
+    if not isinstance(limits, AxisLimits):
+        raise InvalidInputError(f"limits must be an AxisLimits, got {type(limits).__name__}")
+    return limits
+
+
+def _check_state(state: Any, field: str, limits: AxisLimits, with_position: bool = True):
+    n = 3 if with_position else 2
+    try:
+        vals = [x for x in state]
+    except TypeError:
+        raise InvalidInputError(
+            f"{field}{axis_label(limits.name)} must be a sequence of {n} numbers "
+            f"(position, velocity, acceleration), got {state!r}"
+        ) from None
+    if len(vals) != n:
+        raise InvalidInputError(
+            f"{field}{axis_label(limits.name)} must have {n} entries "
+            f"(position, velocity, acceleration), got {len(vals)}"
+        )
+    names = ("position", "velocity", "acceleration")[3 - n:]
+    out = [check_finite(x, f"{field} {nm}", limits.name) for x, nm in zip(vals, names)]
+    if with_position:
+        limits.check_position(out[0], f"{field} position")
+    return tuple(out)
+
+
+def _natural_velocity(v, a, L):
+    """Velocity reached by ramping ``a`` to zero at once (regime jerks)."""
+    s = 1.0 if v > 0.0 or (v == 0.0 and a > 0.0) else -1.0
+    out: list = []
+    dv, _ = K.ramp(s * a, 0.0, L[2], L[4], out)
+    vn = v + s * dv
+    if vn * s < 0.0:  # the ramp crosses v = 0: conservative jerk
+        Jm = min(L[2], L[4])
+        out = []
+        dv, _ = K.ramp(s * a, 0.0, Jm, Jm, out)
+        vn = v + s * dv
+    return vn
+
+
+def _start_violation(v, a, L) -> str | None:
+    """Why the start state cannot be kept within the limits, or None."""
+    V, A1, J1, A2, J2 = L
+    tol = K.LIMIT_RTOL
+    if abs(v) > V * (1.0 + tol):
+        return f"|velocity| {abs(v)!r} is above v_max {V!r}"
+    speeding = v * a > 0.0 or (v == 0.0 and a != 0.0)
+    A = A1 if speeding else A2
+    if abs(a) > A * (1.0 + tol):
+        return (f"|acceleration| {abs(a)!r} is above "
+                f"{'a_max' if speeding else 'a_max_decel'} {A!r}")
+    vn = _natural_velocity(v, a, L)
+    if abs(vn) > V * (1.0 + tol):
+        return (f"the acceleration {a!r} carries the velocity to {vn!r}, past v_max {V!r}")
+    return None
+
+
+def _goal_violation(v, a, L) -> str | None:
+    """Why the goal state cannot be reached within the limits, or None."""
+    V, A1, J1, A2, J2 = L
+    tol = K.LIMIT_RTOL
+    if abs(v) > V * (1.0 + tol):
+        return f"|velocity| {abs(v)!r} is above v_max {V!r}"
+    speeding = v * a > 0.0
+    A = A1 if speeding else A2
+    if abs(a) > A * (1.0 + tol):
+        return (f"|acceleration| {abs(a)!r} is above "
+                f"{'a_max' if speeding else 'a_max_decel'} {A!r}")
+    # time-reversed: the arrival state mirrored, decel/accel legs swapped
+    Lr = (V, A2, J2, A1, J1)
+    vn = _natural_velocity(v, -a, Lr)
+    if abs(vn) > V * (1.0 + tol):
+        return (f"arriving with acceleration {a!r} needs the velocity {vn!r} just "
+                f"before, past v_max {V!r}")
+    return None
+
+
+def brake_phases(v0: float, a0: float, L) -> list:
+    """Brake pre-phase bringing ``(v0, a0)`` back into the limits.
+
+    Empty when the start state is within the limits. Otherwise, at the
+    largest jerk: an acceleration above its limit is ramped back to the
+    limit; if the velocity is (or will be) above ``v_max``, the fastest
+    velocity change to ``(+-v_max, 0)`` follows (decelerating at up to
+    ``a_max_decel``). During the pre-phase the velocity may exceed
+    ``v_max`` (it started there or is carried there); it never grows more
+    than the start state forces.
+    """
+    V, A1, J1, A2, J2 = L
+    if _start_violation(v0, a0, L) is None:
+        return []
+    out: list = []
+    s = 1.0 if v0 > 0.0 or (v0 == 0.0 and a0 > 0.0) else -1.0
+    v, a = s * v0, s * a0
+    # 1. acceleration back within its regime limit
+    r: list = []
+    if a > A1:
+        K.ramp(a, A1, J1, J2, r)
+    elif a < -A2 and v > 0.0:
+        K.ramp(a, -A2, J1, J2, r)
+    if r:
+        v, a = K.integrate_va(r, v, a)
+        out += r
+    # 2. velocity back within v_max
+    vn = _natural_velocity(v, a, (V, A1, J1, A2, J2))
+    if abs(vn) > V * (1.0 + K.LIMIT_RTOL) or abs(v) > V:
+        target = math.copysign(V, vn)
+        b = K.bump(v, a, target, 0.0, L)
+        if b is None:
+            Am, Jm = min(A1, A2), min(J1, J2)
+            b = K.bump(v, a, target, 0.0, (V, Am, Jm, Am, Jm))
+        if b is None:
+            return out  # caller reports the state as unrecoverable
+        out += b
+    return out if s > 0 else K.negate(out)
+
+
+def _duration_arg(duration: Any, limits: AxisLimits) -> float | None:
+    if duration is None:
+        return None
+    try:
+        T = float(duration)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"duration must be a number of seconds, got {duration!r}") from None
+    if not math.isfinite(T) or T < 0.0:
+        raise InvalidInputError(
+            f"duration{axis_label(limits.name)} must be finite and >= 0 s, got {T!r}"
+        )
+    return T
+
+
+# -------------------------------------------------------------- planners
+def _min_time(start, goal, L, name):
+    """Fastest verified candidate; (phases, family)."""
+    if start == goal and start[2] == 0.0:
+        return [], "none"
+    cands = K.candidates_min_time(start, goal, L)
+    if not cands:
+        raise InfeasibleError(
+            f"no profile found from state {start!r} to {goal!r}{axis_label(name)} "
+            "within the limits (please report this input)"
+        )
+    best = min(cands, key=lambda c: c[0])
+    return best[2], best[1]
+
+
+def _prepare(start, goal, limits):
+    L = _limits_tuple(limits)
+    gv = _goal_violation(goal[1], goal[2], L)
+    if gv is not None:
+        raise InvalidInputError(f"goal state{axis_label(limits.name)} cannot be reached within the limits: {gv}")
+    brake = brake_phases(start[1], start[2], L)
+    p1, v1, a1 = K.integrate(brake, *start) if brake else start
+    if brake:
+        sv = _start_violation(v1, a1, L)
+        if sv is not None:
+            raise InfeasibleError(
+                f"start state{axis_label(limits.name)} cannot be brought back within the limits: {sv}"
+            )
+    return L, brake, (p1, v1, a1)
+
+
+def min_state_duration(start: Sequence[float], goal: Sequence[float], limits: AxisLimits) -> float:
+    """Minimum duration [s] of :func:`plan_state_to_state` (brake included)."""
+    return plan_state_to_state(start, goal, limits).duration
+
+
+def plan_state_to_state(
+    start: Sequence[float],
+    goal: Sequence[float],
+    limits: AxisLimits,
+    duration: float | None = None,
+) -> StateProfile:
+    """Plan a jerk-limited move of one axis between two moving states.
+
+    Parameters
+    ----------
+    start, goal : sequence of 3 float
+        ``(position [unit], velocity [unit/s], acceleration [unit/s^2])``.
+        The goal must be reachable within the limits: ``|vf| <= v_max``,
+        ``|af|`` within its leg's limit and the velocity just before arrival
+        within ``v_max``. A start state outside the limits gets a brake
+        pre-phase (see :func:`brake_phases`).
+    limits : AxisLimits
+        Velocity, acceleration and jerk limits (asymmetric accel/decel legs:
+        accel limits while ``|v|`` grows, decel limits while it shrinks).
+    duration : float, optional
+        Requested duration [s], brake pre-phase included. ``None`` gives the
+        minimum-time profile.
+
+    Returns
+    -------
+    StateProfile
+        Exact (piecewise-constant jerk), hitting the goal state to 1e-9
+        relative, every limit kept (checked exactly at phase boundaries,
+        in-phase extrema and ``v = 0`` crossings) after the brake pre-phase.
+
+    Raises
+    ------
+    InvalidInputError
+        Malformed or non-finite states, positions outside the range, an
+        unreachable goal state, a bad duration.
+    InfeasibleError
+        ``duration`` below the minimum (``error.minimum``); a
+        :class:`BlockedDurationError` when it lies in a blocked interval
+        (``error.interval``).
+
+    Examples
+    --------
+    >>> from trajkit import AxisLimits
+    >>> from trajkit.profiles.state import plan_state_to_state
+    >>> lim = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0)
+    >>> p = plan_state_to_state((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), lim)
+    >>> round(p.duration, 6)
+    1.7
+    """
+    limits = _check_limits(limits)
+    s = _check_state(start, "start", limits)
+    g = _check_state(goal, "goal", limits)
+    T = _duration_arg(duration, limits)
+    L, brake, s1 = _prepare(s, g, limits)
+    tb = K.total_time(brake)
+    main, fam = _min_time(s1, g, L, limits.name)
+    tmin = tb + K.total_time(main)
+    if T is None or abs(T - tmin) <= DURATION_RTOL * max(tmin, 1e-300):
+        return _finish(s, g, brake, main, tmin, fam, limits)
+    if T < tmin:
+        raise InfeasibleError(
+            f"duration {T!r} s{axis_label(limits.name)} is below the minimum duration "
+            f"{tmin!r} s from state {s!r} to {g!r}",
+            minimum=tmin,
+        )
+    ph = K.fixed_time_profile(s1, g, L, T - tb)
+    if ph is None:
+        lo, hi = _blocked_interval(s1, g, L, T - tb, tmin - tb)
+        raise BlockedDurationError(
+            f"duration {T!r} s{axis_label(limits.name)} lies in a blocked interval "
+            f"({lo + tb!r}, {hi + tb!r}) s of the move from state {s!r} to {g!r}: no profile of "
+            f"that duration keeps the limits; the minimum is {tmin!r} s",
+            minimum=tmin, interval=(lo + tb, hi + tb),
+        )
+    return _finish(s, g, brake, ph, tmin, "fixed", limits)
+
+
+def _blocked_interval(s1, g, L, T, tmin):
+    """``(lower, upper)`` feasible-duration gap containing the infeasible ``T``."""
+    def ok(t):
+        return K.fixed_time_profile(s1, g, L, t) is not None
+
+    step = max(T - tmin, BLOCKED_SEARCH_RTOL * max(T, 1e-300))
+    hi = T + step
+    n = 0
+    while not ok(hi):
+        step *= 2.0
+        hi = T + step
+        n += 1
+        if n > BLOCKED_SEARCH_MAX:
+            return T, math.inf
+    lo_in = T
+    while hi - lo_in > BLOCKED_SEARCH_RTOL * hi:
+        mid = 0.5 * (lo_in + hi)
+        if ok(mid):
+            hi = mid
+        else:
+            lo_in = mid
+    # lower end: between tmin (feasible) and T (infeasible)
+    lo_ok, lo_in = tmin, T
+    while lo_in - lo_ok > BLOCKED_SEARCH_RTOL * lo_in:
+        mid = 0.5 * (lo_ok + lo_in)
+        if ok(mid):
+            lo_ok = mid
+        else:
+            lo_in = mid
+    return lo_ok, hi
+
+
+def _finish(s, g, brake, main, tmin, fam, limits):
+    L = _limits_tuple(limits)
+    start_main = K.integrate(brake, *s) if brake else s
+    why = K.verify(main, *start_main, L, g)
+    if why is not None:  # pragma: no cover - every candidate is verified before
+        raise InfeasibleError(f"internal: profile{axis_label(limits.name)} failed verification: {why}")
+    phases = list(brake) + list(main)
+    prof = StateProfile(s, g, phases, tmin, len(brake), fam, limits)
+    _check_range(prof, limits)
+    return prof
+
+
+def _check_range(prof: StateProfile, limits: AxisLimits) -> None:
+    if limits.position_min == -math.inf and limits.position_max == math.inf:
+        return
+    lo, hi = position_extremes(prof)
+    if lo < limits.position_min or hi > limits.position_max:
+        raise InfeasibleError(
+            f"the profile{axis_label(limits.name)} would leave the position range "
+            f"[{limits.position_min}, {limits.position_max}] (reaches [{lo}, {hi}])"
+        )
+
+
+def position_extremes(prof: StateProfile) -> tuple[float, float]:
+    """Exact smallest and largest position of a profile over ``[0, duration]``."""
+    b = prof.boundary_states()
+    lo = hi = float(b[0, 0])
+    for k, (dt, j) in enumerate(zip(prof.phase_durations, prof.jerks)):
+        p, v, a = b[k]
+        for t in (dt,) + tuple(x for x in K._quad_roots(0.5 * j, a, v) if 0.0 < x < dt):
+            x = p + t * (v + t * (0.5 * a + t * j / 6.0))
+            lo, hi = min(lo, x), max(hi, x)
+    return lo, hi
+
+
+def plan_velocity(
+    start: Sequence[float],
+    goal_velocity: float,
+    goal_acceleration: float = 0.0,
+    *,
+    limits: AxisLimits,
+    duration: float | None = None,
+) -> StateProfile:
+    """Reach a velocity and acceleration with the position free.
+
+    Jogging, feed override and the controlled stop (``goal_velocity=0``:
+    the minimum-time brake) all use this.
+
+    Parameters
+    ----------
+    start : sequence of 3 float
+        ``(position [unit], velocity [unit/s], acceleration [unit/s^2])``.
+    goal_velocity : float
+        Target velocity [unit/s], ``|goal_velocity| <= v_max``.
+    goal_acceleration : float, optional
+        Target acceleration [unit/s^2] (default 0).
+    limits : AxisLimits
+        Keyword-only.
+    duration : float, optional
+        Requested duration [s]: the velocity first changes to a cruise
+        velocity ``vc`` (the goal velocity when the goal acceleration is 0),
+        holds it, then ramps into the goal acceleration, ending exactly at
+        ``duration``.
+
+    Returns
+    -------
+    StateProfile
+        Its ``goal_state`` position is where the motion ends.
+
+    Raises
+    ------
+    InvalidInputError
+        Malformed input, an unreachable goal velocity/acceleration.
+    InfeasibleError
+        ``duration`` below the minimum (``error.minimum``) or not reachable.
+    """
+    limits = _check_limits(limits)
+    s = _check_state(start, "start", limits)
+    vf = check_finite(goal_velocity, "goal_velocity", limits.name)
+    af = check_finite(goal_acceleration, "goal_acceleration", limits.name)
+    T = _duration_arg(duration, limits)
+    L = _limits_tuple(limits)
+    gv = _goal_violation(vf, af, L)
+    if gv is not None:
+        raise InvalidInputError(
+            f"goal velocity/acceleration{axis_label(limits.name)} cannot be reached "
+            f"within the limits: {gv}"
+        )
+    brake = brake_phases(s[1], s[2], L)
+    s1 = K.integrate(brake, *s) if brake else s
+    if brake and _start_violation(s1[1], s1[2], L) is not None:
+        raise InfeasibleError(
+            f"start state{axis_label(limits.name)} cannot be brought back within the limits"
+        )
+    tb = K.total_time(brake)
+    main = K.bump(s1[1], s1[2], vf, af, L) if (s1[1], s1[2]) != (vf, af) else []
+    ok = main is not None and K.verify(main, *s1, L, (0.0, vf, af), check_goal=False) is None
+    if not ok:
+        raise InfeasibleError(
+            f"no velocity profile found{axis_label(limits.name)} from {s!r} to velocity "
+            f"{vf!r}, acceleration {af!r} (please report this input)"
+        )
+    tmin = tb + K.total_time(main)
+    if T is not None and abs(T - tmin) > DURATION_RTOL * max(tmin, 1e-300):
+        if T < tmin:
+            raise InfeasibleError(
+                f"duration {T!r} s{axis_label(limits.name)} is below the minimum duration "
+                f"{tmin!r} s to reach velocity {vf!r}",
+                minimum=tmin,
+            )
+        main = _velocity_fixed(s1, vf, af, L, T - tb)
+        if main is None:
+            raise InfeasibleError(
+                f"no velocity profile of duration {T!r} s{axis_label(limits.name)} "
+                f"reaches velocity {vf!r}, acceleration {af!r} within the limits",
+                minimum=tmin,
+            )
+        fam = "velocity-fixed"
+    else:
+        fam = "velocity"
+    pe, ve, ae = K.integrate(main, *s1)
+    goal = (pe, vf, af)
+    why = K.verify(main, *s1, L, goal)
+    if why is not None:  # pragma: no cover
+        raise InfeasibleError(f"internal: velocity profile failed verification: {why}")
+    prof = StateProfile(s, goal, list(brake) + list(main), tmin, len(brake), fam, limits)
+    _check_range(prof, limits)
+    return prof
+
+
+def _velocity_fixed(s1, vf, af, L, T):
+    """Bump to a cruise velocity, hold, bump to ``(vf, af)``: exactly ``T``."""
+    _, v0, a0 = s1
+    Am, vn0, vnf = K.natural_scale(s1, (0.0, vf, af), L)
+    V = L[0]
+    tries = [vnf, vf, vn0, v0]
+    w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), 1e-300)
+    lo, hi = (-V, V) if V != math.inf else (-2 * w, 2 * w)
+    tries += sorted(K._grid(lo, hi, []), key=lambda x: abs(x - vnf))
+    for vc in tries:
+        if V != math.inf and abs(vc) > V:
+            continue
+        b1 = K.bump(v0, a0, vc, 0.0, L)
+        b2 = K.bump(vc, 0.0, vf, af, L)
+        if b1 is None or b2 is None:
+            continue
+        tc = T - K.total_time(b1) - K.total_time(b2)
+        if tc < 0.0:
+            continue
+        ph = b1 + [(tc, 0.0, 0.0)] + b2
+        if K.verify(ph, *s1, L, (0.0, vf, af), check_goal=False) is None:
+            return ph
+    return None

@@ -1,0 +1,411 @@
+"""Cartesian motion chains (LIN/CIRC with blends): path, IK grid, speed limits, feed.
+
+Steps: build the pieces (lines, arcs, Bezier corner blends, orientation by
+slerp); solve IK on a dense grid of the path parameter, each seeded by the
+previous one (the configuration stays pinned); get dq/ds and d2q/ds2; cap the
+feed speed so that every joint stays within its velocity limit and, together
+with the path acceleration, within its acceleration limit; plan the
+jerk-limited feed (:mod:`trajkit.robot._feed`). Sampling then solves IK at
+every sample.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InvalidInputError, UnreachableError
+from ..kinematics.base import Pose, RobotModel
+from ..paths.arc import Arc3
+from ..paths.line import Line
+from ..paths._tolerances import COINCIDENT_DIST
+from ._feed import Feed, Run, plan_feed
+from ._pieces import BezierBlend, Piece, angle_between_tangents, constant_point, sub_path
+from ._rotations import matrix_from_quat, quat_from_matrix, rotation_angle
+from .motion import CartesianTarget, Circ, JointTarget, Lin
+
+__all__ = ["CartesianChain", "plan_chain"]
+
+#: Fraction of each joint's velocity limit the feed may use (margin for the
+#: difference between the IK grid and IK at the samples).
+VEL_USE = 0.95
+
+#: Fraction of each joint's acceleration limit used by the centripetal term
+#: (d2q/ds2) v^2; the rest (ACC_PATH_USE) is left to the path acceleration.
+ACC_CURVE_USE = 0.5
+
+#: Fraction of each joint's acceleration limit used by (dq/ds) s''.
+ACC_PATH_USE = 0.45
+
+#: Fraction of the tool acceleration limit used by the path curvature (v^2 kappa).
+CART_CURVE_USE = 0.5
+
+#: Speed levels of the feed: the programmed speed times LEVEL_RATIO**k.
+LEVEL_RATIO = 0.85
+
+#: A required speed below this fraction of the programmed speed makes the
+#: path impassable (a singularity on the path).
+MIN_SPEED_FRACTION = 1e-3
+
+#: Target spacing of the IK grid [m of path parameter].
+GRID_DS = 5e-4
+
+#: Fewest grid cells per piece.
+GRID_MIN_CELLS = 16
+
+#: Most grid cells per chain.
+GRID_MAX_CELLS = 20000
+
+#: Tangent turn below which two pieces meet smoothly (no blend needed) [rad].
+SMOOTH_TURN = 1e-6
+
+#: Tangent turn above which a corner cannot be blended (reversal) [rad].
+MAX_BLEND_TURN = math.pi - 1e-3
+
+
+@dataclass
+class Slowdown:
+    """A stretch where the feed runs below the programmed speed because of a limit.
+
+    Attributes
+    ----------
+    motion : int
+        Index of the motion in the chain's program.
+    label : str
+    start_xyz, end_xyz : ndarray, shape (3,) [m]
+    speed : float
+        Feed speed there [m/s].
+    programmed : float
+        Programmed speed [m/s].
+    reason : str
+        E.g. ``"velocity of joint A4"``, ``"acceleration of joint A1"``,
+        ``"orientation speed"``, ``"path curvature"``.
+    """
+
+    motion: int
+    label: str
+    start_xyz: np.ndarray
+    end_xyz: np.ndarray
+    speed: float
+    programmed: float
+    reason: str
+
+    def to_dict(self) -> dict:
+        return {"instruction": self.label, "start_xyz_mm": (1e3 * self.start_xyz).tolist(),
+                "end_xyz_mm": (1e3 * self.end_xyz).tolist(), "speed_mm_s": 1e3 * self.speed,
+                "programmed_mm_s": 1e3 * self.programmed, "reason": self.reason}
+
+
+@dataclass
+class CartesianChain:
+    """A planned chain of LIN/CIRC motions between two stops."""
+
+    robot: RobotModel
+    pieces: list[Piece]
+    offsets: np.ndarray
+    grid_s: np.ndarray
+    grid_q: np.ndarray
+    grid_dq: np.ndarray
+    grid_ddq: np.ndarray
+    feed: Feed
+    labels: list[str]
+    motion_ids: list[int]
+    slowdowns: list[Slowdown] = field(default_factory=list)
+
+    @property
+    def duration(self) -> float:
+        return self.feed.duration
+
+    @property
+    def q_start(self) -> np.ndarray:
+        return self.grid_q[0]
+
+    @property
+    def q_end(self) -> np.ndarray:
+        return self.grid_q[-1]
+
+    def locate(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k = np.clip(np.searchsorted(self.offsets, s, side="right") - 1, 0, len(self.pieces) - 1)
+        return k, s - self.offsets[k]
+
+    def geometry(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (n, 3), quaternions (n, 4), tool rate (n,), motion ids (n,) at parameter s."""
+        k, local = self.locate(s)
+        pos = np.empty((s.size, 3))
+        quat = np.empty((s.size, 4))
+        rate = np.empty(s.size)
+        mid = np.empty(s.size, dtype=int)
+        for i in np.unique(k):
+            m = k == i
+            pc = self.pieces[i]
+            pos[m] = pc.point(local[m])
+            quat[m] = pc.quat(local[m])
+            rate[m] = pc.tool_rate
+            mid[m] = self.motion_ids[pc.motion]
+        return pos, quat, rate, mid
+
+    def sample(self, t: np.ndarray) -> dict[str, np.ndarray]:
+        """IK at every sample time ``t`` (n,) [s] (local to the chain)."""
+        s, v, a = self.feed.sample(t)
+        pos, quat, rate, mid = self.geometry(s)
+        rots = matrix_from_quat(quat)
+        nj = self.robot.n_joints
+        q = np.empty((s.size, nj))
+        seeds = np.column_stack([np.interp(s, self.grid_s, self.grid_q[:, j]) for j in range(nj)])
+        for i in range(s.size):
+            q[i] = self._ik(Pose.trusted(pos[i], rots[i]), seeds[i], int(mid[i]), pos[i])
+        dq = np.column_stack([np.interp(s, self.grid_s, self.grid_dq[:, j]) for j in range(nj)])
+        ddq = np.column_stack([np.interp(s, self.grid_s, self.grid_ddq[:, j]) for j in range(nj)])
+        qd = dq * v[:, None]
+        qdd = dq * a[:, None] + ddq * (v * v)[:, None]
+        return {"q": q, "qd": qd, "qdd": qdd, "xyz": pos, "quat": quat,
+                "tool_speed": v * rate, "motion": mid}
+
+    def _ik(self, pose: Pose, seed: np.ndarray, motion: int, p: np.ndarray) -> np.ndarray:
+        try:
+            return self.robot.ik_near(pose, seed)
+        except UnreachableError as exc:
+            lab = self.labels[self.motion_ids.index(motion)] if motion in self.motion_ids else ""
+            raise UnreachableError(f"{lab}: point {_mm(p)} is unreachable: {exc}") from None
+
+
+def _mm(p: Any) -> str:
+    return "(" + ", ".join(f"{1e3 * float(x):.3f}" for x in p) + ") mm"
+
+
+def _target_pose(robot: RobotModel, t: Any, label: str) -> tuple[Pose, Any]:
+    if isinstance(t, JointTarget):
+        q = robot.check_joints(t.q, f"{label}: joints of point {t.name}")
+        return robot.fk(q), robot.config_of(q)
+    return t.pose, (None if t.config is None else robot.parse_config(t.config))
+
+
+def _base_pieces(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str]):
+    pose = robot.fk(q0)
+    p_prev, quat_prev = pose.position, quat_from_matrix(pose.rotation)
+    out = []  # (piece-spec dict) per motion
+    for i, (m, lab) in enumerate(zip(motions, labels)):
+        tpose, cfg = _target_pose(robot, m.target, lab)
+        p_end, quat_end = tpose.position, quat_from_matrix(tpose.rotation)
+        if float(np.dot(quat_prev, quat_end)) < 0:
+            quat_end = -quat_end
+        ang = rotation_angle(quat_prev, quat_end)
+        path = None
+        if isinstance(m, Circ):
+            vpose, _ = _target_pose(robot, m.via, lab)
+            try:
+                path = Arc3(p_prev, vpose.position, p_end)
+            except InvalidInputError as exc:
+                raise InvalidInputError(f"{lab}: {exc}") from None
+        elif float(np.linalg.norm(p_end - p_prev)) > COINCIDENT_DIST:
+            path = Line(p_prev, p_end)
+        out.append({"path": path, "p0": p_prev, "p1": p_end, "quat0": quat_prev,
+                    "quat1": quat_end, "angle": ang, "speed": float(m.speed),
+                    "zone": float(m.zone), "config": cfg, "motion": i})
+        p_prev, quat_prev = p_end, quat_end
+    return out
+
+
+def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
+    w_max = robot.orientation_speed
+    n = len(specs)
+    # trims at both ends of each path spec
+    trim0 = [0.0] * n
+    trim1 = [0.0] * n
+    blends: dict[int, float] = {}
+    for i in range(n - 1):
+        a, b = specs[i], specs[i + 1]
+        if a["zone"] <= 0 or a["path"] is None or b["path"] is None:
+            continue
+        ta = a["path"].tangent(a["path"].length)
+        tb = b["path"].tangent(0.0)
+        turn = angle_between_tangents(ta, tb)
+        if turn < SMOOTH_TURN or turn > MAX_BLEND_TURN:
+            continue
+        r = min(a["zone"], 0.5 * a["path"].length, 0.5 * b["path"].length)
+        trim1[i] = r
+        trim0[i + 1] = r
+        blends[i] = r
+    pieces: list[Piece] = []
+    for i, sp in enumerate(specs):
+        path = sp["path"]
+        v = sp["speed"]
+        if path is None:
+            if sp["angle"] <= 0.0:
+                continue
+            L = sp["angle"] * robot.length_scale
+            pieces.append(Piece("orient", L, constant_point(sp["p0"]), sp["quat0"], sp["quat1"],
+                                w_max * robot.length_scale, i, 0.0, "orientation speed"))
+            continue
+        a, b = trim0[i], path.length - trim1[i]
+        frac0, frac1 = a / path.length, b / path.length
+        from ._rotations import slerp
+        qa = slerp(sp["quat0"], sp["quat1"], frac0)
+        qb = slerp(sp["quat0"], sp["quat1"], frac1)
+        cap, reason = v, ""
+        if sp["angle"] > 0 and w_max * path.length / sp["angle"] < v:
+            cap, reason = w_max * path.length / sp["angle"], "orientation speed"
+        pieces.append(Piece("path", b - a, sub_path(path, a, b), qa, qb, cap, i, 1.0, reason, v))
+        if i in blends:
+            r = blends[i]
+            nxt = specs[i + 1]
+            pa = path.point(b)
+            tang_a = path.tangent(b)
+            pb = nxt["path"].point(r)
+            tang_b = nxt["path"].tangent(r)
+            qn = slerp(nxt["quat0"], nxt["quat1"], r / nxt["path"].length)
+            bz = BezierBlend(pa, tang_a, pb, tang_b, r)
+            cap_b = min(v, nxt["speed"])
+            pieces.append(Piece("blend", bz.length, bz.point, qb, qn, cap_b, i, 1.0, ""))
+    return pieces
+
+
+def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str],
+               motion_ids: Sequence[int]) -> CartesianChain:
+    """Plan LIN/CIRC ``motions`` from joints ``q0`` as one chain (rest to rest).
+
+    Raises
+    ------
+    UnreachableError
+        A point of the path is out of reach or needs a joint outside its
+        range, or the path crosses a singularity that cannot be passed (the
+        message names the instruction and the point).
+    InvalidInputError
+        Degenerate arcs.
+    """
+    labels = list(labels)
+    specs = _base_pieces(robot, q0, motions, labels)
+    pieces = _pieces(robot, specs)
+    if not pieces:
+        return None  # nothing moves
+    lengths = np.array([p.length for p in pieces])
+    offsets = np.concatenate([[0.0], np.cumsum(lengths)])
+    total = float(offsets[-1])
+    # ---- grid
+    grid = []
+    for i, pc in enumerate(pieces):
+        n = max(GRID_MIN_CELLS, int(math.ceil(pc.length / GRID_DS)))
+        n = min(n, GRID_MAX_CELLS)
+        ss = offsets[i] + np.linspace(0.0, pc.length, n + 1)
+        grid.append(ss if i == 0 else ss[1:])
+    s = np.concatenate(grid)
+    keep = np.concatenate([[True], np.diff(s) > 0])
+    s = s[keep]
+    k = np.clip(np.searchsorted(offsets, s, side="right") - 1, 0, len(pieces) - 1)
+    local = s - offsets[k]
+    nj = robot.n_joints
+    q = np.empty((s.size, nj))
+    pos = np.empty((s.size, 3))
+    mot = np.empty(s.size, dtype=int)
+    quat = np.empty((s.size, 4))
+    for i in np.unique(k):
+        m = k == i
+        pos[m] = pieces[i].point(local[m])
+        quat[m] = pieces[i].quat(local[m])
+        mot[m] = pieces[i].motion
+    rots = matrix_from_quat(quat)
+    seed = np.asarray(q0, dtype=np.float64)
+    for idx in range(s.size):
+        pc = pieces[k[idx]]
+        p = pos[idx]
+        r = rots[idx]
+        try:
+            qi = robot.ik_near(Pose.trusted(p, r), seed)
+        except UnreachableError as exc:
+            raise UnreachableError(
+                f"{labels[pc.motion]}: point {_mm(p)} of the path is unreachable: {exc}"
+            ) from None
+        q[idx] = qi
+        seed = qi
+    # ---- configuration of the targets (a LIN/CIRC cannot change configuration)
+    for sp in specs:
+        if sp["config"] is None:
+            continue
+        last = np.nonzero(mot == sp["motion"])[0]
+        if last.size and robot.config_of(q[last[-1]]) != sp["config"] and robot.configs != ("numeric",):
+            raise UnreachableError(
+                f"{labels[sp['motion']]}: the target is taught in configuration {sp['config']!r} "
+                f"but the path arrives in {robot.config_of(q[last[-1]])!r} "
+                "(a LIN/CIRC cannot change configuration; use PTP)"
+            )
+    # ---- derivatives along the path
+    dq = np.gradient(q, s, axis=0)
+    ddq = np.gradient(dq, s, axis=0)
+    vmax = np.array([lim.v_max for lim in robot.limits])
+    amax = np.array([min(lim.a_max, lim.a_max_decel) for lim in robot.limits])
+    with np.errstate(divide="ignore"):
+        vel_cap = VEL_USE * vmax[None, :] / np.abs(dq)
+        acc_cap = np.sqrt(ACC_CURVE_USE * amax[None, :] / np.abs(ddq))
+        dpos = np.gradient(pos, s, axis=0)
+        ddpos = np.gradient(dpos, s, axis=0)
+        curv = np.linalg.norm(ddpos, axis=1)
+        cart_cap = np.sqrt(CART_CURVE_USE * robot.cartesian_accel / curv)
+    prog = np.array([pieces[i].cap for i in k])
+    cand = np.column_stack([prog, vel_cap, acc_cap, cart_cap])
+    node_cap = cand.min(axis=1)
+    programmed = np.array([pieces[i].programmed for i in k])
+    worst = int(np.argmin(node_cap / programmed))
+    if node_cap[worst] < MIN_SPEED_FRACTION * programmed[worst]:
+        jv = int(np.argmin(vel_cap[worst]))
+        raise UnreachableError(
+            f"{labels[mot[worst]]}: the path passes through a singularity at {_mm(pos[worst])} "
+            f"that cannot be passed: joint {robot.joint_names[jv]} would need "
+            f"{np.abs(dq[worst, jv]):.4g} rad per m of path, allowing only "
+            f"{1e3 * node_cap[worst]:.4g} mm/s (< {100 * MIN_SPEED_FRACTION:g} % of the programmed "
+            f"{1e3 * programmed[worst]:.4g} mm/s)"
+        )
+    # ---- runs: cells with quantised caps
+    cell_cap = np.minimum(node_cap[:-1], node_cap[1:])
+    cell_piece = k[:-1]
+    cell_prog = np.array([pieces[i].cap for i in cell_piece])
+    # a cell at the end of a piece also obeys the next piece's programmed cap
+    cell_prog = np.minimum(cell_prog, np.array([pieces[i].cap for i in k[1:]]))
+    # quantise strictly downwards: a level never exceeds its cell cap
+    with np.errstate(divide="ignore"):
+        steps = np.ceil(np.log(cell_cap / cell_prog) / math.log(LEVEL_RATIO))
+    level_speed = np.where(cell_cap >= cell_prog, cell_prog, cell_prog * LEVEL_RATIO**steps)
+    with np.errstate(divide="ignore"):
+        path_acc = np.min(ACC_PATH_USE * amax[None, :] / np.abs(dq), axis=1)
+    runs: list[Run] = []
+    run_cells: list[tuple[int, int]] = []
+    i0 = 0
+    ncell = s.size - 1
+    for c in range(1, ncell + 1):
+        if c == ncell or level_speed[c] != level_speed[i0]:
+            acc = min(robot.cartesian_accel, float(np.min(path_acc[i0:c + 1])))
+            jerk = robot.cartesian_jerk * acc / robot.cartesian_accel
+            runs.append(Run(float(s[i0]), float(s[c]), float(level_speed[i0]), acc, jerk))
+            run_cells.append((i0, c))
+            i0 = c
+    feed = plan_feed(runs)
+    chain = CartesianChain(robot, pieces, offsets, s, q, dq, ddq, feed, labels,
+                           list(motion_ids))
+    # ---- slow-downs caused by limits (not by the programmed speed)
+    for run, (c0, c1) in zip(runs, run_cells):
+        prog_run = float(np.min(programmed[c0:c1 + 1]))
+        if run.cap >= prog_run * (1.0 - 1e-9):
+            continue
+        nodes = np.arange(c0, c1 + 1)
+        j = nodes[int(np.argmin(node_cap[nodes]))]
+        col = int(np.argmin(cand[j]))
+        if col == 0:
+            reason = pieces[k[j]].cap_reason or "programmed speed"
+        elif col == 1:
+            reason = f"velocity of joint {robot.joint_names[int(np.argmin(vel_cap[j]))]}"
+        elif col == 2:
+            reason = f"acceleration of joint {robot.joint_names[int(np.argmin(acc_cap[j]))]}"
+        else:
+            reason = "path curvature (tool acceleration)"
+        mi = int(mot[j])
+        if (chain.slowdowns and chain.slowdowns[-1].motion == mi
+                and chain.slowdowns[-1].reason == reason):
+            sd = chain.slowdowns[-1]
+            sd.end_xyz = pos[c1]
+            sd.speed = min(sd.speed, run.speed)
+            continue
+        chain.slowdowns.append(Slowdown(mi, labels[mi], pos[c0], pos[c1], run.speed,
+                                        float(programmed[j]), reason))
+    return chain

@@ -1,0 +1,66 @@
+"""Run every numbered example script (``examples/*.py``) in a subprocess.
+
+Each example must run to completion with ``--out DIR`` (exit status 0), print
+real numbers on stdout, and write its output files (plots, CSV) into DIR and
+nowhere else. Examples added later are picked up by the glob.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
+EXAMPLES = sorted(EXAMPLES_DIR.glob("[0-9]*.py"))
+
+#: Generous wall-clock guard per script on a slow CI machine [s] (a hang
+#: guard, not a timing assertion).
+EXAMPLE_TIMEOUT_S = 300
+
+
+#: Lines that known examples must print (closed forms checked by hand):
+#: 01: 0.8 m at v 1, a 4, j 40 -> each leg a/j + v/a = 0.35 s covering
+#: 0.175 m, cruise 0.45 m at 1 m/s -> T = 1.15 s.
+EXPECTED = {
+    "01_single_axis_move": ["symmetric : T = 1.150000 s, shape 7-phase",
+                            "final position 0.8 m"],
+    "02_multi_axis_ptp": ["sync=time : T = 1.350000 s", "spread of the normalised progress"],
+}
+
+
+def test_examples_are_found():
+    names = [p.name for p in EXAMPLES]
+    assert "01_single_axis_move.py" in names and "02_multi_axis_ptp.py" in names
+
+
+@pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_example_runs(script, tmp_path):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "out"
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    env = dict(os.environ, MPLBACKEND="Agg")
+    proc = subprocess.run(
+        [sys.executable, str(script), "--out", str(out)],
+        capture_output=True, text=True, timeout=EXAMPLE_TIMEOUT_S, env=env, cwd=cwd,
+    )
+    assert proc.returncode == 0, f"{script.name} failed:\n{proc.stdout}\n{proc.stderr}"
+    assert "Traceback" not in proc.stderr
+    assert any(ch.isdigit() for ch in proc.stdout), "an example prints real numbers"
+    written = sorted(p.name for p in out.iterdir()) if out.exists() else []
+    assert written, f"{script.name} wrote nothing into --out"
+    for name in written:
+        assert (out / name).stat().st_size > 0, name
+        assert ".tmp-" not in name
+    assert list(cwd.iterdir()) == [], "an example wrote into the working directory"
+    for text in EXPECTED.get(script.stem, []):
+        assert text in proc.stdout, text
+    # every file the example says it wrote is in --out
+    for line in proc.stdout.splitlines():
+        if line.strip().startswith("wrote "):
+            path = Path(line.strip()[len("wrote "):].split(" ")[0])
+            assert path.parent == out and path.exists(), line

@@ -1,0 +1,76 @@
+"""URDF robots through pinocchio: FK against the closed-form Arm6, seeded numeric IK."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pinocchio")
+
+from trajkit.errors import InvalidInputError, UnreachableError  # noqa: E402
+from trajkit.kinematics.arm6 import default_arm6  # noqa: E402
+from trajkit.kinematics.base import Pose  # noqa: E402
+from trajkit.kinematics.urdf import UrdfRobot  # noqa: E402
+
+URDF = Path(__file__).parent / "data" / "arm6_test.urdf"
+
+
+@pytest.fixture(scope="module")
+def robots():
+    return UrdfRobot(URDF, "tool0"), default_arm6()
+
+
+def test_structure_from_urdf(robots):
+    urdf, arm = robots
+    assert urdf.joint_names == arm.joint_names
+    assert urdf.n_joints == 6
+    for a, b in zip(urdf.limits, arm.limits):
+        assert a.position_min == pytest.approx(b.position_min, abs=1e-12)
+        assert a.position_max == pytest.approx(b.position_max, abs=1e-12)
+        assert a.v_max == pytest.approx(b.v_max, rel=1e-12)
+
+
+def test_fk_matches_closed_form_arm(robots):
+    urdf, arm = robots
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        q = np.array([rng.uniform(l.position_min, l.position_max) for l in arm.limits])
+        dp, da = urdf.fk(q).distance(arm.fk(q))
+        assert dp < 1e-12 and da < 1e-12
+
+
+def test_seeded_ik_stays_on_branch(robots):
+    urdf, arm = robots
+    rng = np.random.default_rng(4)
+    for _ in range(40):
+        q = np.array([rng.uniform(0.8 * l.position_min, 0.8 * l.position_max) for l in arm.limits])
+        pose = arm.fk(q)
+        seed = q + rng.normal(0.0, 0.02, 6)
+        qs = urdf.ik_near(pose, seed)
+        dp, da = pose.distance(urdf.fk(qs))
+        assert dp < 1e-9 * urdf.length_scale and da < 1e-9
+        # near the seed, the numeric solution is the closed-form one of the same branch
+        assert np.abs(qs - arm.ik(pose, arm.config_of(q), seed=q)).max() < 1e-6
+
+
+def test_ik_all_finds_closed_form_solutions(robots):
+    urdf, arm = robots
+    pose = arm.fk(np.array([0.2, 0.3, 0.4, 0.5, 0.6, 0.7]))
+    found = urdf.ik_all(pose)
+    assert found
+    for _, q in found:
+        dp, da = pose.distance(urdf.fk(q))
+        assert dp < 1e-9 and da < 1e-9
+
+
+def test_errors(robots, tmp_path):
+    urdf, _ = robots
+    with pytest.raises(UnreachableError, match=r"\(3000\.000, 0\.000, 0\.000\) mm"):
+        urdf.ik(Pose.from_xyz_abc([3.0, 0.0, 0.0]))
+    with pytest.raises(InvalidInputError, match="no link named 'nope'"):
+        UrdfRobot(URDF, "nope")
+    with pytest.raises(InvalidInputError, match="does not exist"):
+        UrdfRobot(tmp_path / "missing.urdf", "tool0")
