@@ -271,6 +271,7 @@ def environment() -> dict:
         "ruckig": rk_version,
         "cpus": os.cpu_count(),
         "machine": platform.machine(),
+        "cpu": _cpu_model(),
         "OPENBLAS_CORETYPE": os.environ.get("OPENBLAS_CORETYPE"),
         "OPENBLAS_L2_SIZE": os.environ.get("OPENBLAS_L2_SIZE"),
     }
@@ -284,6 +285,17 @@ def environment() -> dict:
     except ImportError:
         env["blas"] = None
     return env
+
+
+def _cpu_model() -> str | None:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or None
 
 
 def _verdict(ok: bool) -> str:
@@ -336,7 +348,7 @@ def print_report(r: dict) -> None:
     print(f"AxisLimits construction (not in the times above): {sc['axislimits_us']:.2f} us")
     e = r["environment"]
     print(f"python {e['python']}, numpy {e['numpy']}, ruckig {e['ruckig']}, "
-          f"{e['cpus']} cpus, OPENBLAS_CORETYPE={e['OPENBLAS_CORETYPE']}, "
+          f"{e['cpus']} cpus ({e['cpu']}), OPENBLAS_CORETYPE={e['OPENBLAS_CORETYPE']}, "
           f"blas={e['blas']}")
 
 

@@ -64,3 +64,23 @@ def test_example_runs(script, tmp_path):
         if line.strip().startswith("wrote "):
             path = Path(line.strip()[len("wrote "):].split(" ")[0])
             assert path.parent == out and path.exists(), line
+
+
+def test_benchmark_script_runs_small(tmp_path):
+    """benchmarks/bench_profiles.py runs end to end on tiny sizes and its
+    durations agree with ruckig (no timing is asserted)."""
+    pytest.importorskip("ruckig")
+    script = EXAMPLES_DIR.parent / "benchmarks" / "bench_profiles.py"
+    proc = subprocess.run(
+        [sys.executable, str(script), "--moves", "200", "--batch", "500", "--ptp", "30",
+         "--samples", "2000", "--repeat", "1", "--json"],
+        capture_output=True, text=True, timeout=EXAMPLE_TIMEOUT_S, cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    import json
+
+    r = json.loads(proc.stdout)
+    for key in ("scalar", "batch", "ptp6"):
+        assert r[key]["max_rel_duration_diff"] < 1e-9, (key, r[key])
+    assert r["sampling"]["profile_axis_samples_per_s"] > 0
+    assert "WARNING" not in proc.stderr

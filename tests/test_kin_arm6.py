@@ -10,7 +10,12 @@ import pytest
 
 from trajkit.errors import InvalidInputError, UnreachableError
 from trajkit.kinematics.arm6 import ARM6_FLAGS, default_arm6
-from trajkit.kinematics.base import Pose, abc_from_rotation, rotation_from_abc, wrap_angle
+from trajkit.kinematics.base import (
+    Pose,
+    abc_from_rotation,
+    rotation_from_abc,
+    wrap_angle,
+)
 
 N = 3000 if os.environ.get("TRAJKIT_SWEEP") else 300
 #: FK(IK(x)) must reproduce x to this fraction of the reach (and in rad).

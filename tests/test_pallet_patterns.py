@@ -102,6 +102,11 @@ def test_fit_errors_name_box_side_and_bound():
         check_layer_fit(over, 2.0, 2.0)
     touching = LayerPattern(np.array([[0.0, 0.0], [0.6, 0.0]]), np.zeros(2), BOX, "ok")
     check_layer_fit(touching, 2.0, 2.0)
+    tilted = LayerPattern(np.array([[0.0, 0.0], [0.62, 0.1]]), np.array([0.0, 0.3]), BOX, "tilt")
+    with pytest.raises(InvalidInputError, match="boxes 0 and 1 of layer pattern 'tilt' overlap"):
+        check_layer_fit(tilted, 3.0, 3.0)
+    apart = LayerPattern(np.array([[0.0, 0.0], [0.9, 0.0]]), np.array([0.0, 0.3]), BOX, "apart")
+    check_layer_fit(apart, 3.0, 3.0)
     # overhang allowance
     check_layer_fit(seed_layer(), 1.1, 1.0, overhang=0.05)
     with pytest.raises(InvalidInputError, match="does not fit on the pallet"):
@@ -116,8 +121,8 @@ def test_generated_patterns_always_fit_sweep():
     rng = np.random.default_rng(7)
     for _ in range(N):
         L, W = rng.uniform(0.6, 2.0, 2)
-        l = rng.uniform(0.15, 0.7)
-        w = rng.uniform(0.1, 1.0) * l
+        l = rng.uniform(0.2, 0.7)
+        w = rng.uniform(0.25, 1.0) * l
         box = BoxSize(l, w, 0.1)
         for name in ("column", "interlock", "pinwheel"):
             for alt in ("rotate180", "mirror"):

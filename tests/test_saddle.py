@@ -150,7 +150,7 @@ def test_saddle_plan_holds_every_axis_limit(i):
     # 1. the planner's own check (analytic values at every piece boundary and 8 points per period)
     assert plan.check.ok
     # 2. an independent, finer reference grid (up to 40 points per period)
-    t = np.linspace(0, plan.duration, min(int(plan.duration / dt) * 40 + 2, 150_001))
+    t = np.linspace(0, plan.duration, min(int(plan.duration / dt) * 40 + 2, 80_001))
     st = plan.axes(t)
     peaks = np.max(np.abs(st[:, 1:]), axis=2)
     assert np.all(peaks <= lim * (1 + 1e-9)), (peaks / lim)

@@ -98,15 +98,19 @@ def test_position_overshoot_inside_a_phase_found_analytically():
     p = plan_move(0.0, 5.0, SYM)
     d = list(p.phase_durations)
     d[5] += 0.15  # v: 0.8 -> 0.8 - 2 * 0.45 = -0.1, zero after 0.4 s
-    bad = _rebuild(p, limits=AxisLimits(1.0, 2.0, 10.0, position_max=5.0, name="B"),
-                   phase_durations=tuple(d), duration=sum(d))
     # analytic overshoot: p at the start of phase 5 plus 0.8 * 0.4 - 2 * 0.4^2 / 2
     p5 = p.boundary_states()[5, 0]
-    peak = p5 + 0.8 * 0.4 - 0.16
+    peak = p5 + 0.8 * 0.4 - 0.16                 # 4.99667 at the v = 0 root
+    end5 = p5 + 0.8 * 0.45 - 0.45 ** 2           # 4.99417 at the phase end
+    pmax = 4.995
+    assert end5 < pmax < peak
+    bad = _rebuild(p, limits=AxisLimits(1.0, 2.0, 10.0, position_max=pmax, name="B"),
+                   phase_durations=tuple(d), duration=sum(d))
+    assert np.all(bad.boundary_states()[:7, 0] < pmax)  # no phase start shows it
     rep = verify_profile(bad, n_samples=0)
     v = next(x for x in rep.violations if x.quantity == "position")
     assert v.value == pytest.approx(peak, rel=EXACT)
-    assert v.limit == 5.0
+    assert v.limit == pmax
     assert v.time == pytest.approx(sum(d[:5]) + 0.4, rel=EXACT)
     assert "goal" in _quantities(rep)
 

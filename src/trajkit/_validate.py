@@ -59,9 +59,22 @@ def check_positive(
 
 
 def check_array(
-    value: Any, field: str, ndim: int | None = 1, size: int | None = None
+    value: Any, field: str, ndim: int | None = 1, size: int | None = None,
+    finite: bool = True,
 ) -> np.ndarray:
-    """Coerce to a finite float64 array of the expected shape.
+    """Coerce to a float64 array of the expected shape (finite by default).
+
+    Parameters
+    ----------
+    value : array_like
+        Input.
+    field : str
+        Name used in messages.
+    ndim, size : int, optional
+        Required number of dimensions / of entries.
+    finite : bool
+        Reject NaN/inf entries (set False when the caller checks each entry
+        itself with a better message, e.g. naming the axis).
 
     Raises
     ------
@@ -81,7 +94,7 @@ def check_array(
         raise InvalidInputError(
             f"{field} must have {size} entries (one per axis), got {arr.size}"
         )
-    bad = ~np.isfinite(arr)
+    bad = ~np.isfinite(arr) if finite else np.zeros(arr.shape, dtype=bool)
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         where = idx[0] if len(idx) == 1 else idx

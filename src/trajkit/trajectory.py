@@ -230,8 +230,9 @@ def plan_ptp(
     """
     if sync not in SYNC_MODES:
         raise InvalidInputError(f"sync must be one of {SYNC_MODES}, got {sync!r}")
-    s = check_array(start, "start", ndim=1)
-    g = check_array(goal, "goal", ndim=1)
+    # entries are checked per axis below (the messages name the axis)
+    s = check_array(start, "start", ndim=1, finite=False)
+    g = check_array(goal, "goal", ndim=1, finite=False)
     if s.shape != g.shape:
         raise InvalidInputError(
             f"start has {s.size} axes but goal has {g.size}"
@@ -243,7 +244,12 @@ def plan_ptp(
     sl = [lim.check_position(x, "start") for lim, x in zip(lims, s.tolist())]
     gl = [lim.check_position(x, "goal") for lim, x in zip(lims, g.tolist())]
     if duration is not None:
-        duration = float(duration)
+        try:
+            duration = float(duration)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"duration must be a number of seconds, got {duration!r}"
+            ) from None
         if not math.isfinite(duration) or duration < 0:
             raise InvalidInputError(f"duration must be finite and >= 0 s, got {duration!r}")
         if sync == "none":

@@ -1,6 +1,7 @@
 """Interpolation along paths: feed profiles, fixed-period setpoints, machine axes."""
 
 from .feed import (
+    CHORD_REASON,
     MAX_PERIOD,
     MIN_PERIOD,
     FeedPlan,
@@ -13,6 +14,7 @@ from .feed import (
 from .machine import AXIS_NAMES, BUDGET, AxisCheck, SaddleMachine, SaddlePlan, axis_states, check_axes, plan_saddle
 
 __all__ = [
+    "CHORD_REASON",
     "AXIS_NAMES",
     "BUDGET",
     "AxisCheck",

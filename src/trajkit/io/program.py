@@ -8,7 +8,7 @@ greater than 0 (got -5)``.
 
 Example::
 
-    robot: arm6                 # arm6 | scara | {urdf: arm.urdf, tip_link: tool0}
+    robot: arm6                 # arm6 | scara | palletizer | {urdf: arm.urdf, tip_link: tool0}
     defaults: {speed_mm_s: 250, speed_pct: 100, zone_mm: 0}
     start: home                 # optional; default: the first PTP's target
     points:
@@ -54,7 +54,7 @@ _MM = 1e-3
 _DEG = math.pi / 180.0
 
 #: Built-in robot model names accepted by ``robot:``.
-ROBOT_MODELS = ("arm6", "scara")
+ROBOT_MODELS = ("arm6", "scara", "palletizer")
 
 INSTRUCTIONS = ("PTP", "LIN", "CIRC", "WAIT")
 
@@ -248,17 +248,11 @@ class Program:
 
 
 def make_robot(spec: Any, base_dir: str | os.PathLike | None = None) -> RobotModel:
-    """Robot model from a ``robot:`` value: ``"arm6"``, ``"scara"`` or a URDF spec."""
+    """Robot model from a ``robot:`` value: ``"arm6"``, ``"scara"``, ``"palletizer"`` or a URDF spec."""
     if isinstance(spec, str):
-        if spec == "arm6":
-            from ..kinematics.arm6 import default_arm6
+        from ..robot.models import robot_by_name
 
-            return default_arm6()
-        if spec == "scara":
-            from ..kinematics.scara import default_scara
-
-            return default_scara()
-        raise InvalidInputError(f"robot must be one of {list(ROBOT_MODELS)} or a URDF spec, got {spec!r}")
+        return robot_by_name(spec)
     from ..kinematics.urdf import UrdfRobot
 
     p = Path(spec.urdf)
@@ -378,7 +372,7 @@ def parse_program(text: str, source: str = "<string>",
         line = _line_of(raw, loc)
         lines.append(line)
         ref = getattr(ins, kind) if kind != "WAIT" else None
-        label = f"instruction {i} ({kind}{' ' + ref if ref else ''}, {source}:{line})"
+        label = f"instruction {i} ({kind}{' ' + ref if ref else ''}, line {line})"
         if kind == "PTP":
             pct = d.speed_pct if ins.speed_pct is None else ins.speed_pct
             motions.append(Ptp(point(ref, loc + ("PTP",)), pct, label))

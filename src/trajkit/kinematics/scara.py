@@ -79,7 +79,7 @@ class Scara(RobotModel):
     def ik_all(self, pose: Pose) -> list[tuple[str, np.ndarray]]:
         """Both solutions (lefty, righty); empty when out of reach or tilted."""
         r = pose.rotation
-        if abs(r[2, 2] - 1.0) > SCARA_TILT_TOL or abs(r[0, 2]) > math.sqrt(SCARA_TILT_TOL):
+        if r[2, 2] <= 0.0 or math.hypot(r[0, 2], r[1, 2]) > SCARA_TILT_TOL:
             return []
         x, y, z = pose.position.tolist()
         yaw = math.atan2(r[1, 0], r[0, 0])

@@ -199,14 +199,19 @@ def check_layer_fit(layer: LayerPattern, pallet_length: float, pallet_width: flo
                     f"{side} side: it reaches {val * 1000:.1f} mm from the centre, the pallet "
                     f"edge is at {(bound - FIT_ATOL) * 1000:.1f} mm"
                 )
-    for i in range(fp.shape[0]):
-        for j in range(i + 1, fp.shape[0]):
-            if _overlap(fp[i], fp[j]):
-                raise InvalidInputError(
-                    f"boxes {i} and {j} of layer pattern {layer.name!r} overlap "
-                    f"(centres {tuple(np.round(layer.offsets[i] * 1000, 1))} and "
-                    f"{tuple(np.round(layer.offsets[j] * 1000, 1))} mm)"
-                )
+    # pairs whose bounding boxes overlap; exact for boxes turned by multiples of 90 deg
+    lo, hi = fp.min(axis=1), fp.max(axis=1)
+    sep = ((lo[:, None, :] >= hi[None, :, :] - FIT_ATOL)
+           | (lo[None, :, :] >= hi[:, None, :] - FIT_ATOL)).any(axis=2)
+    quarter = np.abs(np.sin(2.0 * layer.yaw)) <= FIT_ATOL
+    ii, jj = np.nonzero(np.triu(~sep, 1))
+    for i, j in zip(ii.tolist(), jj.tolist()):
+        if (quarter[i] and quarter[j]) or _overlap(fp[i], fp[j]):
+            raise InvalidInputError(
+                f"boxes {i} and {j} of layer pattern {layer.name!r} overlap "
+                f"(centres {tuple(np.round(layer.offsets[i] * 1000, 1))} and "
+                f"{tuple(np.round(layer.offsets[j] * 1000, 1))} mm)"
+            )
 
 
 def _overlap(p: np.ndarray, q: np.ndarray) -> bool:

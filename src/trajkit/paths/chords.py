@@ -175,8 +175,9 @@ def chord_deviations(path: Path, s_nodes: Any, samples: int = CHORD_CHECK_SAMPLE
         lo = np.where(left, lo, x1)
         nx1 = hi - _GOLDEN * (hi - lo)
         nx2 = lo + _GOLDEN * (hi - lo)
+        fn = f(np.where(left, nx1, nx2))  # one new evaluation per chord
         x1, x2 = np.where(left, nx1, x2), np.where(left, x1, nx2)
-        f1, f2 = np.where(left, f(nx1), f2), np.where(left, f1, f(nx2))
+        f1, f2 = np.where(left, fn, f2), np.where(left, f1, fn)
     return np.maximum(best, np.maximum(f1, f2))
 
 
@@ -321,12 +322,13 @@ def _next_step(sg, cell, ncell, s0, stop, target, max_chord):
     return min(step, max_chord, stop - s0)
 
 
-def uniform_chord_count(path: Path, tolerance: float, n_max: int = 1 << 20) -> int:
+def uniform_chord_count(path: Path, tolerance: float, n_max: int = 1 << 20, start: int = 1) -> int:
     """Smallest number of equal parameter steps whose chords all hold ``tolerance``.
 
     Equal steps of the path's natural parameter (:meth:`Path.uniform_nodes`:
     equal theta steps on a saddle seam, as in seed 003's "points per turn";
-    equal arc lengths otherwise). Found by bisection on the dense check.
+    equal arc lengths otherwise). Found by bisection on the dense check,
+    starting from ``start`` (a guess, e.g. the adaptive chord count).
 
     Returns
     -------
@@ -337,7 +339,11 @@ def uniform_chord_count(path: Path, tolerance: float, n_max: int = 1 << 20) -> i
     def ok(n):
         return float(np.max(chord_deviations(path, path.uniform_nodes(n)))) <= E
 
-    lo, hi = 0, 1
+    lo, hi = 0, max(1, int(start))
+    if ok(hi):
+        while hi > 1 and ok(hi // 2):
+            hi //= 2
+        lo = hi // 2
     while not ok(hi):
         lo, hi = hi, hi * 2
         if hi > n_max:

@@ -35,6 +35,7 @@ from ._tolerances import (
     ARC_INVERSION_MAX_ITER,
     ARC_INVERSION_RTOL,
     GAUSS_ORDER,
+    NEWTON_LAST_STEP,
     SADDLE_LENGTH_RTOL,
 )
 from .base import Path
@@ -277,10 +278,12 @@ class SaddleCurve(Path):
         k = np.clip(np.searchsorted(self._cum, ss, side="right") - 1, 0, len(self._edges) - 2)
         a, b = self._edges[k], self._edges[k + 1]
         th = np.clip(th, a, b)
-        tol = ARC_INVERSION_RTOL * self.length
+        tol = max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
         for _ in range(ARC_INVERSION_MAX_ITER):
             res = self._partial(k, th) - ss
             th = np.clip(th - res / self.speed_theta(th), a, b)
+            # residual below NEWTON_LAST_STEP * r: the step just taken squares
+            # it (quadratic convergence), far below ARC_INVERSION_RTOL
             if np.max(np.abs(res), initial=0.0) <= tol:
                 break
         return th

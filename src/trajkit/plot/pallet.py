@@ -29,8 +29,9 @@ PLOT_FILES = {
     "path3d": "pallet_gripper_path_3d.png",
 }
 
-#: Samples per second for the figures.
+#: Samples per second for the time plots and for the 3-D path.
 _PLOT_RATE = 1000.0
+_PATH_RATE = 100.0
 _DPI = 110
 
 
@@ -142,6 +143,12 @@ def _box_edges(pose, size):
     return [P[[a, b]] for a, b in edges]
 
 
+def _joined(edges):
+    """Stack edges (2, 3) into one polyline with NaN breaks (one artist, fast)."""
+    gap = np.full((1, 3), np.nan)
+    return np.vstack([np.vstack([e, gap]) for e in edges])
+
+
 def plot_gripper_path_3d(plans: Mapping[str, object] | object, boxes: Sequence[int] | None = None,
                          path=None):
     """3-D view of the gripper path (forward kinematics) over the stack.
@@ -160,16 +167,14 @@ def plot_gripper_path_3d(plans: Mapping[str, object] | object, boxes: Sequence[i
     fig = plt.figure(figsize=(8.0, 7.0))
     ax = fig.add_subplot(111, projection="3d")
     size = (sc.box.length, sc.box.width, sc.box.height)
-    for pose in sc.place_poses():
-        for e in _box_edges(pose, size):
-            ax.plot(*(e.T * 1000), color="0.6", lw=0.5)
-    pick = sc.pick
-    for e in _box_edges(pick, size):
-        ax.plot(*(e.T * 1000), color="C2", lw=0.8)
+    stack = _joined([e for pose in sc.place_poses() for e in _box_edges(pose, size)])
+    ax.plot(*(stack.T * 1000), color="0.6", lw=0.5, label="boxes on the pallet")
+    pick = _joined(_box_edges(sc.pick, size))
+    ax.plot(*(pick.T * 1000), color="C2", lw=0.8, label="box at the pick")
     for k, (name, plan) in enumerate(plans.items()):
         tl = plan.timeline
         if boxes is None:
-            t = np.linspace(0.0, tl.duration, int(tl.duration * 200) + 2)
+            t = np.linspace(0.0, tl.duration, int(tl.duration * _PATH_RATE) + 2)
         else:
             t = np.concatenate([np.linspace(*_cycle_window(plan, b)[1:], 400) for b in boxes])
         q = tl.sample(t).position

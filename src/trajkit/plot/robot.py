@@ -6,8 +6,6 @@ import math
 import os
 from typing import Any
 
-import numpy as np
-
 from . import require_matplotlib
 
 __all__ = ["plot_robot_run"]

@@ -40,11 +40,34 @@ _inf = math.inf
 _sqrt = math.sqrt
 
 #: Points per family scan (velocity or acceleration parameter).
-SCAN_POINTS = 40
+SCAN_POINTS = 16
 
 #: Offsets (fractions of the scan width) of extra grid points around the
 #: special parameter values, where legs change shape (square-root behaviour).
-MARK_OFFSETS = (1e-7, 1e-3)
+MARK_OFFSETS = (1e-6,)
+
+#: Round-off allowance (in units of machine epsilon times the position
+#: magnitude) for the goal position check: positions far from the origin
+#: cannot be hit more precisely than their own representation.
+FLOAT_ULPS = 64.0
+
+_eps = 2.220446049250313e-16
+
+#: Margin on the acceleration scan range ``sqrt(4 J V)``.
+ACC_CAP_FACTOR = 1.01
+
+#: A local extremum of a scanned residual is searched for hidden roots when
+#: the parabola through it dips below this fraction of its sampled value.
+PROMISING_FRACTION = 0.5
+
+#: Relative round-off allowance when a closed-form peak lands on a branch end.
+ROUND_RTOL = 4e-16
+
+#: Smallest positive magnitude used to guard divisions and comparisons.
+TINY = 1e-300
+
+#: Golden-section steps when looking for roots hidden between grid points.
+GOLDEN_ITER = 28
 
 #: Relative x-tolerance of the scalar root finder on a family parameter.
 SCAN_XRTOL = 1e-15
@@ -168,49 +191,60 @@ def _bump_frame(dv, a0, a1, A1, J1, A2, J2):
     ``dv`` is monotone in ``|ap|`` on every branch, so each has at most one
     solution; the fastest wins.
     """
-    best = None
+    best_ap = None
+    best_tp = 0.0
     best_t = _inf
-    hi = max(a0, a1)
-    lo = min(a0, a1)
-    branches = []  # (inner end, outer end, regime jerk, k sign, ap side, plateau)
-    if hi <= A1:
-        branches.append((max(hi, 0.0), A1, J1, +1.0, +1.0, A1))
-    if hi < 0.0:
-        branches.append((0.0, hi, J2, +1.0, -1.0, None))
-    if lo >= -A2:
-        branches.append((min(lo, 0.0), -A2, J2, -1.0, -1.0, -A2))
-    if lo > 0.0:
-        branches.append((0.0, lo, J1, -1.0, +1.0, None))
-    for inner, outer, J, ksign, side, plat in branches:
+    hi = a0 if a0 > a1 else a1
+    lo = a1 if a0 > a1 else a0
+    rdd = ramp_dv_dt
+    for b in range(4):
+        if b == 0:
+            if hi > A1:
+                continue
+            inner, outer, J, ksign, side, plat = (hi if hi > 0.0 else 0.0), A1, J1, 1.0, 1.0, A1
+        elif b == 1:
+            if hi >= 0.0:
+                continue
+            inner, outer, J, ksign, side, plat = 0.0, hi, J2, 1.0, -1.0, None
+        elif b == 2:
+            if lo < -A2:
+                continue
+            inner, outer, J, ksign, side, plat = (lo if lo < 0.0 else 0.0), -A2, J2, -1.0, -1.0, -A2
+        else:
+            if lo <= 0.0:
+                continue
+            inner, outer, J, ksign, side, plat = 0.0, lo, J1, -1.0, 1.0, None
         if abs(outer) < abs(inner):
             continue
         ap = None
         tp = 0.0
         if J != _inf:
             k = ksign / J
-            f_in = _bump_dv(a0, inner, a1, J1, J2)
-            c = f_in - k * inner * inner
-            s2 = (dv - c) / k
+            d1, t1 = rdd(a0, inner, J1, J2)
+            d2, t2 = rdd(inner, a1, J1, J2)
             in2 = inner * inner
-            if s2 >= in2 * (1.0 - 4e-16) or s2 >= in2 - 1e-300:
-                r = _sqrt(max(s2, in2))
-                if r <= abs(outer) * (1.0 + 4e-16):
-                    ap = side * min(r, abs(outer))
-        if ap is None and plat is not None and math.isfinite(plat):
-            f_p = _bump_dv(a0, plat, a1, J1, J2)
-            tp = (dv - f_p) / plat
+            s2 = (dv - (d1 + d2 - k * in2)) / k
+            if s2 >= in2 * (1.0 - ROUND_RTOL) or s2 >= in2 - TINY:
+                r = _sqrt(s2 if s2 > in2 else in2)
+                if r <= abs(outer) * (1.0 + ROUND_RTOL):
+                    ao = abs(outer)
+                    ap = side * (r if r < ao else ao)
+        if ap is None and plat is not None and plat != _inf and plat != -_inf:
+            d1, t1 = rdd(a0, plat, J1, J2)
+            d2, t2 = rdd(plat, a1, J1, J2)
+            tp = (dv - d1 - d2) / plat
             if tp >= 0.0:
                 ap = plat
             else:
                 tp = 0.0
         if ap is None:
             continue
-        t = _bump_dt(a0, ap, a1, tp, J1, J2)
+        t = rdd(a0, ap, J1, J2)[1] + tp + rdd(ap, a1, J1, J2)[1]
         if t < best_t:
-            best, best_t = (ap, tp), t
-    if best is None:
+            best_ap, best_tp, best_t = ap, tp, t
+    if best_ap is None:
         return None
-    return _bump_phases(a0, best[0], a1, best[1], J1, J2)
+    return _bump_phases(a0, best_ap, a1, best_tp, J1, J2)
 
 
 def bump(v0, a0, v1, a1, L):
@@ -258,6 +292,9 @@ def verify(phases, p0, v0, a0, L, goal, rtol=LIMIT_RTOL, check_goal=True):
     vscale = max(abs(v0), abs(goal[1]), 1e-300)
     ascale = max(abs(a0), abs(goal[2]), 1e-300)
     vtol = V * rtol if V != _inf else 0.0
+    vref = vscale
+    for dt, j, a_s in phases:
+        vref = max(vref, abs(a_s) * dt, abs(j) * dt * dt)
     for dt, j, a_s in phases:
         a = a_s
         if dt < 0.0 or not math.isfinite(dt):
@@ -288,6 +325,9 @@ def verify(phases, p0, v0, a0, L, goal, rtol=LIMIT_RTOL, check_goal=True):
             speeding = vm * am > 0.0 or vm == 0.0
             A = A1 if speeding else A2
             J = J1 if speeding else J2
+            if abs(vm) <= VERIFY_ATOL_SCALE * vref:
+                # |v| is at round-off level: the regime is undetermined
+                A, J = max(A1, A2), max(J1, J2)
             for t in (t0, t1):
                 at = a + t * j
                 if abs(at) > A * (1.0 + rtol) + VERIFY_ATOL_SCALE * ascale:
@@ -303,8 +343,10 @@ def verify(phases, p0, v0, a0, L, goal, rtol=LIMIT_RTOL, check_goal=True):
         ascale = max(ascale, abs(a))
     if check_goal:
         pg, vg, ag = goal
-        pscale = max(abs(pg - p0), abs(p0), abs(pg), vscale * total_time(phases), 1e-300)
-        if abs(p - pg) > GOAL_RTOL * pscale:
+        T = total_time(phases)
+        pscale = max(abs(pg - p0), vscale * T, ascale * T * T, 1e-300)
+        floor = FLOAT_ULPS * _eps * max(abs(p0), abs(pg))
+        if abs(p - pg) > GOAL_RTOL * pscale + floor:
             return f"goal position missed by {p - pg!r}"
         if abs(v - vg) > GOAL_RTOL * vscale:
             return f"goal velocity missed by {v - vg!r}"
@@ -345,36 +387,43 @@ def f1_profile(vc, start, goal, L, cruise=0.0):
     return b1 + b2
 
 
+def _ramp_signed(a_s, a_e, v_ref, L):
+    """Ramp ``a_s -> a_e`` in the frame of ``v_ref``; (phases, dv).
+
+    Uses the tighter jerk of both legs when the velocity would change sign.
+    """
+    V, A1, J1, A2, J2 = L
+    s = 1.0 if v_ref > 0.0 or (v_ref == 0.0 and a_e + a_s >= 0.0) else -1.0
+    r = []
+    dv, _ = ramp(s * a_s, s * a_e, J1, J2, r)
+    if (v_ref + s * dv) * s < 0.0 and J1 != J2:
+        Jm = min(J1, J2)
+        r = []
+        dv, _ = ramp(s * a_s, s * a_e, Jm, Jm, r)
+    return (r if s > 0 else negate(r)), s * dv
+
+
 def f2_profile(am, start, goal, L, first_is_ramp):
     """F2: a bump and a single ramp joined at acceleration ``am``.
 
     ``first_is_ramp=False``: bump ``(v0, a0) -> (vm, am)`` then the ramp
     ``am -> af``; ``True``: ramp ``a0 -> am`` then a bump to the goal.
     """
-    V, A1, J1, A2, J2 = L
     _, v0, a0 = start
     _, vf, af = goal
     if not first_is_ramp:
-        s = 1.0 if vf > 0.0 or (vf == 0.0 and af - am < 0.0) else -1.0
-        r = []
-        dv, _ = ramp(s * am, s * af, J1, J2, r)
-        vm = vf - s * dv
-        if vm * s < 0.0:
-            return None
+        r, dv = _ramp_signed(am, af, vf, L)
+        vm = vf - dv
         b = bump(v0, a0, vm, am, L)
         if b is None:
             return None
-        return b + (r if s > 0 else negate(r))
-    s = 1.0 if v0 > 0.0 or (v0 == 0.0 and am - a0 > 0.0) else -1.0
-    r = []
-    dv, _ = ramp(s * a0, s * am, J1, J2, r)
-    vm = v0 + s * dv
-    if vm * s < 0.0:
-        return None
+        return b + r
+    r, dv = _ramp_signed(a0, am, v0, L)
+    vm = v0 + dv
     b = bump(vm, am, vf, af, L)
     if b is None:
         return None
-    return (r if s > 0 else negate(r)) + b
+    return r + b
 
 
 def _root(fun, x0, f0, x1, f1):
@@ -411,26 +460,78 @@ def _root(fun, x0, f0, x1, f1):
     return x0 if abs(f0) < abs(f1) else x1
 
 
+def _golden_min(fun, a, b, sgn, n=GOLDEN_ITER):
+    """Minimise ``sgn*fun`` on ``[a, b]`` (golden section); ``(x, f(x))``."""
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    c = b - g * (b - a)
+    d = a + g * (b - a)
+    fc, fd = fun(c), fun(d)
+    if fc is None or fd is None:
+        return None
+    for _ in range(n):
+        if sgn * fc < sgn * fd:
+            b, d, fd = d, c, fc
+            c = b - g * (b - a)
+            fc = fun(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + g * (b - a)
+            fd = fun(d)
+        if fc is None or fd is None:
+            return None
+    return (c, fc) if sgn * fc < sgn * fd else (d, fd)
+
+
+def _promising(x0, f0, x1, f1, x2, f2):
+    """Does the parabola through three samples dip near or past zero?"""
+    d1 = (f1 - f0) / (x1 - x0) if x1 != x0 else 0.0
+    d2 = (f2 - f1) / (x2 - x1) if x2 != x1 else 0.0
+    c = (d2 - d1) / (x2 - x0) if x2 != x0 else 0.0
+    if c == 0.0:
+        return False
+    b = d1 - c * (x0 + x1)
+    xv = -b / (2.0 * c)
+
+    # vertex value of p(x) = f0 + d1 (x - x0) + c (x - x0)(x - x1)
+    fv = f0 + d1 * (xv - x0) + c * (xv - x0) * (xv - x1)
+    return (fv > 0.0) != (f1 > 0.0) or abs(fv) < PROMISING_FRACTION * abs(f1)
+
+
 def scan_roots(fun, grid):
-    """All sign changes of ``fun`` on ``grid``, refined to roots."""
-    vals = []
-    for x in grid:
-        vals.append((x, fun(x)))
+    """All roots of ``fun`` on ``grid``: sign changes between grid points,
+    plus pairs of roots hidden next to a local extremum of ``|fun|`` (found
+    by golden-section search), each refined by :func:`_root`."""
+    vals = [(x, fun(x)) for x in grid]
     roots = []
-    prev = None
-    for x, fx in vals:
+    n = len(vals)
+    for i in range(n):
+        x, fx = vals[i]
         if fx is None:
-            prev = None
             continue
         if fx == 0.0:
             roots.append(x)
-        if prev is not None:
-            xp, fp = prev
-            if fp != 0.0 and fx != 0.0 and (fp > 0.0) != (fx > 0.0):
+        if i > 0:
+            xp, fp = vals[i - 1]
+            if fp is not None and fp != 0.0 and fx != 0.0 and (fp > 0.0) != (fx > 0.0):
                 r = _root(fun, xp, fp, x, fx)
                 if r is not None:
                     roots.append(r)
-        prev = (x, fx)
+        if 0 < i < n - 1:
+            xp, fp = vals[i - 1]
+            xn, fn = vals[i + 1]
+            if fp is None or fn is None or fx == 0.0:
+                continue
+            sgn = 1.0 if fx > 0.0 else -1.0
+            if sgn * fp > sgn * fx <= sgn * fn and sgn * fp > 0.0 and sgn * fn > 0.0:
+                if not _promising(xp, fp, x, fx, xn, fn):
+                    continue
+                m = _golden_min(fun, xp, xn, sgn)
+                if m is not None and sgn * m[1] < 0.0:
+                    xm, fm = m
+                    for xa, fa in ((xp, fp), (xn, fn)):
+                        r = _root(fun, xa, fa, xm, fm)
+                        if r is not None:
+                            roots.append(r)
     return roots
 
 
@@ -466,8 +567,22 @@ def natural_scale(start, goal, L):
 def candidates_min_time(start, goal, L):
     """Every verified candidate profile of the minimum-time problem.
 
-    Returns a list of ``(duration, family, phases)``.
+    Returns a list of ``(duration, family, phases)``. With asymmetric
+    limits the families are also solved under the tighter symmetric limits
+    ``(V, min(A1, A2), min(J1, J2))`` (valid under the real ones); that
+    covers motions whose velocity changes sign, where the regime-exact
+    families (conservative inside a sign-changing bump) can have gaps.
     """
+    V, A1, J1, A2, J2 = L
+    out = _candidates(start, goal, L, L)
+    if A1 != A2 or J1 != J2:
+        Am, Jm = min(A1, A2), min(J1, J2)
+        out += [(t, fam + "-sym", ph) for t, fam, ph in
+                _candidates(start, goal, (V, Am, Jm, Am, Jm), L)]
+    return out
+
+
+def _candidates(start, goal, L, L_check):
     V, A1, J1, A2, J2 = L
     p0, v0, a0 = start
     pf, vf, af = goal
@@ -476,7 +591,7 @@ def candidates_min_time(start, goal, L):
     def add(ph, fam):
         if ph is None:
             return
-        if verify(ph, p0, v0, a0, L, goal) is None:
+        if verify(ph, p0, v0, a0, L_check, goal) is None:
             out.append((total_time(ph), fam, ph))
 
     Am, vn0, vnf = natural_scale(start, goal, L)
@@ -515,10 +630,13 @@ def candidates_min_time(start, goal, L):
                 add(f1_profile(vc, start, goal, L, cruise=tc), "F1-cruise")
     # ---- F2: bump + ramp joined at an acceleration extremum am
     if Am > 0.0:
-        A_lo = -(A2 if A2 != _inf else Am)
-        A_hi = (A1 if A1 != _inf else Am)
-        A_lo, A_hi = min(A_lo, -A_hi), max(A_hi, -A_lo)
-        amarks = [a0, af, 0.0, A1, -A1, A2, -A2]
+        Acap = max(A1 if A1 != _inf else Am, A2 if A2 != _inf else Am)
+        if V != _inf:
+            # |a| cannot exceed sqrt(4 J V) without |v| passing v_max
+            Acap = min(Acap, ACC_CAP_FACTOR * _sqrt(4.0 * max(J1, J2) * V))
+        Acap = max(Acap, abs(a0), abs(af))
+        A_lo, A_hi = -Acap, Acap
+        amarks = [a0, af, 0.0]
         for first in (False, True):
             def r2(am, first=first):
                 ph = f2_profile(am, start, goal, L, first)

@@ -6,9 +6,9 @@ at any period (IK at every Cartesian sample) and summarises the program
 (time, slow-downs, limit usage).
 """
 
+from ._cartesian import Slowdown
 from .execute import RobotRun, RobotSamples, Segment, run_motions
 from .motion import CartesianTarget, Circ, JointTarget, Lin, Ptp, Wait
-from ._cartesian import Slowdown
 
 __all__ = ["run_motions", "RobotRun", "RobotSamples", "Segment", "Slowdown",
            "Ptp", "Lin", "Circ", "Wait", "JointTarget", "CartesianTarget"]

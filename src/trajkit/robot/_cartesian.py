@@ -19,13 +19,20 @@ import numpy as np
 
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import Pose, RobotModel
+from ..paths._tolerances import COINCIDENT_DIST
 from ..paths.arc import Arc3
 from ..paths.line import Line
-from ..paths._tolerances import COINCIDENT_DIST
 from ._feed import Feed, Run, plan_feed
-from ._pieces import BezierBlend, Piece, angle_between_tangents, constant_point, sub_path
-from ._rotations import matrix_from_quat, quat_from_matrix, rotation_angle
-from .motion import CartesianTarget, Circ, JointTarget, Lin
+from ._pieces import (
+    BezierBlend,
+    Piece,
+    angle_between_tangents,
+    blended_orientation,
+    constant_point,
+    sub_path,
+)
+from ._rotations import matrix_from_quat, quat_from_matrix, rotation_angle, slerp
+from .motion import Circ, JointTarget
 
 __all__ = ["CartesianChain", "plan_chain"]
 
@@ -43,6 +50,9 @@ ACC_PATH_USE = 0.45
 #: Fraction of the tool acceleration limit used by the path curvature (v^2 kappa).
 CART_CURVE_USE = 0.5
 
+#: A run capped less than this fraction below its programmed speed is not a slow-down.
+SLOWDOWN_RTOL = 1e-9
+
 #: Speed levels of the feed: the programmed speed times LEVEL_RATIO**k.
 LEVEL_RATIO = 0.85
 
@@ -58,6 +68,14 @@ GRID_MIN_CELLS = 16
 
 #: Most grid cells per chain.
 GRID_MAX_CELLS = 20000
+
+#: A joint change [rad or m] between grid neighbours above which the cell is
+#: bisected to tell a steep stretch from a jump (singularity).
+JUMP_CHECK = 0.05
+
+#: Bisection stops at cells this short [m of path parameter]; a joint change
+#: still above JUMP_CHECK there is a jump.
+JUMP_DS = 1e-9
 
 #: Tangent turn below which two pieces meet smoothly (no blend needed) [rad].
 SMOOTH_TURN = 1e-6
@@ -242,7 +260,6 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
             continue
         a, b = trim0[i], path.length - trim1[i]
         frac0, frac1 = a / path.length, b / path.length
-        from ._rotations import slerp
         qa = slerp(sp["quat0"], sp["quat1"], frac0)
         qb = slerp(sp["quat0"], sp["quat1"], frac1)
         cap, reason = v, ""
@@ -259,8 +276,57 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
             qn = slerp(nxt["quat0"], nxt["quat1"], r / nxt["path"].length)
             bz = BezierBlend(pa, tang_a, pb, tang_b, r)
             cap_b = min(v, nxt["speed"])
-            pieces.append(Piece("blend", bz.length, bz.point, qb, qn, cap_b, i, 1.0, ""))
+            ori = blended_orientation(sp["quat0"], sp["quat1"], path.length, b,
+                                      nxt["quat0"], nxt["quat1"], nxt["path"].length, r, bz.length)
+            pieces.append(Piece("blend", bz.length, bz.point, qb, qn, cap_b, i, 1.0, "",
+                                quat_fn=ori))
     return pieces
+
+
+def _pose_at(pieces: list[Piece], offsets: np.ndarray, s: float) -> tuple[Pose, int]:
+    i = int(np.clip(np.searchsorted(offsets, s, side="right") - 1, 0, len(pieces) - 1))
+    loc = np.array([s - offsets[i]])
+    p = pieces[i].point(loc)[0]
+    r = matrix_from_quat(pieces[i].quat(loc)[0])
+    return Pose.trusted(p, r), pieces[i].motion
+
+
+def _check_continuous(robot: RobotModel, pieces: list[Piece], offsets: np.ndarray, s0: float,
+                      s1: float, q0: np.ndarray, labels: Sequence[str]) -> None:
+    """Bisect the cell [s0, s1]; raise if a joint still jumps in a cell of JUMP_DS."""
+    qa = q0
+    while s1 - s0 > JUMP_DS:
+        sm = 0.5 * (s0 + s1)
+        pm, _ = _pose_at(pieces, offsets, sm)
+        try:
+            qm = robot.ik_near(pm, qa)
+        except UnreachableError:
+            return  # reported by the sampling of the grid
+        pe, _ = _pose_at(pieces, offsets, s1)
+        try:
+            qe = robot.ik_near(pe, qm)
+        except UnreachableError:
+            return
+        left, right = float(np.abs(qm - qa).max()), float(np.abs(qe - qm).max())
+        if max(left, right) <= JUMP_CHECK:
+            return  # the change shrinks with the cell: steep but continuous
+        if left >= right:
+            s1 = sm
+        else:
+            s0, qa = sm, qm
+    pe, mi = _pose_at(pieces, offsets, s1)
+    try:
+        qe = robot.ik_near(pe, qa)
+    except UnreachableError:
+        return
+    jump = np.abs(qe - qa)
+    if jump.max() > JUMP_CHECK:
+        j = int(np.argmax(jump))
+        raise UnreachableError(
+            f"{labels[mi]}: the path passes through a singularity at {_mm(pe.position)} that "
+            f"cannot be passed in this configuration: joint {robot.joint_names[j]} would jump by "
+            f"{math.degrees(float(jump[j])):.1f} deg"
+        )
 
 
 def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str],
@@ -283,7 +349,6 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
         return None  # nothing moves
     lengths = np.array([p.length for p in pieces])
     offsets = np.concatenate([[0.0], np.cumsum(lengths)])
-    total = float(offsets[-1])
     # ---- grid
     grid = []
     for i, pc in enumerate(pieces):
@@ -320,6 +385,11 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
             ) from None
         q[idx] = qi
         seed = qi
+    # ---- continuity: a joint that jumps inside a cell however finely it is cut
+    # marks a singularity the pinned configuration cannot pass
+    steps = np.abs(np.diff(q, axis=0))
+    for c in np.nonzero(steps.max(axis=1) > JUMP_CHECK)[0]:
+        _check_continuous(robot, pieces, offsets, s[c], s[c + 1], q[c], labels)
     # ---- configuration of the targets (a LIN/CIRC cannot change configuration)
     for sp in specs:
         if sp["config"] is None:
@@ -344,7 +414,7 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
         curv = np.linalg.norm(ddpos, axis=1)
         cart_cap = np.sqrt(CART_CURVE_USE * robot.cartesian_accel / curv)
     prog = np.array([pieces[i].cap for i in k])
-    cand = np.column_stack([prog, vel_cap, acc_cap, cart_cap])
+    cand = np.column_stack([prog, vel_cap.min(axis=1), acc_cap.min(axis=1), cart_cap])
     node_cap = cand.min(axis=1)
     programmed = np.array([pieces[i].programmed for i in k])
     worst = int(np.argmin(node_cap / programmed))
@@ -384,9 +454,10 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
     chain = CartesianChain(robot, pieces, offsets, s, q, dq, ddq, feed, labels,
                            list(motion_ids))
     # ---- slow-downs caused by limits (not by the programmed speed)
+    last_cell = -1
     for run, (c0, c1) in zip(runs, run_cells):
         prog_run = float(np.min(programmed[c0:c1 + 1]))
-        if run.cap >= prog_run * (1.0 - 1e-9):
+        if run.cap >= prog_run * (1.0 - SLOWDOWN_RTOL):
             continue
         nodes = np.arange(c0, c1 + 1)
         j = nodes[int(np.argmin(node_cap[nodes]))]
@@ -400,12 +471,14 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
         else:
             reason = "path curvature (tool acceleration)"
         mi = int(mot[j])
-        if (chain.slowdowns and chain.slowdowns[-1].motion == mi
+        if (chain.slowdowns and chain.slowdowns[-1].motion == mi and last_cell == c0
                 and chain.slowdowns[-1].reason == reason):
             sd = chain.slowdowns[-1]
             sd.end_xyz = pos[c1]
             sd.speed = min(sd.speed, run.speed)
+            last_cell = c1
             continue
+        last_cell = c1
         chain.slowdowns.append(Slowdown(mi, labels[mi], pos[c0], pos[c1], run.speed,
                                         float(programmed[j]), reason))
     return chain

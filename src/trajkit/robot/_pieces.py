@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..paths.base import Path
-from ._rotations import rotation_angle, slerp
+from ._rotations import SLERP_SMALL_ANGLE, rotation_angle, slerp
 
 __all__ = ["Piece", "BezierBlend", "BLEND_TABLE"]
 
@@ -88,11 +88,13 @@ class Piece:
         Why ``cap`` is below the programmed speed ("" if it is not).
     programmed : float, optional
         The programmed speed [m/s] (default ``cap``).
+    quat_fn : callable, optional
+        ``quat_fn(s (n,)) -> (n, 4)`` replacing the slerp from ``q0`` to ``q1``.
     """
 
     def __init__(self, kind: str, length: float, point, q0: np.ndarray, q1: np.ndarray,
                  cap: float, motion: int, tool_rate: float, cap_reason: str = "",
-                 programmed: float | None = None) -> None:
+                 programmed: float | None = None, quat_fn=None) -> None:
         self.kind = kind
         self.length = float(length)
         self._point = point
@@ -103,12 +105,15 @@ class Piece:
         self.tool_rate = tool_rate
         self.cap_reason = cap_reason
         self.programmed = cap if programmed is None else programmed
+        self.quat_fn = quat_fn
         self.angle = rotation_angle(q0, q1)
 
     def point(self, s: np.ndarray) -> np.ndarray:
         return self._point(np.clip(s, 0.0, self.length))
 
     def quat(self, s: np.ndarray) -> np.ndarray:
+        if self.quat_fn is not None:
+            return self.quat_fn(np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length))
         u = np.clip(np.asarray(s, dtype=np.float64) / self.length, 0.0, 1.0) if self.length > 0 \
             else np.zeros_like(s)
         return slerp(self.q0, self.q1, np.atleast_1d(u))
@@ -119,6 +124,50 @@ def sub_path(path: Path, a: float, b: float):
     def point(s: np.ndarray) -> np.ndarray:
         return path.point(np.clip(a + np.atleast_1d(s), 0.0, path.length))
     return point
+
+
+def smootherstep(x: np.ndarray) -> np.ndarray:
+    """``6 x^5 - 15 x^4 + 10 x^3``: 0 -> 1 with zero first and second derivatives at both ends."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * x * (x * (6.0 * x - 15.0) + 10.0)
+
+
+def blended_orientation(qa0, qa1, len_a: float, sa: float, qb0, qb1, len_b: float, sb: float,
+                        length: float):
+    """Orientation of a corner blend of parameter length ``length``.
+
+    Cross-fades (smootherstep) from the incoming motion's slerp, continued
+    past the corner at its own rate (``qa0 -> qa1`` over ``len_a``, from arc
+    length ``sa``), to the outgoing motion's slerp (``qb0 -> qb1`` over
+    ``len_b``, reaching arc length ``sb`` at the end), so the orientation
+    and its rate are continuous at both ends of the blend.
+    """
+    def fn(s: np.ndarray) -> np.ndarray:
+        ua = (sa + s) / len_a
+        ub = (sb - (length - s)) / len_b
+        a = slerp_any(qa0, qa1, ua)
+        b = slerp_any(qb0, qb1, ub)
+        w = smootherstep(s / length)
+        out = np.empty((s.size, 4))
+        for i in range(s.size):
+            out[i] = slerp(a[i], b[i], float(w[i]))
+        return out
+    return fn
+
+
+def slerp_any(q0: np.ndarray, q1: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Slerp that also extrapolates (``u`` outside [0, 1]) along the same great circle."""
+    a = np.asarray(q0, dtype=np.float64)
+    b = np.asarray(q1, dtype=np.float64)
+    if float(np.dot(a, b)) < 0.0:
+        b = -b
+    th = rotation_angle(a, b) / 2.0
+    uu = np.atleast_1d(np.asarray(u, dtype=np.float64))
+    if th < SLERP_SMALL_ANGLE:
+        return np.broadcast_to(a, (uu.size, 4)).copy()
+    sn = math.sin(th)
+    out = (np.sin((1 - uu) * th) / sn)[:, None] * a + (np.sin(uu * th) / sn)[:, None] * b
+    return out / np.linalg.norm(out, axis=1)[:, None]
 
 
 def constant_point(p: np.ndarray):

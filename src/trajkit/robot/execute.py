@@ -4,22 +4,22 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
 
-from .._validate import check_array, check_positive
+from .._atomicio import atomic_write
+from .._validate import check_positive
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import RobotModel
 from ..limits import AxisLimits
-from ..trajectory import Trajectory, _atomic_write, plan_ptp
-from ._cartesian import CartesianChain, Slowdown, plan_chain
+from ..trajectory import Trajectory, plan_ptp
+from ._cartesian import SLOWDOWN_RTOL, VEL_USE, CartesianChain, Slowdown, plan_chain
 from ._rotations import quat_from_matrix
-from .motion import CartesianTarget, Circ, JointTarget, Lin, Ptp, Wait
+from .motion import Circ, JointTarget, Lin, Ptp, Wait
 
 __all__ = ["RobotRun", "RobotSamples", "Segment", "run_motions", "SAMPLE_ENDPOINT_RTOL"]
 
@@ -170,7 +170,7 @@ class RobotRun:
                 vr = float(np.max(np.abs(samples.qd[:, j]))) / lim.v_max
                 ar = float(np.max(np.abs(samples.qdd[:, j]))) / min(lim.a_max, lim.a_max_decel)
                 lims.append({"joint": nm, "velocity_ratio": vr, "acceleration_ratio": ar,
-                             "at_velocity_limit": vr >= 1.0 - 0.05 - 1e-9})
+                             "at_velocity_limit": vr >= VEL_USE * (1.0 - SLOWDOWN_RTOL)})
             out["limits"] = lims
         return out
 
@@ -195,7 +195,7 @@ class RobotRun:
                         repr(float(1e3 * samples.tool_speed[i])), int(samples.motion[i])])
         text = buf.getvalue()
         if path is not None:
-            _atomic_write(path, text)
+            atomic_write(path, text)
         return text
 
 

@@ -1,0 +1,215 @@
+"""Many axes between moving states: :func:`plan_ptp_states`.
+
+Step 1 (ruckig's scheme): every axis' minimum duration. Synchronisation:
+the common duration is the largest minimum, moved past any axis' blocked
+duration interval. Step 2: every axis planned for exactly that duration.
+
+This module sits in ``profiles/`` only because of file ownership; it builds
+a :class:`~trajkit.trajectory.Trajectory` and belongs with the
+synchronisation layer (the lead moves it / wires it into ``plan_ptp``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from .._validate import check_array
+from ..errors import InfeasibleError, InvalidInputError
+from ..limits import AxisLimits
+from .state import (
+    BlockedDurationError,
+    StateProfile,
+    plan_state_to_state,
+)
+
+__all__ = ["plan_ptp_states", "STATE_SYNC_MODES"]
+
+#: Accepted values of ``plan_ptp_states(..., sync=...)``.
+STATE_SYNC_MODES = ("time", "phase", "none")
+
+#: Relative tolerance for "the boundary states are collinear with the
+#: displacement" (phase synchronisation needs a straight line).
+COLLINEAR_RTOL = 1e-9
+
+#: Maximum re-synchronisation rounds when axes have blocked intervals.
+SYNC_MAX_ROUNDS = 64
+
+
+def _coerce_states(x: Any, field: str) -> np.ndarray:
+    arr = check_array(x, field, ndim=None)
+    if arr.ndim == 1:
+        out = np.zeros((arr.size, 3))
+        out[:, 0] = arr
+        return out
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise InvalidInputError(
+            f"{field} must have shape (n_axes, 3) (position, velocity, acceleration "
+            f"per axis) or (n_axes,), got shape {arr.shape}"
+        )
+    return arr
+
+
+def _coerce_limits(limits, n):
+    if isinstance(limits, AxisLimits):
+        return [limits.with_name(i) if limits.name is None else limits for i in range(n)]
+    try:
+        lims = list(limits)
+    except TypeError:
+        raise InvalidInputError(
+            f"limits must be an AxisLimits or a sequence of them, got {type(limits).__name__}"
+        ) from None
+    if len(lims) != n:
+        raise InvalidInputError(f"limits has {len(lims)} entries but start/goal have {n} axes")
+    out = []
+    for i, lim in enumerate(lims):
+        if not isinstance(lim, AxisLimits):
+            raise InvalidInputError(f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}")
+        out.append(lim.with_name(i) if lim.name is None else lim)
+    return out
+
+
+def plan_ptp_states(
+    start: Any,
+    goal: Any,
+    limits: AxisLimits | Sequence[AxisLimits],
+    sync: str = "time",
+    duration: float | None = None,
+):
+    """Plan a synchronised move of several axes between moving states.
+
+    Parameters
+    ----------
+    start, goal : array_like, shape (n_axes, 3) or (n_axes,)
+        Per axis ``(position, velocity, acceleration)`` [unit, unit/s,
+        unit/s^2]; a 1-D array gives positions at rest.
+    limits : AxisLimits or sequence of n_axes AxisLimits
+    sync : {"time", "phase", "none"}
+        ``"time"``: every axis arrives at the same time, the smallest
+        duration every axis can meet (the largest minimum, moved past any
+        blocked interval). ``"phase"``: a straight line in joint space --
+        possible only when every boundary velocity and acceleration is
+        collinear with the displacement (``v_k = c * D_k`` for one ``c``
+        over all axes, same for the goal and the accelerations); otherwise
+        it falls back to ``"time"`` and the trajectory's ``sync`` says
+        ``"time"``. ``"none"``: each axis at its own minimum time.
+    duration : float, optional
+        With ``"time"``/``"phase"``: exactly this duration [s].
+
+    Returns
+    -------
+    Trajectory
+        Its ``axes`` are :class:`StateProfile` objects (same sampling
+        interface as :class:`Profile`).
+
+    Raises
+    ------
+    InvalidInputError
+        Bad shapes, NaN/inf, positions outside a range, unreachable goal
+        states, unknown ``sync``.
+    InfeasibleError
+        ``duration`` below the synchronised minimum, or inside a blocked
+        interval of some axis (the message names the axis).
+    """
+    from ..trajectory import Trajectory  # sync layer; imported lazily
+
+    if sync not in STATE_SYNC_MODES:
+        raise InvalidInputError(f"sync must be one of {STATE_SYNC_MODES}, got {sync!r}")
+    s = _coerce_states(start, "start")
+    g = _coerce_states(goal, "goal")
+    if s.shape != g.shape:
+        raise InvalidInputError(f"start has {s.shape[0]} axes but goal has {g.shape[0]}")
+    n = s.shape[0]
+    if n == 0:
+        raise InvalidInputError("start and goal must have at least one axis")
+    lims = _coerce_limits(limits, n)
+    if duration is not None:
+        try:
+            duration = float(duration)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"duration must be a number of seconds, got {duration!r}") from None
+        if not math.isfinite(duration) or duration < 0:
+            raise InvalidInputError(f"duration must be finite and >= 0 s, got {duration!r}")
+        if sync == "none":
+            raise InvalidInputError('duration cannot be given with sync="none"')
+
+    fastest = [plan_state_to_state(s[k], g[k], lims[k]) for k in range(n)]
+    if sync == "none":
+        return Trajectory(fastest, "none")
+
+    if sync == "phase":
+        traj = _phase_sync(s, g, lims, duration, Trajectory)
+        if traj is not None:
+            return traj
+
+    tmin = max(p.duration for p in fastest)
+    if duration is not None and duration < tmin * (1.0 - 1e-12):
+        k = max(range(n), key=lambda i: fastest[i].duration)
+        raise InfeasibleError(
+            f"duration {duration!r} s is below the minimum synchronised duration "
+            f"{tmin!r} s (axis {lims[k].name})",
+            minimum=tmin,
+        )
+    T = tmin if duration is None else duration
+    for _ in range(SYNC_MAX_ROUNDS):
+        axes: list[StateProfile] = []
+        moved = False
+        for k in range(n):
+            if fastest[k].duration == T:
+                axes.append(fastest[k])
+                continue
+            try:
+                axes.append(plan_state_to_state(s[k], g[k], lims[k], duration=T))
+            except BlockedDurationError as err:
+                if duration is not None:
+                    raise InfeasibleError(
+                        f"duration {duration!r} s lies in a blocked interval "
+                        f"{err.interval!r} s of axis {lims[k].name}",
+                        minimum=tmin,
+                    ) from err
+                T = err.interval[1]
+                moved = True
+                break
+        if not moved:
+            return Trajectory(axes, "time")
+    raise InfeasibleError(  # pragma: no cover - would need > 64 nested blocked intervals
+        "could not find a common duration outside every axis' blocked intervals"
+    )
+
+
+def _phase_sync(s, g, lims, duration, Trajectory):
+    """Straight-line synchronisation, or None when the states are not collinear."""
+    D = g[:, 0] - s[:, 0]
+    scale = float(np.abs(D).max())
+    if scale == 0.0:
+        return None
+    u = D / scale
+    coef = []
+    for col, arr in ((1, s), (2, s), (1, g), (2, g)):
+        x = arr[:, col]
+        c = float(np.dot(x, u) / np.dot(u, u))
+        if np.abs(x - c * u).max() > COLLINEAR_RTOL * max(np.abs(x).max(), 1e-300):
+            return None
+        coef.append(c)
+    moving = [k for k in range(len(D)) if D[k] != 0.0]
+    # path parameter z in [0, scale]: axis k = s_k + u_k z (|u_k| <= 1)
+    vmax = min(lims[k].v_max / abs(u[k]) for k in moving)
+    amax = min(lims[k].a_max / abs(u[k]) for k in moving)
+    jmax = min(lims[k].j_max / abs(u[k]) for k in moving)
+    admax = min(lims[k].a_max_decel / abs(u[k]) for k in moving)
+    jdmax = min(lims[k].j_max_decel / abs(u[k]) for k in moving)
+    unit = AxisLimits(vmax, amax, jmax, admax, jdmax, name="path")
+    try:
+        z = plan_state_to_state((0.0, coef[0], coef[1]), (scale, coef[2], coef[3]), unit,
+                                duration=duration)
+    except InvalidInputError:
+        return None
+    axes = []
+    for k in range(len(D)):
+        ph = [(dt, u[k] * j, u[k] * a) for dt, j, a in
+              zip(z.phase_durations, z.jerks, z.phase_accelerations)]
+        axes.append(StateProfile(tuple(s[k]), tuple(g[k]), ph, z.min_duration,
+                                 z.n_brake_phases, "phase", lims[k]))
+    return Trajectory(axes, "phase")

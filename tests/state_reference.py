@@ -1,0 +1,230 @@
+"""Independent references and case generators for the state-to-state tests.
+
+* :func:`ruckig_duration` -- ruckig (PyPI, test dependency only) for
+  symmetric limits.
+* :func:`double_s_duration` -- an independent minimum-time formula for
+  one-direction moves between cruise states (``a0 = af = 0``,
+  ``v0, vf >= 0``, no reversal) under ASYMMETRIC limits: the peak velocity
+  is found by bisection on the distance, each velocity ramp by the textbook
+  closed form (Biagiotti & Melchiorri's double-S with non-zero boundary
+  velocities, extended to separate accel/decel limits).
+* :func:`dense_check` -- limits and continuity on dense samples (independent
+  of the kernel's exact verification).
+* :func:`random_case` -- seeded random states over the hard corners.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Relative tolerance of the reference bisection.
+REF_RTOL = 1e-14
+
+
+def ruckig_duration(start, goal, V, A, J):
+    """Minimum duration from ruckig's ``Ruckig(1).calculate`` (symmetric limits)."""
+    from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+    inp = InputParameter(1)
+    inp.current_position = [start[0]]
+    inp.current_velocity = [start[1]]
+    inp.current_acceleration = [start[2]]
+    inp.target_position = [goal[0]]
+    inp.target_velocity = [goal[1]]
+    inp.target_acceleration = [goal[2]]
+    inp.max_velocity = [V]
+    inp.max_acceleration = [A]
+    inp.max_jerk = [J]
+    traj = Trajectory(1)
+    res = Ruckig(1).calculate(inp, traj)
+    if res not in (Result.Working, Result.Finished):
+        return None
+    return traj.duration
+
+
+def _ramp(dv, a, j):
+    """Duration and distance factor of a rest-acceleration velocity ramp of size dv >= 0."""
+    if dv <= 0.0:
+        return 0.0
+    if dv * j >= a * a:  # trapezoidal acceleration
+        return dv / a + a / j
+    return 2.0 * math.sqrt(dv / j)
+
+
+def double_s_duration(d, v0, vf, V, A1, J1, A2, J2):
+    """Minimum duration of a one-direction move with a0 = af = 0 (asymmetric).
+
+    Requires ``d > 0`` large enough that no reversal is needed; returns
+    ``None`` when the move needs more than "accelerate, cruise, decelerate"
+    (i.e. the distance is below the one of the direct velocity ramp).
+    Speeding up uses ``(A1, J1)``, slowing down ``(A2, J2)``.
+    """
+    def legs(vp):
+        # from v0 up (or down) to vp, then from vp to vf
+        t1 = _ramp(abs(vp - v0), A1 if vp >= v0 else A2, J1 if vp >= v0 else J2)
+        t2 = _ramp(abs(vp - vf), A2 if vp >= vf else A1, J2 if vp >= vf else J1)
+        return t1, t2, 0.5 * (v0 + vp) * t1 + 0.5 * (vp + vf) * t2
+
+    lo = max(v0, vf)
+    t1, t2, dist = legs(lo)
+    if dist > d:
+        return None
+    t1, t2, dist = legs(V)
+    if dist <= d:
+        return t1 + t2 + (d - dist) / V
+    hi = V
+    for _ in range(400):
+        mid = 0.5 * (lo + hi)
+        if legs(mid)[2] > d:
+            hi = mid
+        else:
+            lo = mid
+        if hi - lo <= REF_RTOL * hi:
+            break
+    t1, t2, _ = legs(0.5 * (lo + hi))
+    return t1 + t2
+
+
+def dense_check(prof, limits, n=2001, rtol=1e-9):
+    """Sample a profile densely; return a failure string or None."""
+    t = np.linspace(0.0, prof.duration, n)
+    s = prof.sample(t)
+    tb = prof.brake_duration
+    m = t >= tb
+    v, a, j = s.velocity[m], s.acceleration[m], s.jerk[m]
+    if np.any(np.abs(v) > limits.v_max * (1 + rtol)):
+        return f"velocity {np.abs(v).max()} > {limits.v_max}"
+    speeding = v * a > 0
+    amax = np.where(speeding, limits.a_max, limits.a_max_decel)
+    if np.any(np.abs(a) > amax * (1 + rtol) + 1e-12):
+        return "acceleration limit"
+    # continuity of position and velocity (finite differences vs samples)
+    if n > 2 and prof.duration > 0:
+        dt = t[1] - t[0]
+        mid_v = 0.5 * (s.velocity[1:] + s.velocity[:-1])
+        dp = np.diff(s.position)
+        scale = np.abs(s.velocity).max() + np.abs(s.acceleration).max() * dt + 1e-12
+        if np.any(np.abs(dp - mid_v * dt) > 1e-3 * scale * dt + 1e-12):
+            return "position not continuous with velocity"
+    return None
+
+
+def random_case(rng, symmetric=True, scale=1.0):
+    """A random (start, goal, (V, A1, J1, A2, J2)) over the hard corners.
+
+    Limits log-uniform; states at the limits, at rest, or random inside;
+    distances random, tiny (1e-6 of the natural scale) or zero; the
+    velocity always leaves the natural velocity within v_max so that no
+    brake is needed.
+    """
+    V = 10 ** rng.uniform(-1, 1) * scale
+    A = 10 ** rng.uniform(-1, 1) * scale
+    J = 10 ** rng.uniform(-1, 1.5) * scale
+    if symmetric:
+        A2, J2 = A, J
+    else:
+        A2 = A * 10 ** rng.uniform(-0.7, 0.7)
+        J2 = J * 10 ** rng.uniform(-0.7, 0.7)
+    Jm = min(J, J2)
+
+    def state(kind_v, kind_a, goal):
+        for _ in range(200):
+            v = {0: 0.0, 1: V, 2: -V, 3: rng.uniform(-V, V)}[kind_v]
+            a = {0: 0.0, 1: min(A, A2), 2: -min(A, A2), 3: rng.uniform(-1, 1) * min(A, A2)}[kind_a]
+            vn = v - a * abs(a) / (2 * Jm) if goal else v + a * abs(a) / (2 * Jm)
+            if abs(vn) <= V and abs(v) <= V:
+                return v, a
+            kind_v, kind_a = 3, 3
+        return 0.0, 0.0
+
+    pick = lambda: int(rng.choice([0, 1, 2, 3, 3, 3]))  # noqa: E731
+    v0, a0 = state(pick(), pick(), False)
+    vf, af = state(pick(), pick(), True)
+    p0 = rng.uniform(-1, 1) * V
+    kind = rng.integers(0, 6)
+    if kind == 0:
+        pf = p0
+    elif kind == 1:
+        pf = p0 + rng.uniform(-1, 1) * 1e-6 * V * V / A
+    else:
+        pf = p0 + rng.uniform(-3, 3) * V * max(V / A, A / J)
+    return (p0, v0, a0), (pf, vf, af), (V, A, J, A2, J2)
+
+
+def exact_check(prof, limits, rtol=1e-9):
+    """Independent exact limit check of a StateProfile; failure string or None.
+
+    Works on the profile's public data only (boundary states, phase
+    durations and jerks): in every phase after the brake pre-phase it finds
+    the zeros of the acceleration (velocity extrema) and of the velocity
+    (regime changes), and checks |v| <= v_max at the extrema and the
+    boundaries, and |a| and |j| against the limits of the regime
+    (speeding up: a_max/j_max, slowing down: decel limits) on each piece.
+    """
+    b = prof.boundary_states()
+    tol_v = limits.v_max * rtol
+    vref = max(np.abs(b[:, 1]).max(), 1e-300)
+    for k in range(prof.n_brake_phases, prof.n_phases):
+        p, v, a = b[k]
+        dt, j = prof.phase_durations[k], prof.jerks[k]
+        cuts = [0.0, dt]
+        if j != 0.0 and 0.0 < -a / j < dt:
+            cuts.append(-a / j)
+        if j != 0.0:
+            roots = np.roots([0.5 * j, a, v])
+        elif a != 0.0:
+            roots = np.array([-v / a])
+        else:
+            roots = np.array([])
+        cuts += [float(r.real) for r in np.atleast_1d(roots)
+                 if abs(r.imag) == 0.0 and 0.0 < r.real < dt]
+        cuts.sort()
+        for t in cuts:
+            vt = v + a * t + 0.5 * j * t * t
+            if abs(vt) > limits.v_max + tol_v:
+                return f"phase {k}: |v| {abs(vt)!r} > v_max {limits.v_max!r}"
+        for t0, t1 in zip(cuts[:-1], cuts[1:]):
+            if t1 <= t0:
+                continue
+            tm = 0.5 * (t0 + t1)
+            vm = v + a * tm + 0.5 * j * tm * tm
+            am = a + j * tm
+            if abs(vm) <= 1e-12 * vref:
+                A = max(limits.a_max, limits.a_max_decel)
+                J = max(limits.j_max, limits.j_max_decel)
+            elif vm * am >= 0.0:
+                A, J = limits.a_max, limits.j_max
+            else:
+                A, J = limits.a_max_decel, limits.j_max_decel
+            for t in (t0, t1):
+                if abs(a + j * t) > A * (1 + rtol) + 1e-12 * max(A, abs(a)):
+                    return f"phase {k}: |a| {abs(a + j * t)!r} > {A!r}"
+            if abs(j) > J * (1 + rtol):
+                return f"phase {k}: |j| {abs(j)!r} > {J!r}"
+    return None
+
+
+def integrate_public(prof):
+    """End state by integrating the public phase data independently (numpy)."""
+    p, v, _ = prof.start_state
+    for dt, j, a in zip(prof.phase_durations, prof.jerks, prof.phase_accelerations):
+        p = p + v * dt + a * dt ** 2 / 2 + j * dt ** 3 / 6
+        v = v + a * dt + j * dt ** 2 / 2
+        a = a + j * dt
+    if prof.n_phases == 0:
+        a = prof.start_state[2]
+    return p, v, a
+
+
+def goal_error(prof):
+    """Relative error of the reached goal state (position, velocity, acceleration)."""
+    pe, ve, ae = integrate_public(prof)
+    pg, vg, ag = prof.goal_state
+    T = prof.duration
+    vs = max(abs(prof.start_state[1]), abs(vg), 1e-300)
+    as_ = max(abs(prof.start_state[2]), abs(ag), prof.limits.a_max if math.isfinite(prof.limits.a_max) else 0.0, 1e-300)
+    ps = max(abs(pg - prof.start_state[0]), vs * T, as_ * T * T, 1e-300)
+    floor = 64 * 2.2e-16 * max(abs(pg), abs(prof.start_state[0]))
+    return max(max(abs(pe - pg) - floor, 0.0) / ps, abs(ve - vg) / vs, abs(ae - ag) / as_)

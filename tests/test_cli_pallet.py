@@ -1,0 +1,82 @@
+"""``trajkit pallet``: table, exact JSON shape, plots, errors as one line + exit 2."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import yaml
+
+from trajkit.cli import main
+from trajkit.io import seed_job_path
+from trajkit.palletizing import plan_cycle, seed_scenario
+
+
+@pytest.fixture(scope="module")
+def seed_totals():
+    sc = seed_scenario()
+    return {n: plan_cycle(sc, n).total_s for n in ("ptp", "merged")}
+
+
+def test_json_shape_and_values(capsys, seed_totals):
+    assert main(["pallet", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {"boxes", "plans"}
+    assert out["boxes"] == 25
+    assert list(out["plans"]) == ["ptp", "merged"]
+    for n, d in out["plans"].items():
+        assert d["total_s"] == pytest.approx(seed_totals[n], rel=1e-15)
+        assert d["per_box_s"] == pytest.approx(seed_totals[n] / 25, rel=1e-15)
+        assert d["verified"] is True
+    assert out["plans"]["merged"]["reduction_pct"] == pytest.approx(
+        100 * (1 - seed_totals["merged"] / seed_totals["ptp"]), rel=1e-12)
+
+
+def test_table_beside_paper(capsys):
+    assert main(["pallet", str(seed_job_path())]) == 0
+    out = capsys.readouterr().out
+    assert "107.854" in out and "91.850" in out
+    assert "107.753" in out and "89.422" in out
+    assert "verified: ptp ok" in out
+
+
+def test_plots_written(tmp_path, capsys):
+    job = yaml.safe_load(seed_job_path().read_text())
+    job["layers"] = 2
+    job["pattern"] = {"name": "column", "alternate": "none"}
+    p = tmp_path / "small.yaml"
+    p.write_text(yaml.safe_dump(job))
+    d = tmp_path / "figs"
+    assert main(["pallet", str(p), "--plot", str(d), "--planner", "merged", "--box", "3"]) == 0
+    out = capsys.readouterr().out
+    for name in ("pallet_b_velocity.png", "pallet_cycle_vs_zmax.png", "pallet_gripper_path_3d.png"):
+        f = d / name
+        assert f.stat().st_size > 10_000
+        assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert f"wrote {f}" in out
+    assert not list(d.glob("*.tmp-*"))
+
+
+@pytest.mark.parametrize("args,match", [
+    (["pallet", "/nonexistent/job.yaml"], "No such file"),
+    (["pallet", "--planner", "fastest"], r"--planner must be one of \['merged', 'ptp'\], got 'fastest'"),
+    (["pallet", "--box", "25"], r"--box must be in \[0, 24\] for this job, got 25"),
+])
+def test_errors_one_line_exit_2(capsys, args, match):
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert err.startswith("trajkit pallet: error:")
+    import re
+    assert re.search(match, err)
+
+
+def test_invalid_job_field_is_named(tmp_path, capsys):
+    job = yaml.safe_load(seed_job_path().read_text())
+    job["box"]["height_mm"] = 0
+    p = tmp_path / "bad.yaml"
+    p.write_text(yaml.safe_dump(job))
+    assert main(["pallet", str(p), "--json"]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == ""
+    assert "field box.height_mm: Input should be greater than 0 (got 0)" in cap.err

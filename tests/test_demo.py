@@ -1,0 +1,39 @@
+"""``trajkit demo``: runs the seed scenario, prints the table, writes the figures."""
+
+from __future__ import annotations
+
+import os
+
+from trajkit.cli import main
+
+
+def test_demo_writes_figures(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    folder = tmp_path / "trajkit-demo"
+    assert f"figures in {folder.resolve()}" in out
+    assert "107.854" in out and "verified: ptp ok, merged ok" in out
+    names = sorted(os.listdir(folder))
+    for n in ("pallet_b_velocity.png", "pallet_cycle_vs_zmax.png", "pallet_gripper_path_3d.png"):
+        assert n in names and (folder / n).stat().st_size > 10_000
+    try:
+        import trajkit.plot.profiles as prof
+        has_traj = hasattr(prof, "plot_trajectory")
+    except ImportError:
+        has_traj = False
+    assert ("ptp_transfer_4axis.png" in names) == has_traj
+    if not has_traj:
+        assert "skipped the 4-axis transfer figure" in out
+
+
+def test_demo_out_dir_and_missing_trajectory_plot(tmp_path, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "trajkit.plot.profiles", None)  # import fails
+    out_dir = tmp_path / "x" / "y"
+    assert main(["demo", "--out", str(out_dir)]) == 0
+    out = capsys.readouterr().out
+    assert "skipped the 4-axis transfer figure" in out
+    assert sorted(os.listdir(out_dir)) == [
+        "pallet_b_velocity.png", "pallet_cycle_vs_zmax.png", "pallet_gripper_path_3d.png"]
