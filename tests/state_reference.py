@@ -102,12 +102,19 @@ def dense_check(prof, limits, n=2001, rtol=1e-9):
         return "acceleration limit"
     # continuity of position and velocity (finite differences vs samples)
     if n > 2 and prof.duration > 0:
+        # exact for a cubic: dp = dt (v0 + v1)/2 + dt^2 (a0 - a1)/12; a jerk
+        # change inside a sample interval costs at most |dj| dt^3 / 12
         dt = t[1] - t[0]
-        mid_v = 0.5 * (s.velocity[1:] + s.velocity[:-1])
+        herm = dt * 0.5 * (s.velocity[1:] + s.velocity[:-1]) + dt * dt * (
+            s.acceleration[:-1] - s.acceleration[1:]) / 12.0
         dp = np.diff(s.position)
-        scale = np.abs(s.velocity).max() + np.abs(s.acceleration).max() * dt + 1e-12
-        if np.any(np.abs(dp - mid_v * dt) > 1e-3 * scale * dt + 1e-12):
+        jm = np.abs(s.jerk).max()
+        scale = np.abs(s.position).max() + np.abs(s.velocity).max() * prof.duration
+        if np.any(np.abs(dp - herm) > jm * dt ** 3 / 6.0 + 1e-12 * scale):
             return "position not continuous with velocity"
+        vh = dt * 0.5 * (s.acceleration[1:] + s.acceleration[:-1])
+        if np.any(np.abs(np.diff(s.velocity) - vh) > jm * dt ** 2 / 2.0 + 1e-12 * scale):
+            return "velocity not continuous with acceleration"
     return None
 
 
@@ -223,8 +230,35 @@ def goal_error(prof):
     pe, ve, ae = integrate_public(prof)
     pg, vg, ag = prof.goal_state
     T = prof.duration
-    vs = max(abs(prof.start_state[1]), abs(vg), 1e-300)
-    as_ = max(abs(prof.start_state[2]), abs(ag), prof.limits.a_max if math.isfinite(prof.limits.a_max) else 0.0, 1e-300)
+    b = prof.boundary_states()
+    vs = max(np.abs(b[:, 1]).max(), 1e-300)
+    as_ = max(np.abs(b[:, 2]).max(), 1e-300)
     ps = max(abs(pg - prof.start_state[0]), vs * T, as_ * T * T, 1e-300)
     floor = 64 * 2.2e-16 * max(abs(pg), abs(prof.start_state[0]))
     return max(max(abs(pe - pg) - floor, 0.0) / ps, abs(ve - vg) / vs, abs(ae - ag) / as_)
+
+
+def ruckig_fixed(start, goal, V, A, J, T):
+    """Duration ruckig gives when asked for at least ``T`` s (symmetric limits).
+
+    Equal to ``T`` when ``T`` is feasible; larger when ``T`` lies in a
+    blocked interval (ruckig then returns the next feasible duration).
+    """
+    from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+    inp = InputParameter(1)
+    inp.current_position = [start[0]]
+    inp.current_velocity = [start[1]]
+    inp.current_acceleration = [start[2]]
+    inp.target_position = [goal[0]]
+    inp.target_velocity = [goal[1]]
+    inp.target_acceleration = [goal[2]]
+    inp.max_velocity = [V]
+    inp.max_acceleration = [A]
+    inp.max_jerk = [J]
+    inp.minimum_duration = T
+    traj = Trajectory(1)
+    res = Ruckig(1).calculate(inp, traj)
+    if res not in (Result.Working, Result.Finished):
+        return None
+    return traj.duration

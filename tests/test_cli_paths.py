@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -79,8 +80,6 @@ def test_saddle_bad_input_one_line_exit_2(capsys, extra, match):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("trajkit saddle: error: ")
-    import re
-
     assert re.search(match, err), err
 
 
@@ -90,8 +89,10 @@ def test_path_from_options_in_order(tmp_path, capsys):
     s2 = math.sqrt(0.5)
     argv = ["path", "--start", "0,0,0", "--line", "100,0,0",
             "--arc", f"{100 + 50 * s2},{50 - 50 * s2},0:150,50,0", "--line", "150,150,0",
-            "--feed", "40", "--tolerance", "0.005", "--period", "0.002", "--csv", str(csv_file)]
+            "--feed", "40", "--tolerance", "0.005", "--period", "0.002", "--csv", str(csv_file),
+            "--plot", str(tmp_path / "p.png")]
     out = _json(capsys, argv)
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
     assert out["path_length_mm"] == pytest.approx(100 + 25 * math.pi + 100, rel=1e-12)
     assert out["corners"] == 0 and out["segments"] == 3
     assert out["max_tool_speed_mm_s"] == pytest.approx(40.0, rel=1e-12)
@@ -142,8 +143,6 @@ def test_path_bad_input_one_line_exit_2(capsys, argv, match):
     assert main(full) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("trajkit path: error: ")
-    import re
-
     assert re.search(match, err), err
 
 
@@ -165,3 +164,21 @@ def test_csv_is_not_half_written_on_error(tmp_path, capsys):
                               "--tolerance", "0.05", "--period", "0.05", "--csv", str(target)]) == 2
     assert not target.exists() and not list(tmp_path.iterdir())
     capsys.readouterr()
+
+
+def test_path_rounded_tangent_points_are_not_corners(tmp_path, capsys):
+    """Taught points rounded to 1 um make the line/arc junction turn by about
+    1e-5 rad: below the default 0.01 deg it is passed through, with
+    --corner-angle 0 the feed stops there."""
+    job = tmp_path / "job.yaml"
+    job.write_text(
+        "start: [0, 0, 0]\n"
+        "segments:\n"
+        "  - line: [100, 0, 0]\n"
+        "  - arc: {via: [135.355, 14.645, 0], end: [150, 50, 0]}\n"
+        "feed: 50\ntolerance: 0.01\nperiod: 0.002\n"
+    )
+    smooth = _json(capsys, ["path", "--file", str(job)])
+    strict = _json(capsys, ["path", "--file", str(job), "--corner-angle", "0"])
+    assert smooth["corners"] == 0 and strict["corners"] == 1
+    assert strict["duration_s"] > smooth["duration_s"]

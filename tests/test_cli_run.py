@@ -45,7 +45,8 @@ def test_run_table_output(capsys):
 
 @pytest.mark.parametrize("args,pattern", [
     (["run", "missing.yaml", "--period", "0.004"], "No such file"),
-    (["run", SCARA, "--period", "-1"], r"--period must be a finite number > 0 s, got -1\.0"),
+    (["run", SCARA, "--period", "-1"], r"--period must be between 0\.0001 and 0\.1 s, got -1\.0"),
+    (["run", SCARA, "--period", "nan"], r"--period must be between .* got nan"),
 ])
 def test_run_errors_one_line(args, pattern, capsys):
     assert main(args) == 2
@@ -62,3 +63,15 @@ def test_run_bad_program_names_line(tmp_path, capsys):
     assert main(["run", str(bad), "--period", "0.004"]) == 2
     err = capsys.readouterr().err
     assert "bad.yaml:7: program[1].speed_mm_s: Input should be greater than 0 (got 0)" in err
+
+
+def test_run_unreachable_is_one_line(tmp_path, capsys):
+    prog = tmp_path / "far.yaml"
+    prog.write_text("robot: arm6\npoints:\n  a: {joints_deg: [0, 20, 10, 0, 60, 0]}\n"
+                    "  far: {xyz_mm: [1500, 0, 500], abc_deg: [0, 0, 180]}\n"
+                    "program:\n  - PTP: a\n  - LIN: far\n")
+    assert main(["run", str(prog), "--period", "0.004"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("trajkit run: error: instruction 1 (LIN far, line 7): point (")
+    assert "unreachable" in err

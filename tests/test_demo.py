@@ -27,13 +27,20 @@ def test_demo_writes_figures(tmp_path, capsys, monkeypatch):
         assert "skipped the 4-axis transfer figure" in out
 
 
-def test_demo_out_dir_and_missing_trajectory_plot(tmp_path, capsys, monkeypatch):
+def test_transfer_plot_skipped_without_plot_trajectory(tmp_path, monkeypatch):
     import sys
 
+    from trajkit.cli._demo import write_transfer_plot
+    from trajkit.palletizing import seed_scenario
+
     monkeypatch.setitem(sys.modules, "trajkit.plot.profiles", None)  # import fails
-    out_dir = tmp_path / "x" / "y"
-    assert main(["demo", "--out", str(out_dir)]) == 0
-    out = capsys.readouterr().out
-    assert "skipped the 4-axis transfer figure" in out
-    assert sorted(os.listdir(out_dir)) == [
-        "pallet_b_velocity.png", "pallet_cycle_vs_zmax.png", "pallet_gripper_path_3d.png"]
+    assert write_transfer_plot(seed_scenario(), tmp_path) is None
+    assert os.listdir(tmp_path) == []
+
+
+def test_demo_bad_out_dir_is_one_line(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["demo", "--out", str(blocker / "sub")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("trajkit demo: error:") and len(err.strip().splitlines()) == 1

@@ -114,8 +114,12 @@ def test_plateau_planner_stays_below_the_speed_limit(i):
     L = rng.uniform(0.01, 2.0)
     path = Line([0, 0, 0], [L, 0, 0])
     feed = rng.uniform(0.02, 0.3)
-    A = rng.uniform(0.05, 5.0)
-    J = rng.uniform(0.5, 50.0)
+    if i % 2:  # gentle tangential limits: speed changes longer than the plateaus,
+        A = rng.uniform(0.002, 0.05)  # so plateaus get lowered and merged
+        J = rng.uniform(0.02, 0.5)
+    else:
+        A = rng.uniform(0.05, 5.0)
+        J = rng.uniform(0.5, 50.0)
     fn, names = _random_limit(rng, L)
     plan = plan_feed(path, feed, A, J, speed_limit=fn, reasons=names)
     m = plan.motion
@@ -177,3 +181,65 @@ def test_feed_errors(kw, match):
     args.update(kw)
     with pytest.raises(InvalidInputError, match=match):
         plan_feed(Line([0, 0, 0], [1, 0, 0]), **args)
+
+
+def _check_plan_below(plan, fn, feed, A, J, L):
+    m = plan.motion
+    assert m.state[-1, 0] == pytest.approx(L, rel=1e-9, abs=1e-12)
+    assert abs(m.state[-1, 1]) <= 1e-9 * feed and abs(m.state[-1, 2]) <= 1e-9 * A
+    t = np.unique(np.concatenate([np.linspace(0, plan.duration, 20001), m.t]))
+    fs = plan.sample(t, points=False)
+    vlim, _ = fn(fs.s)
+    assert np.all(fs.v <= np.minimum(vlim, feed) * (1 + 1e-9))
+    assert np.max(np.abs(fs.a)) <= A * (1 + 1e-12) and np.max(np.abs(fs.j)) <= J * (1 + 1e-12)
+    return fs
+
+
+def test_short_fast_stretch_between_zones_is_lowered():
+    """Two slow zones 5 mm apart, gentle tangential limits: the stretch between
+    them cannot reach the feed; it gets the highest speed that fits (bisection)."""
+    L, feed, A, J = 0.2, 0.1, 0.02, 0.2
+
+    def fn(s):
+        dip = ((s > 0.05) & (s < 0.08)) | ((s > 0.085) & (s < 0.12))
+        return np.where(dip, 0.03, np.inf), np.zeros(np.size(s), dtype=int)
+
+    plan = plan_feed(Line([0, 0, 0], [L, 0, 0]), feed, A, J, speed_limit=fn, reasons=["dip"])
+    fs = _check_plan_below(plan, fn, feed, A, J, L)
+    z1, z2 = plan.slowdowns
+    gap = (fs.s > z1.s_end) & (fs.s < z2.s_start)
+    vp = float(np.max(fs.v[gap]))
+    assert 0.03 < vp < feed
+    # the bump up and down fills the gap exactly
+    assert 2 * velocity_change(0.03, vp, A, J)[1] == pytest.approx(z2.s_start - z1.s_end, rel=1e-9)
+    # the first stretch (50 mm) is too short to reach the feed: the same holds there
+    first = fs.s < z1.s_start
+    v1 = float(np.max(fs.v[first]))
+    assert 0.03 < v1 < feed
+    d = velocity_change(0.0, v1, A, J)[1] + velocity_change(v1, 0.03, A, J)[1]
+    assert d == pytest.approx(z1.s_start, rel=1e-9)
+
+
+def test_stretch_too_short_for_its_speed_change_is_merged():
+    """A 0.2 mm stretch between a 0.01 m/s zone and a 0.03 m/s zone cannot even
+    hold the change from 0.01 to 0.03 m/s: it joins the faster zone, and the
+    speed change runs inside it (below its limit)."""
+    L, feed, A, J = 0.3, 0.1, 0.02, 0.2
+
+    def fn(s):
+        v = np.where((s > 0.05) & (s < 0.08), 0.01, np.inf)
+        v = np.where((s > 0.0802) & (s < 0.2), 0.03, v)
+        return v, np.where(v == 0.01, 0, 1)
+
+    plan = plan_feed(Line([0, 0, 0], [L, 0, 0]), feed, A, J, speed_limit=fn, reasons=["slow", "medium"])
+    fs = _check_plan_below(plan, fn, feed, A, J, L)
+    z1, z2 = plan.slowdowns[:2]
+    assert (z1.reason, z2.reason) == ("slow", "medium")
+    # the speed change 0.01 -> 0.03 m/s starts at the end of the slow zone and
+    # is still running where the gap ends: it lies inside the merged stretch
+    at_gap_end = np.interp(z2.s_start, fs.s, fs.v)
+    assert 0.01 < at_gap_end < 0.03
+    dist = velocity_change(0.01, 0.03, A, J)[1]
+    after = fs.s > z1.s_end
+    reach = fs.s[after][np.argmax(fs.v[after] >= 0.03 * (1 - 1e-12))]
+    assert reach == pytest.approx(z1.s_end + dist, rel=1e-6)

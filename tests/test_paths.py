@@ -155,3 +155,14 @@ def test_composite_and_argument_errors():
         ln.point([0.5, 1.5])
     with pytest.raises(InvalidInputError, match=r"arc length s=-0.1 is outside"):
         ln.tangent(-0.1)
+
+
+def test_corner_angle_threshold():
+    l1 = Line([0, 0, 0], [1, 0, 0])
+    kink = 1e-4  # rad
+    l2 = Line([1, 0, 0], [2, math.tan(kink), 0])
+    assert CompositePath([l1, l2]).corners().size == 1  # default: 1e-6 rad
+    assert CompositePath([l1, l2], corner_angle=2e-4).corners().size == 0
+    assert CompositePath([l1, l2], corner_angle=0.5e-4).corners().size == 1
+    with pytest.raises(InvalidInputError, match=r"corner_angle must lie in \[0, pi\) rad, got -1"):
+        CompositePath([l1, l2], corner_angle=-1)

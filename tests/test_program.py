@@ -43,7 +43,7 @@ def test_parse_to_si():
     prog = _parse(BASE)
     m = prog.motions
     assert [type(x) for x in m] == [Ptp, Lin, Circ, Wait]
-    assert m[0].speed_pct == 40
+    assert m[0].speed_pct == 40 and m[0].zone == pytest.approx(0.005)  # default zone
     assert m[1].speed == pytest.approx(0.1) and m[1].zone == 0.0
     assert m[2].speed == pytest.approx(0.15) and m[2].zone == pytest.approx(0.005)  # defaults
     assert m[3].time == 0.25

@@ -124,3 +124,33 @@ def test_blend_orientation_is_smooth(arm, start):
     _check_limits(arm, smp)
     dp, da = arm.fk(smp.q[-1]).distance(b)
     assert dp < 1e-12 and da < 1e-9
+
+
+@pytest.mark.parametrize("zone", [0.05, 0.004])
+def test_ptp_blend_superposition(arm, zone):
+    from trajkit.robot import JointTarget, Ptp
+
+    q0 = np.radians([0, 20, 10, 0, 60, 0])
+    q1 = np.radians([40, 10, 30, 10, 50, 20])
+    q2 = np.radians([80, 25, 5, 0, 60, -20])
+    stop = run_motions(arm, [Ptp(JointTarget(q1)), Ptp(JointTarget(q2))], q0)
+    run = run_motions(arm, [Ptp(JointTarget(q1), zone=zone, label="P1"), Ptp(JointTarget(q2))], q0)
+    assert len(run.segments) == 1 and len(stop.segments) == 2
+    assert run.duration < stop.duration
+    (o0, a), (o1, b) = run.segments[0].parts
+    assert o0 == 0.0 and 0.0 < o1 < a.duration  # b starts before a ends
+    smp = run.sample(np.union1d(run.times(0.0005), [o1, a.duration]))
+    _check_limits(arm, smp)
+    assert np.allclose(smp.q[-1], q2, atol=1e-12)
+    # no stop at the corner: some joint moves at every instant between the two moves
+    mid = (smp.t > 0.5 * a.duration) & (smp.t < o1 + 0.5 * b.duration)
+    assert np.abs(smp.qd[mid]).max(axis=1).min() > 0.05
+    # during the overlap the tool stays within the zone of the corner point
+    corner = arm.fk(q1).position
+    ov = (smp.t >= o1) & (smp.t <= a.duration)
+    d = np.array([np.linalg.norm(arm.fk(q).position - corner) for q in smp.q[ov]])
+    assert d.max() <= zone * (1 + 1e-9)
+    # the joint-space superposition is exact: q(t) = a(t) + b(t - o1) - q1
+    t = smp.t[ov]
+    ref = a.sample(t).position + b.sample(t - o1).position - q1
+    assert np.abs(smp.q[ov] - ref).max() < 1e-12

@@ -12,7 +12,7 @@ from scipy.integrate import quad
 
 from trajkit import AxisLimits
 from trajkit.errors import InvalidInputError
-from trajkit.interpolation import SaddleMachine, axis_states, plan_saddle
+from trajkit.interpolation import SaddleMachine, plan_saddle
 from trajkit.paths import SaddleCurve, chord_deviations
 from trajkit.paths._tolerances import SADDLE_LENGTH_RTOL
 
@@ -53,6 +53,7 @@ def test_points_lie_on_both_cylinders(i):
     assert np.max(np.abs(dist - c.main_radius)) <= 1e-9 * scale
 
 
+@pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")  # the reference's own round-off
 @pytest.mark.parametrize("i", range(60 if SWEEP else 12))
 def test_arc_length_meets_its_stated_bound(i):
     rng = np.random.default_rng(2000 + i)
@@ -63,9 +64,9 @@ def test_arc_length_meets_its_stated_bound(i):
     # partial lengths, and the inverse map
     th = c.theta_start + np.sort(rng.uniform(0, 2 * math.pi, 5))
     for t in th:
-        ref_t = quad(lambda x: float(c.speed_theta(x)), c.theta_start, t, epsabs=0.0, epsrel=2e-14,
-                     limit=1000)[0]
-        assert abs(c.s_of_theta([t])[0] - ref_t) <= SADDLE_LENGTH_RTOL * c.length + 1e-15
+        ref_t, err_t = quad(lambda x: float(c.speed_theta(x)), c.theta_start, t, epsabs=0.0,
+                            epsrel=2e-14, limit=1000)
+        assert abs(c.s_of_theta([t])[0] - ref_t) <= SADDLE_LENGTH_RTOL * c.length + err_t
     s = np.linspace(0, c.length, 2001)
     assert np.max(np.abs(c.s_of_theta(c.theta_of_s(s)) - s)) <= 1e-13 * c.length
 

@@ -214,3 +214,16 @@ def test_trajectory_off_the_line_fails_phase_sync():
     assert rep.line_error > 1e-3
     with pytest.raises(VerificationError, match=r"^joint_space_line"):
         rep.raise_if_failed()
+
+
+def test_reports_to_dict_are_json():
+    import json
+
+    tr = plan_ptp([0.0, 0.0], [1.0, 3.0], [SYM, AxisLimits(1.0, 2.0, 10.0, name="C")])
+    doc = json.loads(json.dumps(verify_trajectory(tr).to_dict()))
+    assert doc["ok"] is True and [a["axis"] for a in doc["axes"]] == ["B", "C"]
+    bad = _rebuild(plan_move(0.0, 5.0, SYM), limits=AxisLimits(0.9, 2.0, 10.0, name="B"))
+    doc = json.loads(json.dumps(verify_profile(bad).to_dict()))
+    assert doc["ok"] is False
+    assert doc["violations"][0]["quantity"] == "velocity"
+    assert doc["violations"][0]["limit"] == 0.9

@@ -28,6 +28,7 @@ The module only computes; it never prints, plots or reads files.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -178,6 +179,21 @@ class VerificationReport:
         """Largest ratio over all quantities."""
         return max(self.ratios.values(), default=0.0)
 
+    def to_dict(self) -> dict:
+        """JSON-ready summary (ratios, errors, violations)."""
+        return {
+            "axis": self.axis,
+            "ok": self.ok,
+            "ratios": dict(self.ratios),
+            "goal_error": self.goal_error,
+            "end_velocity_error": self.end_velocity_error,
+            "end_acceleration_error": self.end_acceleration_error,
+            "continuity_error": self.continuity_error,
+            "duration_error": self.duration_error,
+            "n_samples": self.n_samples,
+            "violations": [dataclasses.asdict(v) for v in self.violations],
+        }
+
     def raise_if_failed(self) -> "VerificationReport":
         """Raise :class:`VerificationError` naming axis, quantity, value, limit.
 
@@ -221,6 +237,17 @@ class TrajectoryReport:
     sync_error: float = 0.0
     line_error: float = 0.0
     violations: tuple = ()
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (per-axis reports included)."""
+        return {
+            "ok": self.ok,
+            "ratios": dict(self.ratios),
+            "sync_error": self.sync_error,
+            "line_error": self.line_error,
+            "axes": [r.to_dict() for r in self.axes],
+            "violations": [dataclasses.asdict(v) for v in self.violations],
+        }
 
     def raise_if_failed(self) -> "TrajectoryReport":
         """Raise :class:`VerificationError` for the first failed check."""

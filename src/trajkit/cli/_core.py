@@ -18,13 +18,14 @@ import sys
 from typing import Any, Literal, Sequence
 
 import numpy as np
+import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from .._atomicio import atomic_write
 from .._validate import check_finite
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
-from .._atomicio import atomic_write
 from ..trajectory import SYNC_MODES, Trajectory, plan_ptp
 from ._console import _fmt, print_json, print_table
 
@@ -168,13 +169,8 @@ def load_job(path: str | os.PathLike) -> "PtpJob":
     with open(p, encoding="utf-8") as fh:
         text = fh.read()
     try:
-        if kind == "json":
-            data = json.loads(text)
-        else:
-            import yaml
-
-            data = yaml.safe_load(text)
-    except Exception as exc:  # json.JSONDecodeError, yaml.YAMLError
+        data = json.loads(text) if kind == "json" else yaml.safe_load(text)
+    except (ValueError, yaml.YAMLError) as exc:  # json.JSONDecodeError is a ValueError
         mark = getattr(exc, "problem_mark", None)
         if mark is not None:
             problem = getattr(exc, "problem", None) or "syntax error"

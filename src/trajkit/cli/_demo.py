@@ -67,6 +67,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from ._pallet import run_pallet
 
     out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)  # fail fast on a bad folder, before planning
     scenario, plans, reports = run_pallet(None, progress=sys.stderr.isatty())
     summary = summarize(plans)
     print_table(

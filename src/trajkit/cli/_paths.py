@@ -27,6 +27,9 @@ __all__ = ["register", "load_path_file", "build_path"]
 
 MM = 1e-3  # metres per millimetre
 
+#: Default tangent jump [deg] treated as a corner by ``trajkit path``.
+DEFAULT_CORNER_DEG = 0.01
+
 #: Largest number of CSV rows an export may write (a typo in --period must not fill the disk).
 MAX_CSV_ROWS = 5_000_000
 
@@ -109,6 +112,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="arc from the current point via VIA to END, each X,Y,Z [mm] (repeatable)")
     q.add_argument("--circle", dest="segments", action=_SegmentAction, const="circle",
                    metavar="VIA:VIA2", help="full circle through the current point, VIA and VIA2 [mm]")
+    q.add_argument("--corner-angle", type=float, default=None, metavar="DEG",
+                   help="tangent jumps above this are corners where the feed stops [deg] "
+                        "(default 0.01; smaller jumps from rounded points are passed through)")
     _motion_options(q, required=False)
     _output_options(q)
     q.set_defaults(func=_run_path, segments=None)
@@ -207,7 +213,8 @@ def load_path_file(filename: str) -> dict:
         raise InvalidInputError(f"{filename}: not valid YAML: {first}") from None
     if not isinstance(data, dict):
         raise InvalidInputError(f"{filename}: expected a mapping with 'start' and 'segments'")
-    unknown = set(data) - {"start", "segments", "feed", "tolerance", "period", "accel", "jerk", "units"}
+    unknown = set(data) - {"start", "segments", "feed", "tolerance", "period", "accel", "jerk", "units",
+                           "corner_angle"}
     if unknown:
         raise InvalidInputError(f"{filename}: unknown key(s) {sorted(unknown)}")
     if data.get("units", "mm") != "mm":
@@ -234,7 +241,7 @@ def load_path_file(filename: str) -> dict:
     return {**data, "segments": out}
 
 
-def build_path(start: Any, segments: list) -> CompositePath:
+def build_path(start: Any, segments: list, corner_angle_deg: float = DEFAULT_CORNER_DEG) -> CompositePath:
     """Build a composite path from a start point and (kind, value) segments [mm]."""
     cur = _point(start, "start")
     segs = []
@@ -265,14 +272,17 @@ def build_path(start: Any, segments: list) -> CompositePath:
         cur = end
     if not segs:
         raise InvalidInputError("path needs at least one --line, --arc or --circle (or --file)")
-    return CompositePath(segs)
+    ca = _num(corner_angle_deg, "--corner-angle")
+    if not 0.0 <= ca < 180.0:
+        raise InvalidInputError(f"--corner-angle must lie in [0, 180) deg, got {ca!r}")
+    return CompositePath(segs, corner_angle=math.radians(ca))
 
 
 def _run_path(args: argparse.Namespace) -> int:
     job: dict = {}
     if args.file:
         job = load_path_file(args.file)
-    for key in ("feed", "tolerance", "period", "accel", "jerk"):
+    for key in ("feed", "tolerance", "period", "accel", "jerk", "corner_angle"):
         if getattr(args, key) is None and key in job:
             setattr(args, key, job[key])
     for key in ("feed", "tolerance", "period"):
@@ -282,7 +292,8 @@ def _run_path(args: argparse.Namespace) -> int:
     if start is None:
         raise InvalidInputError("--start is required (on the command line or in the file)")
     segments = (args.segments or []) if args.segments else job.get("segments", [])
-    path = build_path(start, segments)
+    path = build_path(start, segments,
+                      DEFAULT_CORNER_DEG if args.corner_angle is None else args.corner_angle)
     feed, tol, period, acc, jerk = _motion_values(args)
     _check_rows(path.length / feed, period)
     chords = discretize(path, tol)

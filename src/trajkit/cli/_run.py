@@ -12,6 +12,7 @@ import argparse
 from typing import Any
 
 from ..errors import InvalidInputError
+from ..interpolation.feed import MAX_PERIOD, MIN_PERIOD
 from ._console import print_json, print_table
 
 __all__ = ["register", "cmd_run"]
@@ -38,8 +39,10 @@ def register(subparsers: Any) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     from ..io.program import load_program
 
-    if not args.period > 0 or args.period != args.period or args.period == float("inf"):
-        raise InvalidInputError(f"--period must be a finite number > 0 s, got {args.period!r}")
+    if not MIN_PERIOD <= args.period <= MAX_PERIOD:
+        raise InvalidInputError(
+            f"--period must be between {MIN_PERIOD} and {MAX_PERIOD} s, got {args.period!r}"
+        )
     program = load_program(args.program)
     run = program.run()
     samples = run.sample(run.times(args.period))

@@ -14,7 +14,7 @@ or merged with its neighbour. Composite paths stop at corners.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -35,6 +35,12 @@ MAX_PERIOD = 0.1
 
 #: Grid points per path for the speed-limit curve.
 LIMIT_GRID = 4097
+
+#: Relative round-off slack on speeds and plateau lengths.
+SPEED_RTOL = 1e-12
+
+#: Bisection of a plateau speed stops at this relative width.
+BISECT_RTOL = 1e-15
 
 #: Golden-section steps refining the lowest speed limit of a slowdown.
 REFINE_ITER = 60
@@ -109,7 +115,9 @@ def setpoint_times(duration: float, period: float) -> np.ndarray:
     ndarray, shape (n,) [s]
     """
     dt = _check_period(period)
-    n = int(math.ceil(duration / dt - 1e-9)) if duration > 0 else 0
+    n = int(math.ceil(duration / dt)) if duration > 0 else 0
+    if n * dt < duration:  # round-off in the division
+        n += 1
     return np.arange(n + 1) * dt
 
 
@@ -182,7 +190,7 @@ class FeedPlan:
         if m.jerk.size == 0:
             return np.zeros(tt.size, bool)
         const = (m.jerk[i] == 0.0) & (np.abs(m.state[i, 2]) == 0.0)
-        at_feed = np.abs(m.state[i, 1] - self.feed) <= 1e-12 * self.feed
+        at_feed = np.abs(m.state[i, 1] - self.feed) <= SPEED_RTOL * self.feed
         return const & at_feed & (tt >= 0) & (tt <= self.duration)
 
     def to_dict(self) -> dict:
@@ -407,7 +415,7 @@ def _make_feasible(pl, A, J) -> None:
         for i in range(1, len(pl) - 1):
             length = pl[i][1] - pl[i][0]
             level = pl[i][2]
-            if _need(pl, i, level, A, J) <= length * (1 + 1e-12):
+            if _need(pl, i, level, A, J) <= length * (1 + SPEED_RTOL):
                 continue
             changed = True
             vn = max(pl[i - 1][2], pl[i + 1][2])
@@ -419,15 +427,14 @@ def _make_feasible(pl, A, J) -> None:
                         lo = mid
                     else:
                         hi = mid
-                    if hi - lo <= 1e-15 * hi:
+                    if hi - lo <= BISECT_RTOL * hi:
                         break
                 pl[i][2] = lo
             else:
-                # too short even at the neighbour's level: merge with that neighbour
+                # too short even at the faster neighbour's level: merge with it. That
+                # neighbour is never a rest end (a rest end has level 0, and a plateau
+                # between two zero levels always fits its own speed changes).
                 j = i - 1 if pl[i - 1][2] >= pl[i + 1][2] else i + 1
-                if j in (0, len(pl) - 1):  # a rest end: keep the plateau, lowest level
-                    pl[i][2] = min(level, vn) if vn > 0 else level * 0.5
-                    continue
                 a, b = min(i, j), max(i, j)
                 pl[a] = [pl[a][0], pl[b][1], min(pl[a][2], pl[b][2])]
                 del pl[b]

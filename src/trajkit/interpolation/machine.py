@@ -62,6 +62,9 @@ MAX_ROUNDS = 8
 #: Extra margin when shrinking budgets after an excess.
 SHRINK_MARGIN = 0.999
 
+#: Guards a division when an axis never accelerates along the seam.
+_TINY = 1e-300
+
 #: Relative slack of the final limit check (floating-point round-off).
 CHECK_RTOL = 1e-9
 
@@ -297,7 +300,7 @@ def plan_saddle(
         for i in range(2):
             a_eff = min(a_eff, tan_scale * BUDGET["accel_tangential"] * lim[i, 1] / q1max[i])
             a_eff = min(a_eff, tan_scale * BUDGET["jerk_cross"] * lim[i, 2]
-                        / (3.0 * math.sqrt(max(ea * lim[i, 1] * q2max[i], 1e-300))))
+                        / (3.0 * math.sqrt(max(ea * lim[i, 1] * q2max[i], _TINY))))
             j_eff = min(j_eff, tan_scale * BUDGET["jerk_tangential"] * lim[i, 2] / q1max[i])
         fp = plan_feed(curve, F, a_eff, j_eff, speed_limit=vlim, reasons=reasons,
                        tolerance=E, period=dt)

@@ -180,6 +180,7 @@ class PointSpec(_Model):
 class PtpSpec(_Model):
     PTP: str
     speed_pct: Optional[float] = Field(default=None, gt=0, le=100, allow_inf_nan=False)
+    zone_mm: Optional[float] = Field(default=None, ge=0, allow_inf_nan=False)
 
 
 class LinSpec(_Model):
@@ -375,7 +376,8 @@ def parse_program(text: str, source: str = "<string>",
         label = f"instruction {i} ({kind}{' ' + ref if ref else ''}, line {line})"
         if kind == "PTP":
             pct = d.speed_pct if ins.speed_pct is None else ins.speed_pct
-            motions.append(Ptp(point(ref, loc + ("PTP",)), pct, label))
+            z = (d.zone_mm if ins.zone_mm is None else ins.zone_mm) * _MM
+            motions.append(Ptp(point(ref, loc + ("PTP",)), pct, label, z))
         elif kind == "LIN":
             v = (d.speed_mm_s if ins.speed_mm_s is None else ins.speed_mm_s) * _MM
             z = (d.zone_mm if ins.zone_mm is None else ins.zone_mm) * _MM

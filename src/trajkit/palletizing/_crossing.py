@@ -29,8 +29,8 @@ def time_at_position(profile: Profile, x: float) -> float:
     profile : Profile
         A rest-to-rest profile (monotone position).
     x : float
-        Position [unit]; clipped to the segment [start, goal] is NOT done:
-        a position beyond the goal raises, one at or before the start gives 0.
+        Position [unit]. A position at or before the start gives 0; one
+        beyond the goal raises (it is never reached).
 
     Returns
     -------

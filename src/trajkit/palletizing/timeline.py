@@ -10,7 +10,11 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..profiles import Profile
 
-__all__ = ["Piece", "Timeline", "TimelineSample"]
+__all__ = ["Piece", "Timeline", "TimelineSample", "CHAIN_RTOL"]
+
+#: Relative tolerance for pieces that chain (start where the previous one
+#: ended, in time and position): float round-off of absolute start times.
+CHAIN_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -59,6 +63,8 @@ class Timeline:
     duration : float
         Total duration [s] (>= the end of every piece).
     names : sequence of str, optional
+    atol : float
+        Relative tolerance for the chaining checks (:data:`CHAIN_RTOL`).
 
     Raises
     ------
@@ -67,7 +73,7 @@ class Timeline:
     """
 
     def __init__(self, pieces: Sequence[Sequence[Piece]], start: Any, duration: float,
-                 names: Sequence[str] | None = None, atol: float = 1e-12) -> None:
+                 names: Sequence[str] | None = None, atol: float = CHAIN_RTOL) -> None:
         self.pieces = tuple(tuple(p) for p in pieces)
         self.start = np.asarray(start, dtype=float).copy()
         self.duration = float(duration)

@@ -38,6 +38,13 @@ GAUSS_ORDER = 16
 #: (round-off); beyond it the argument is an error.
 S_RANGE_RTOL = 1e-12
 
+#: A step ending closer than this fraction of itself to a forced node (corner,
+#: end) is stretched to it, so no sliver chord remains.
+SNAP_FRACTION = 1e-9
+
+#: Angle slack [rad] on a theta argument outside its one-turn range (round-off).
+THETA_RANGE_ATOL = 1e-12
+
 #: Fraction of the tolerance that the adaptive chord stepper aims at (the
 #: rest absorbs the curvature sampling error; violators are split).
 CHORD_TARGET_FRACTION = 0.98

@@ -28,6 +28,7 @@ from ._tolerances import (
     CHORD_CHECK_SAMPLES,
     CHORD_REFINE_ITER,
     CHORD_TARGET_FRACTION,
+    SNAP_FRACTION,
 )
 from .base import Path
 
@@ -274,7 +275,7 @@ def discretize(path: Path, tolerance: float, max_chord: float = math.inf) -> Cho
     for stop in forced:
         while stop - s0 > 0.0:
             step = _next_step(sg, cell, ncell, s0, stop, target, max_chord)
-            if stop - (s0 + step) <= 1e-9 * step:
+            if stop - (s0 + step) <= SNAP_FRACTION * step:
                 s0 = stop
             else:
                 s0 = s0 + step

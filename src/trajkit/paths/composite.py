@@ -22,6 +22,10 @@ class CompositePath(Path):
     segments : sequence of Path
         At least one; each must start where the previous one ends (within
         :data:`~trajkit.paths._tolerances.JOIN_DIST` [m]).
+    corner_angle : float
+        Tangent jump [rad] above which a junction is a corner (where the feed
+        stops); smaller jumps (e.g. rounded taught points) are passed through,
+        with a velocity direction step of ``feed * jump``.
 
     Attributes
     ----------
@@ -33,11 +37,11 @@ class CompositePath(Path):
     -----
     At a junction the point, tangent and curvature of the *following*
     segment are returned (the end of the path belongs to the last one).
-    Junctions where the tangent turns by more than
-    :data:`~trajkit.paths._tolerances.CORNER_ANGLE` are :meth:`corners`.
+    Junctions where the tangent turns by more than ``corner_angle`` are
+    :meth:`corners`.
     """
 
-    def __init__(self, segments: Sequence[Path]) -> None:
+    def __init__(self, segments: Sequence[Path], corner_angle: float = CORNER_ANGLE) -> None:
         segs = tuple(segments)
         if not segs:
             raise InvalidInputError("composite path needs at least one segment, got 0")
@@ -51,6 +55,10 @@ class CompositePath(Path):
                     f"segment {i} starts {gap:.6g} m away from the end of segment {i - 1} "
                     f"(joins must be within {JOIN_DIST} m)"
                 )
+        ca = float(corner_angle)
+        if not (0.0 <= ca < math.pi):
+            raise InvalidInputError(f"corner_angle must lie in [0, pi) rad, got {corner_angle!r}")
+        self.corner_angle = ca
         self.segments = segs
         self.offsets = np.concatenate([[0.0], np.cumsum([sg.length for sg in segs])])
         self.length = float(self.offsets[-1])
@@ -60,7 +68,7 @@ class CompositePath(Path):
             t0 = segs[i - 1].tangent(segs[i - 1].length)
             t1 = segs[i].tangent(0.0)
             ang = math.atan2(float(np.linalg.norm(np.cross(t0, t1))), float(np.dot(t0, t1)))
-            if ang > CORNER_ANGLE:
+            if ang > ca:
                 corners.append(self.offsets[i])
         self._corners = np.array(corners, dtype=float)
 

@@ -37,6 +37,7 @@ from ._tolerances import (
     GAUSS_ORDER,
     NEWTON_LAST_STEP,
     SADDLE_LENGTH_RTOL,
+    THETA_RANGE_ATOL,
 )
 from .base import Path
 
@@ -233,7 +234,7 @@ class SaddleCurve(Path):
         """
         th = np.atleast_1d(np.asarray(theta, dtype=float))
         lo, hi = self.theta_start, self.theta_start + _TWO_PI
-        if th.size and (np.min(th) < lo - 1e-12 or np.max(th) > hi + 1e-12):
+        if th.size and (np.min(th) < lo - THETA_RANGE_ATOL or np.max(th) > hi + THETA_RANGE_ATOL):
             raise InvalidInputError(
                 f"theta must lie in [{lo!r}, {hi!r}] rad, got a value in "
                 f"[{float(np.min(th))!r}, {float(np.max(th))!r}]"

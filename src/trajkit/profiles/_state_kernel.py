@@ -60,6 +60,12 @@ ACC_CAP_FACTOR = 1.01
 #: the parabola through it dips below this fraction of its sampled value.
 PROMISING_FRACTION = 0.5
 
+#: Closest candidates from each side tried for a blend (fixed duration).
+BLEND_TRIES = 3
+
+#: Margin on the velocity window scanned for fixed-duration profiles.
+WINDOW_MARGIN = 1.01
+
 #: Relative round-off allowance when a closed-form peak lands on a branch end.
 ROUND_RTOL = 4e-16
 
@@ -648,15 +654,61 @@ def _candidates(start, goal, L, L_check):
     return out
 
 
-def fixed_time_profile(start, goal, L, T):
+def insert_cruise(phases, v0, dT):
+    """Insert a cruise of ``dT`` s at the fastest and the slowest ``a = 0`` point.
+
+    Returns up to two phase lists (the acceleration is zero there, so the
+    inserted constant-velocity phase keeps every limit; the end state's
+    velocity and acceleration are unchanged, the position moves by
+    ``v_e * dT``).
+    """
+    pts = []  # (velocity, phase index, split time)
+    v = v0
+    n = len(phases)
+    for k, (dt, j, a) in enumerate(phases):
+        if a == 0.0:
+            pts.append((v, k, 0.0))
+        if j != 0.0 and a != 0.0:
+            tz = -a / j
+            if 0.0 < tz < dt:
+                pts.append((v + tz * (a + 0.5 * tz * j), k, tz))
+        v = v + dt * (a + 0.5 * dt * j)
+    if n and phases[-1][2] + phases[-1][0] * phases[-1][1] == 0.0 or n == 0:
+        pts.append((v, n, 0.0))
+    if not pts:
+        return []
+    out = []
+    for v_e, k, tz in {min(pts), max(pts)}:
+        ph = list(phases[:k])
+        if k < n and tz > 0.0:
+            dt, j, a = phases[k]
+            ph.append((tz, j, a))
+            ph.append((dT, 0.0, 0.0))
+            ph.append((dt - tz, j, 0.0))
+            ph += phases[k + 1:]
+        else:
+            ph.append((dT, 0.0, 0.0))
+            ph += phases[k:]
+        out.append(ph)
+    return out
+
+
+def fixed_time_profile(start, goal, L, T, seeds=()):
     """A verified profile of exactly ``T`` s, or ``None``.
 
-    F1 with a cruise at ``vc`` (``|vc| <= V``) filling the time left by the
-    two bumps; the position is monotone in ``vc`` on each connected set of
-    feasible ``vc``, so a bracketed root gives it. Where the goal lies in a
-    gap between two such sets, the convex combination of the two nearest
-    profiles (same duration, same start and goal velocity/acceleration) is
-    exact and kept if it verifies.
+    Candidates of exactly ``T`` s:
+
+    * F1 with a cruise at ``vc`` filling the time the two bumps leave
+      (scanned over the velocity window reachable within ``T``; a sign change
+      of the position error between two scan points is refined to a root);
+    * every profile in ``seeds`` (faster solutions, e.g. the minimum-time
+      candidates) with a cruise inserted at its fastest or slowest
+      zero-acceleration point.
+
+    When no root is exact, the two candidates closest to the goal position
+    from below and above are blended: their convex combination has the same
+    duration and boundary velocity/acceleration, the position in between,
+    and keeps every convex (symmetric) limit; it is kept if it verifies.
     """
     V, A1, J1, A2, J2 = L
     p0, v0, a0 = start
@@ -671,7 +723,7 @@ def fixed_time_profile(start, goal, L, T):
         if b2 is None:
             return None
         tc = T - total_time(b1) - total_time(b2)
-        if tc < -1e-15 * T:
+        if tc < -ROUND_RTOL * T:
             return None
         return b1 + [(max(tc, 0.0), 0.0, 0.0)] + b2
 
@@ -681,28 +733,50 @@ def fixed_time_profile(start, goal, L, T):
             return None
         return integrate(ph, p0, v0, a0)[0] - pf
 
+    # within T the velocity cannot move further than min(A T, J T^2 / 4)
+    # from the boundary velocities: scan only that window (inside +-V)
+    Amax = max(A1, A2, abs(a0), abs(af))
+    Jmax = max(J1, J2)
+    reach = min(Amax * T, Jmax * T * T / 4.0) * WINDOW_MARGIN
+    marks = [v0, vf, vn0, vnf]
+    lo, hi = min(marks) - reach, max(marks) + reach
     if V != _inf:
-        lo, hi = -V, V
-    else:
-        w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), abs(pf - p0) / max(T, 1e-300), 1e-300)
-        lo, hi = -4.0 * w, 4.0 * w
-    grid = _grid(lo, hi, [v0, vf, vn0, vnf, 0.0], n=2 * SCAN_POINTS)
-    vals = [(x, r(x)) for x in grid]
-    best = None
+        lo, hi = max(lo, -V), min(hi, V)
+    if not (lo < hi) or not math.isfinite(lo) or not math.isfinite(hi):
+        w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), abs(pf - p0) / max(T, TINY), TINY)
+        lo, hi = (-V, V) if V != _inf else (-4.0 * w, 4.0 * w)
+    grid = _grid(lo, hi, marks + [0.0], n=2 * SCAN_POINTS)
     for vc in scan_roots(r, grid):
         ph = prof(vc)
         if ph is not None and verify(ph, p0, v0, a0, L, goal) is None:
             return ph
-    # blend across a gap
-    below = [(fx, x) for x, fx in vals if fx is not None and fx < 0.0]
-    above = [(fx, x) for x, fx in vals if fx is not None and fx > 0.0]
-    if below and above:
-        fb, xb = max(below)
-        fa, xa = min(above)
-        ph = blend(prof(xb), prof(xa), fa / (fa - fb))
-        if verify(ph, p0, v0, a0, L, goal) is None:
-            best = ph
-    return best
+    pool = []
+    for x in grid:
+        ph = prof(x)
+        if ph is not None:
+            pool.append((integrate(ph, p0, v0, a0)[0] - pf, ph))
+    for sp in seeds:
+        dT = T - total_time(sp)
+        if dT < 0.0:
+            continue
+        for ph in insert_cruise(sp, v0, dT):
+            pool.append((integrate(ph, p0, v0, a0)[0] - pf, ph))
+    for e, ph in pool:
+        if e == 0.0 and verify(ph, p0, v0, a0, L, goal) is None:
+            return ph
+    below = [(e, i) for i, (e, _) in enumerate(pool) if e < 0.0]
+    above = [(e, i) for i, (e, _) in enumerate(pool) if e > 0.0]
+    if not below or not above:
+        return None
+    # try the closest pairs first
+    below.sort(reverse=True)
+    above.sort()
+    for eb, ib in below[:BLEND_TRIES]:
+        for ea, ia in above[:BLEND_TRIES]:
+            ph = blend(pool[ib][1], pool[ia][1], ea / (ea - eb))
+            if verify(ph, p0, v0, a0, L, goal) is None:
+                return ph
+    return None
 
 
 def blend(pa, pb, lam):

@@ -15,7 +15,7 @@ import numpy as np
 from .._constants import DURATION_RTOL, ROOT_MAX_ITER, ROOT_RTOL
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
-from .profile import Profile, _build
+from .profile import Profile
 
 __all__ = ["MoveBatch", "plan_moves"]
 

@@ -342,7 +342,10 @@ def plan_move(
     limits : AxisLimits
         Velocity, acceleration and jerk limits (accel and decel legs).
     duration : float, optional
-        Requested duration [s] (>= the minimum duration).
+        Requested duration [s] (>= the minimum duration). A request below
+        the minimum by less than ``DURATION_RTOL`` (relative; float
+        round-off, e.g. a minimum printed and typed back) is taken as the
+        minimum, and the profile then lasts the minimum duration.
 
     Returns
     -------

@@ -394,9 +394,9 @@ def _duration_arg(duration: Any, limits: AxisLimits) -> float | None:
 
 # -------------------------------------------------------------- planners
 def _min_time(start, goal, L, name):
-    """Fastest verified candidate; (phases, family)."""
+    """Fastest verified candidate; (phases, family, all candidates' phases)."""
     if start == goal and start[2] == 0.0:
-        return [], "none"
+        return [], "none", [[]]
     cands = K.candidates_min_time(start, goal, L)
     if not cands:
         raise InfeasibleError(
@@ -404,7 +404,7 @@ def _min_time(start, goal, L, name):
             "within the limits (please report this input)"
         )
     best = min(cands, key=lambda c: c[0])
-    return best[2], best[1]
+    return best[2], best[1], [c[2] for c in cands]
 
 
 def _prepare(start, goal, limits):
@@ -483,7 +483,7 @@ def plan_state_to_state(
     T = _duration_arg(duration, limits)
     L, brake, s1 = _prepare(s, g, limits)
     tb = K.total_time(brake)
-    main, fam = _min_time(s1, g, L, limits.name)
+    main, fam, seeds = _min_time(s1, g, L, limits.name)
     tmin = tb + K.total_time(main)
     if T is None or abs(T - tmin) <= DURATION_RTOL * max(tmin, 1e-300):
         return _finish(s, g, brake, main, tmin, fam, limits)
@@ -493,9 +493,9 @@ def plan_state_to_state(
             f"{tmin!r} s from state {s!r} to {g!r}",
             minimum=tmin,
         )
-    ph = K.fixed_time_profile(s1, g, L, T - tb)
+    ph = K.fixed_time_profile(s1, g, L, T - tb, seeds)
     if ph is None:
-        lo, hi = _blocked_interval(s1, g, L, T - tb, tmin - tb)
+        lo, hi = _blocked_interval(s1, g, L, T - tb, tmin - tb, seeds)
         raise BlockedDurationError(
             f"duration {T!r} s{axis_label(limits.name)} lies in a blocked interval "
             f"({lo + tb!r}, {hi + tb!r}) s of the move from state {s!r} to {g!r}: no profile of "
@@ -505,10 +505,10 @@ def plan_state_to_state(
     return _finish(s, g, brake, ph, tmin, "fixed", limits)
 
 
-def _blocked_interval(s1, g, L, T, tmin):
+def _blocked_interval(s1, g, L, T, tmin, seeds):
     """``(lower, upper)`` feasible-duration gap containing the infeasible ``T``."""
     def ok(t):
-        return K.fixed_time_profile(s1, g, L, t) is not None
+        return K.fixed_time_profile(s1, g, L, t, seeds) is not None
 
     step = max(T - tmin, BLOCKED_SEARCH_RTOL * max(T, 1e-300))
     hi = T + step

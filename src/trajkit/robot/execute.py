@@ -23,6 +23,16 @@ from .motion import Circ, JointTarget, Lin, Ptp, Wait
 
 __all__ = ["RobotRun", "RobotSamples", "Segment", "run_motions", "SAMPLE_ENDPOINT_RTOL"]
 
+#: Fraction of the joint velocity and acceleration limits a PTP blend may use
+#: (checked on samples; the margin covers the values between them).
+PTP_BLEND_USE = 0.99
+
+#: Samples on which a PTP blend overlap is checked.
+PTP_BLEND_CHECKS = 200
+
+#: Bisection steps when shrinking a PTP blend overlap.
+PTP_BLEND_BISECT = 25
+
 #: A sample time within this fraction of the period from the end is the end.
 SAMPLE_ENDPOINT_RTOL = 1e-9
 
@@ -51,6 +61,24 @@ class Segment:
     q_end: np.ndarray
     ptp: Trajectory | None = None
     chain: CartesianChain | None = None
+    parts: list[tuple[float, Trajectory]] | None = None
+
+    def sample_ptp(self, tl: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Joint position, velocity, acceleration (n, n_joints) at local times ``tl``.
+
+        A blended PTP group is the superposition of its moves, each started
+        at its offset: ``q = q_start + sum_k (q_k(t - off_k) - q_k(0))``.
+        """
+        parts = self.parts if self.parts is not None else [(0.0, self.ptp)]
+        q = np.broadcast_to(self.q_start, (tl.size, self.q_start.size)).copy()
+        qd = np.zeros_like(q)
+        qdd = np.zeros_like(q)
+        for off, traj in parts:
+            smp = traj.sample(tl - off)
+            q += smp.position - traj.start
+            qd += smp.velocity
+            qdd += smp.acceleration
+        return q, qd, qdd
 
 
 @dataclass
@@ -134,11 +162,11 @@ class RobotRun:
                 xyz[m], quat[m], speed[m], mot[m] = out["xyz"], out["quat"], out["tool_speed"], out["motion"]
                 continue
             if sg.kind == "PTP":
-                smp = sg.ptp.sample(tl)
-                q[m], qd[m], qdd[m] = smp.position, smp.velocity, smp.acceleration
+                q[m], qd[m], qdd[m] = sg.sample_ptp(tl)
+                mot[m] = _part_index(sg, tl)
             else:
                 q[m] = sg.q_start
-            mot[m] = sg.motions[0]
+                mot[m] = sg.motions[0]
             rows = np.nonzero(m)[0]
             for r in rows:
                 pose = self.robot.fk(q[r])
@@ -215,13 +243,72 @@ def _joint_goal(robot: RobotModel, target: Any, q_cur: np.ndarray, label: str) -
         raise UnreachableError(f"{label}: target {target.name}: {exc}") from None
 
 
+def _part_index(sg: Segment, tl: np.ndarray) -> np.ndarray:
+    """Motion index of each local time of a (blended) PTP segment: the latest started move."""
+    offs = np.array([o for o, _ in sg.parts]) if sg.parts else np.zeros(1)
+    k = np.clip(np.searchsorted(offs, tl, side="right") - 1, 0, len(sg.motions) - 1)
+    return np.asarray(sg.motions)[k]
+
+
+def _leg_times(traj: Trajectory) -> tuple[float, float]:
+    """(accel leg, decel leg) durations [s] of a phase-synchronised PTP."""
+    acc = max((sum(p.phase_durations[:3]) for p in traj.axes), default=0.0)
+    dec = max((sum(p.phase_durations[4:]) for p in traj.axes), default=0.0)
+    return acc, dec
+
+
+def _ptp_overlap(robot: RobotModel, a: Trajectory, b: Trajectory, ma: Ptp, mb: Ptp) -> float:
+    """Largest overlap [s] of PTP ``b`` over the end of ``a`` that keeps the limits and the zone.
+
+    The overlap is at most the decel leg of ``a`` and the accel leg of ``b``;
+    it is shrunk (bisection) until, on PTP_BLEND_CHECKS samples of the
+    overlap, every joint stays within PTP_BLEND_USE of its velocity (with the
+    lower of both overrides) and acceleration limits, and the tool within
+    ``ma.zone`` of ``a``'s target.
+    """
+    _, dec = _leg_times(a)
+    acc, _ = _leg_times(b)
+    dmax = min(dec, acc)
+    if dmax <= 0.0:
+        return 0.0
+    f = min(ma.speed_pct, mb.speed_pct) / 100.0
+    vmax = np.array([lim.v_max for lim in robot.limits]) * f * PTP_BLEND_USE
+    amax = np.array([min(lim.a_max, lim.a_max_decel) for lim in robot.limits]) * PTP_BLEND_USE
+    corner = robot.fk(a.goal).position
+    zone = float(ma.zone)
+
+    def ok(d: float) -> bool:
+        t = np.linspace(a.duration - d, a.duration, PTP_BLEND_CHECKS)
+        sa = a.sample(t)
+        sb = b.sample(t - (a.duration - d))
+        v = sa.velocity + sb.velocity
+        acc_ = sa.acceleration + sb.acceleration
+        if (np.abs(v) > vmax).any() or (np.abs(acc_) > amax).any():
+            return False
+        q = sa.position + sb.position - b.start
+        return all(np.linalg.norm(robot.fk(qq).position - corner) <= zone for qq in q)
+
+    if ok(dmax):
+        return dmax
+    lo, hi = 0.0, dmax
+    for _ in range(PTP_BLEND_BISECT):
+        mid = 0.5 * (lo + hi)
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
 def run_motions(robot: RobotModel, motions: Sequence[Any], start: Any) -> RobotRun:
     """Plan ``motions`` from joints ``start``.
 
     Consecutive LIN/CIRC motions form one continuous-path chain when each
     (but the last) has a zone > 0: the corners are blended and the feed
-    does not stop; a zone of 0 stops at the point (exact stop). PTP motions
-    always stop at their target.
+    does not stop; a zone of 0 stops at the point (exact stop). A PTP with a
+    zone > 0 followed by a PTP blends in joint space (the next move starts
+    during this one's deceleration, the tool within the zone of the target,
+    limits kept); between PTP and LIN/CIRC the robot always stops.
 
     Parameters
     ----------
@@ -255,12 +342,27 @@ def run_motions(robot: RobotModel, motions: Sequence[Any], start: Any) -> RobotR
             t += float(m.time)
             i += 1
         elif isinstance(m, Ptp):
-            goal = _joint_goal(robot, m.target, q, m.label)
-            traj = plan_ptp(q, goal, _scaled_limits(robot, m.speed_pct), sync="phase")
-            segments.append(Segment("PTP", t, traj.duration, [i], q, goal, ptp=traj))
-            t += traj.duration
-            q = goal
-            i += 1
+            j = i
+            while j + 1 < len(motions) and isinstance(motions[j + 1], Ptp) and motions[j].zone > 0:
+                j += 1
+            parts: list[tuple[float, Trajectory]] = []
+            q_start = q
+            off = 0.0
+            for k in range(i, j + 1):
+                mk = motions[k]
+                goal = _joint_goal(robot, mk.target, q, mk.label)
+                traj = plan_ptp(q, goal, _scaled_limits(robot, mk.speed_pct), sync="phase")
+                if parts:
+                    prev_off, prev = parts[-1]
+                    off = prev_off + prev.duration - _ptp_overlap(
+                        robot, prev, traj, motions[k - 1], mk)
+                parts.append((off, traj))
+                q = goal
+            duration = max(o + tr.duration for o, tr in parts)
+            segments.append(Segment("PTP", t, duration, list(range(i, j + 1)), q_start, q,
+                                    ptp=parts[0][1], parts=parts))
+            t += duration
+            i = j + 1
         elif isinstance(m, (Lin, Circ)):
             j = i
             while j + 1 < len(motions) and isinstance(motions[j + 1], (Lin, Circ)) and motions[j].zone > 0:

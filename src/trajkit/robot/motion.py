@@ -72,17 +72,25 @@ class Ptp:
         Velocity override in percent (0, 100] of every joint's v_max.
     label : str
         Names the instruction in messages (e.g. ``"instruction 2 (PTP home, line 9)"``).
+    zone : float
+        Blend radius [m] >= 0: when the next motion is also a PTP, it starts
+        before this one ends (joint-space superposition) while the tool is
+        within ``zone`` of this target; 0 stops exactly.
     """
 
     target: Target
     speed_pct: float = 100.0
     label: str = "PTP"
+    zone: float = 0.0
 
     def __post_init__(self) -> None:
         _check_target(self.target, f"{self.label}: target")
         p = check_positive(self.speed_pct, f"{self.label}: speed_pct")
         if p > 100.0:
             raise InvalidInputError(f"{self.label}: speed_pct must be <= 100, got {p!r}")
+        z = check_finite(self.zone, f"{self.label}: zone")
+        if z < 0:
+            raise InvalidInputError(f"{self.label}: zone must be >= 0 m, got {z!r}")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,260 @@
+"""Unit tests of trajkit.profiles.state (one axis between moving states)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from trajkit import AxisLimits
+from trajkit.errors import InfeasibleError, InvalidInputError
+from trajkit.profiles import plan_move
+from trajkit.profiles.state import (
+    BlockedDurationError,
+    StateProfile,
+    plan_state_to_state,
+    plan_velocity,
+)
+from state_reference import (
+    dense_check,
+    double_s_duration,
+    exact_check,
+    goal_error,
+    random_case,
+)
+
+LIM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0)
+ASYM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0, a_max_decel=1.0, j_max_decel=3.0)
+
+
+def _lim(L):
+    return AxisLimits(L[0], L[1], L[2], L[3], L[4])
+
+
+def _assert_valid(prof, lim):
+    assert exact_check(prof, lim) is None, exact_check(prof, lim)
+    assert goal_error(prof) < 1e-9
+    assert dense_check(prof, lim, n=401) is None
+
+
+# ------------------------------------------------------------ rest to rest
+@pytest.mark.parametrize("lim", [LIM, ASYM], ids=["symmetric", "asymmetric"])
+def test_rest_to_rest_equals_closed_form(lim):
+    rng = np.random.default_rng(11)
+    for _ in range(60):
+        d = float(rng.choice([1e-6, 1e-3, 0.1, 1.0, 7.0])) * rng.uniform(-1, 1)
+        # at the origin: the distance is exact, so the durations must agree
+        # to round-off (away from it, a tiny d is only known to eps*|p|/|d|)
+        p = plan_state_to_state((0.0, 0.0, 0.0), (d, 0.0, 0.0), lim)
+        ref = plan_move(0.0, d, lim)
+        assert p.duration == pytest.approx(ref.duration, rel=1e-12, abs=1e-15)
+        _assert_valid(p, lim)
+
+
+def test_doc_example():
+    p = plan_state_to_state((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), LIM)
+    assert p.duration == pytest.approx(1.7, rel=1e-12)
+
+
+def test_zero_motion_is_zero_duration():
+    p = plan_state_to_state((1.0, 0.5, 0.0), (1.0, 0.5, 0.0), LIM)
+    assert p.duration == 0.0 and p.family == "none"
+    s = p.sample([0.0, 1.0])  # continues at constant velocity after the end
+    assert s.position.tolist() == [1.0, 1.5]
+
+
+# ------------------------------------------------------- sampling interface
+def test_sampling_interface_and_continuity():
+    p = plan_state_to_state((0.0, 0.4, -1.0), (0.5, -0.3, 0.5), ASYM)
+    tb = p.phase_times
+    assert tb.shape == (p.n_phases + 1,)
+    assert tb[-1] == p.duration
+    b = p.boundary_states()
+    assert b.shape == (p.n_phases + 1, 3)
+    s = p.sample(tb[:-1])
+    np.testing.assert_allclose(s.position, b[:-1, 0], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(s.velocity, b[:-1, 1], rtol=0, atol=1e-15)
+    # continuity of p, v, a across every boundary (left limit == right value)
+    eps = 1e-9
+    left = p.sample(tb[1:-1] - eps)
+    right = p.sample(tb[1:-1])
+    np.testing.assert_allclose(left.position, right.position, atol=1e-8)
+    np.testing.assert_allclose(left.velocity, right.velocity, atol=1e-7)
+    np.testing.assert_allclose(left.acceleration, right.acceleration, atol=1e-7)
+    # scalar time gives 0-d arrays
+    assert p.sample(0.1).position.shape == ()
+    # goal exactly at and after the end; continued with goal v and a
+    end = p.sample([p.duration, p.duration + 2.0])
+    pf, vf, af = p.goal_state
+    assert end.position[0] == pf and end.velocity[0] == vf and end.acceleration[0] == af
+    assert end.position[1] == pytest.approx(pf + 2 * vf + 2 * af)
+    assert end.velocity[1] == pytest.approx(vf + 2 * af)
+    # start state held before 0
+    before = p.sample(-1.0)
+    assert (float(before.position), float(before.velocity), float(before.acceleration)) == p.start_state
+    json.dumps(p.to_dict())
+
+
+# --------------------------------------------------------- input checking
+def test_bad_inputs_are_named():
+    with pytest.raises(InvalidInputError, match="start must have 3 entries"):
+        plan_state_to_state((0.0, 1.0), (1.0, 0.0, 0.0), LIM)
+    with pytest.raises(InvalidInputError, match="goal velocity must be finite, got nan"):
+        plan_state_to_state((0.0, 0.0, 0.0), (1.0, math.nan, 0.0), LIM)
+    with pytest.raises(InvalidInputError, match=r"goal state of axis B cannot be reached.*velocity.*above v_max 1.0"):
+        plan_state_to_state((0.0, 0.0, 0.0), (1.0, 1.5, 0.0), LIM.with_name("B"))
+    with pytest.raises(InvalidInputError, match=r"\|acceleration\| 3.0 is above a_max_decel 1.0"):
+        plan_state_to_state((0.0, 0.0, 0.0), (1.0, 0.5, -3.0), ASYM)
+    with pytest.raises(InvalidInputError, match="arriving with acceleration"):
+        plan_state_to_state((0.0, 0.0, 0.0), (1.0, 0.99, -1.9), LIM)
+    with pytest.raises(InvalidInputError, match="limits must be an AxisLimits"):
+        plan_state_to_state((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), {"v_max": 1})
+    with pytest.raises(InvalidInputError, match="duration must be finite and >= 0 s, got -1.0"):
+        plan_state_to_state((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), LIM, duration=-1.0)
+    lim = AxisLimits(1.0, 2.0, 10.0, position_min=0.0, position_max=1.0)
+    with pytest.raises(InvalidInputError, match="goal position 2.0 is outside the position range"):
+        plan_state_to_state((0.0, 0.0, 0.0), (2.0, 0.0, 0.0), lim)
+
+
+def test_leaving_the_position_range_is_reported():
+    lim = AxisLimits(1.0, 2.0, 10.0, position_min=-1.0, position_max=0.5)
+    # moving fast towards the upper end: the stop overshoots past 0.5
+    with pytest.raises(InfeasibleError, match=r"would leave the position range \[-1.0, 0.5\]"):
+        plan_state_to_state((0.45, 1.0, 0.0), (0.0, 0.0, 0.0), lim)
+
+
+def test_duration_below_minimum():
+    p = plan_state_to_state((0.0, 0.5, 0.0), (1.0, 0.0, 0.0), LIM)
+    with pytest.raises(InfeasibleError, match="below the minimum duration") as err:
+        plan_state_to_state((0.0, 0.5, 0.0), (1.0, 0.0, 0.0), LIM, duration=0.9 * p.duration)
+    assert err.value.minimum == pytest.approx(p.duration)
+
+
+# ----------------------------------------------------------- fixed duration
+def test_fixed_duration_exact_and_valid():
+    rng = np.random.default_rng(3)
+    n_blocked = 0
+    for _ in range(120):
+        s, g, L = random_case(rng, symmetric=bool(rng.integers(0, 2)))
+        lim = _lim(L)
+        p = plan_state_to_state(s, g, lim)
+        T = p.duration * (1.0 + float(rng.choice([1e-9, 0.01, 0.3, 2.0])))
+        if T == 0.0:
+            continue
+        try:
+            q = plan_state_to_state(s, g, lim, duration=T)
+        except BlockedDurationError as err:
+            n_blocked += 1
+            lo, hi = err.interval
+            assert lo <= T <= hi
+            q = plan_state_to_state(s, g, lim, duration=hi)
+            assert q.duration == pytest.approx(hi, rel=1e-12)
+            _assert_valid(q, lim)
+            continue
+        assert q.duration == pytest.approx(T, rel=1e-12)
+        assert q.min_duration == pytest.approx(p.duration, rel=1e-12)
+        _assert_valid(q, lim)
+    assert n_blocked < 120
+
+
+def test_blocked_interval_is_reported():
+    # moving at full speed away from a goal just behind: reversing at once is
+    # fastest; arriving a bit later would need a velocity beyond the limits
+    lim = AxisLimits(v_max=1.0, a_max=1.0, j_max=1.0)
+    s, g = (0.0, 1.0, 0.0), (0.0, -1.0, 0.0)
+    p = plan_state_to_state(s, g, lim)
+    found = None
+    for f in np.linspace(1.0001, 3.0, 60):
+        try:
+            plan_state_to_state(s, g, lim, duration=p.duration * f)
+        except BlockedDurationError as err:
+            found = err
+            break
+    assert found is not None
+    lo, hi = found.interval
+    assert p.duration <= lo < hi
+    assert found.minimum == pytest.approx(p.duration)
+    _assert_valid(plan_state_to_state(s, g, lim, duration=hi), lim)
+    _assert_valid(plan_state_to_state(s, g, lim, duration=lo), lim)
+
+
+# ------------------------------------------------------------- brake
+def test_brake_from_overspeed():
+    p = plan_state_to_state((0.0, 1.5, 0.0), (3.0, 0.0, 0.0), ASYM)
+    assert p.brake_duration > 0.0
+    _assert_valid(p, ASYM)  # every limit holds after the pre-phase
+    # during the pre-phase the axis slows down monotonically, at the decel limits
+    t = np.linspace(0.0, p.brake_duration, 200)
+    s = p.sample(t)
+    assert np.all(np.diff(s.velocity) <= 1e-15)
+    assert np.all(s.acceleration >= -ASYM.a_max_decel * (1 + 1e-12))
+    assert s.velocity[-1] == pytest.approx(1.0, rel=1e-12)
+
+
+def test_brake_from_excess_acceleration_and_carry_over():
+    # acceleration above a_max: ramped back first
+    p = plan_state_to_state((0.0, 0.0, 3.0), (1.0, 0.0, 0.0), ASYM)
+    assert p.brake_duration > 0.0
+    _assert_valid(p, ASYM)
+    # acceleration that carries the velocity past v_max: v + a^2/(2J) > V
+    p = plan_state_to_state((0.0, 0.9, 1.5), (2.0, 0.0, 0.0), ASYM)
+    assert p.brake_duration > 0.0
+    _assert_valid(p, ASYM)
+    # the unavoidable overshoot is the minimum: v_peak = v0 + a0^2/(2 j_max),
+    # reached at a phase boundary (a = 0)
+    assert p.boundary_states()[:, 1].max() == pytest.approx(0.9 + 1.5 ** 2 / 20.0, rel=1e-12)
+
+
+# ----------------------------------------------------- velocity interface
+def _stop_time(v, a_dec, j_dec):
+    v = abs(v)
+    if v * j_dec >= a_dec ** 2:
+        return v / a_dec + a_dec / j_dec
+    return 2.0 * math.sqrt(v / j_dec)
+
+
+@pytest.mark.parametrize("v0", [0.01, 0.1, 0.5, 1.0, -0.3, -1.0])
+def test_controlled_stop_is_minimum_time(v0):
+    p = plan_velocity((2.0, v0, 0.0), 0.0, limits=ASYM)
+    assert p.duration == pytest.approx(_stop_time(v0, 1.0, 3.0), rel=1e-12)
+    assert p.goal_state[1:] == (0.0, 0.0)
+    _assert_valid(p, ASYM)
+
+
+def test_velocity_interface_with_duration():
+    p = plan_velocity((0.0, 0.2, 0.5), -0.6, 0.3, limits=ASYM)
+    q = plan_velocity((0.0, 0.2, 0.5), -0.6, 0.3, limits=ASYM, duration=p.duration + 1.0)
+    assert q.duration == pytest.approx(p.duration + 1.0, rel=1e-12)
+    assert q.goal_state[1] == -0.6 and q.goal_state[2] == 0.3
+    _assert_valid(q, ASYM)
+    with pytest.raises(InfeasibleError, match="below the minimum duration") as err:
+        plan_velocity((0.0, 0.2, 0.5), -0.6, 0.3, limits=ASYM, duration=0.5 * p.duration)
+    assert err.value.minimum == pytest.approx(p.duration)
+    with pytest.raises(InvalidInputError, match="goal velocity/acceleration cannot be reached"):
+        plan_velocity((0.0, 0.0, 0.0), 2.0, limits=ASYM)
+
+
+# ------------------------------------------------- asymmetric references
+def test_asymmetric_double_s_reference():
+    rng = np.random.default_rng(5)
+    n = 0
+    for _ in range(400):
+        V = 10 ** rng.uniform(-1, 1)
+        A1, A2 = 10 ** rng.uniform(-1, 1, 2)
+        J1, J2 = 10 ** rng.uniform(-1, 1.5, 2)
+        v0, vf = rng.uniform(0, V, 2) * rng.integers(0, 2, 2)
+        d = 10 ** rng.uniform(-2, 1.5) * V
+        ref = double_s_duration(d, v0, vf, V, A1, J1, A2, J2)
+        if ref is None:
+            continue
+        lim = AxisLimits(V, A1, J1, A2, J2)
+        p = plan_state_to_state((0.0, v0, 0.0), (d, vf, 0.0), lim)
+        assert p.duration == pytest.approx(ref, rel=1e-9), (v0, vf, d, lim)
+        n += 1
+    assert n > 100
+
+
+def test_state_profile_type():
+    assert isinstance(plan_state_to_state((0, 0, 0), (1, 0, 0), LIM), StateProfile)
