@@ -108,12 +108,12 @@ def dense_check(prof, limits, n=2001, rtol=1e-9):
         herm = dt * 0.5 * (s.velocity[1:] + s.velocity[:-1]) + dt * dt * (
             s.acceleration[:-1] - s.acceleration[1:]) / 12.0
         dp = np.diff(s.position)
-        jm = np.abs(s.jerk).max()
+        jm = max(np.abs(np.asarray(prof.jerks, dtype=float)).max(initial=0.0), np.abs(s.jerk).max())
         scale = np.abs(s.position).max() + np.abs(s.velocity).max() * prof.duration
-        if np.any(np.abs(dp - herm) > jm * dt ** 3 / 6.0 + 1e-12 * scale):
+        if np.any(np.abs(dp - herm) > jm * dt ** 3 / 2.0 + 1e-12 * scale):
             return "position not continuous with velocity"
         vh = dt * 0.5 * (s.acceleration[1:] + s.acceleration[:-1])
-        if np.any(np.abs(np.diff(s.velocity) - vh) > jm * dt ** 2 / 2.0 + 1e-12 * scale):
+        if np.any(np.abs(np.diff(s.velocity) - vh) > jm * dt ** 2 + 1e-12 * scale):
             return "velocity not continuous with acceleration"
     return None
 

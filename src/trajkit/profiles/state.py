@@ -39,6 +39,9 @@ __all__ = [
 #: Relative step used to bracket the end of a blocked duration interval.
 BLOCKED_SEARCH_RTOL = 1e-12
 
+#: Maximum rounds of the brake pre-phase (each removes one kind of excess).
+BRAKE_MAX_ROUNDS = 6
+
 #: Maximum doublings when searching for the end of a blocked interval.
 BLOCKED_SEARCH_MAX = 80
 
@@ -315,7 +318,21 @@ def _start_violation(v, a, L) -> str | None:
     vn = _natural_velocity(v, a, L)
     if abs(vn) > V * (1.0 + tol):
         return (f"the acceleration {a!r} carries the velocity to {vn!r}, past v_max {V!r}")
+    if _reverses_too_hard(v, a, L):
+        return (f"slowing down with |acceleration| {abs(a)!r}, the velocity {v!r} reverses "
+                f"before the acceleration can drop to a_max {A1!r}")
     return None
+
+
+def _reverses_too_hard(v, a, L):
+    """Slowing down with |a| > a_max: does v reach 0 before |a| drops to a_max?"""
+    V, A1, J1, A2, J2 = L
+    if not (v * a < 0.0 and abs(a) > A1 * (1.0 + K.LIMIT_RTOL)):
+        return False
+    if J2 == math.inf:
+        return False
+    dv = (a * a - A1 * A1) / (2.0 * J2)  # |v| lost while |a| ramps down to A1
+    return abs(v) < dv
 
 
 def _goal_violation(v, a, L) -> str | None:
@@ -341,41 +358,56 @@ def _goal_violation(v, a, L) -> str | None:
 def brake_phases(v0: float, a0: float, L) -> list:
     """Brake pre-phase bringing ``(v0, a0)`` back into the limits.
 
-    Empty when the start state is within the limits. Otherwise, at the
-    largest jerk: an acceleration above its limit is ramped back to the
-    limit; if the velocity is (or will be) above ``v_max``, the fastest
-    velocity change to ``(+-v_max, 0)`` follows (decelerating at up to
-    ``a_max_decel``). During the pre-phase the velocity may exceed
-    ``v_max`` (it started there or is carried there); it never grows more
-    than the start state forces.
+    Empty when the start state is within the limits. Otherwise, in rounds
+    (each at the largest jerk) until the state is valid:
+
+    1. an acceleration above its leg's limit is ramped back to the limit;
+       slowing down with ``|a| > a_max`` so hard that the velocity reverses
+       first, ``|a|`` is ramped down to ``a_max`` (through the reversal);
+    2. above ``v_max`` while already slowing down (and the slowdown alone
+       brings the velocity back within the limits): the acceleration is held
+       until ``|v| = v_max``; otherwise the fastest velocity change to
+       ``(+-v_max, 0)`` (decelerating at up to ``a_max_decel``);
+    3. a slowdown so hard that the velocity reverses past ``-v_max``: the
+       acceleration is ramped to zero, then the velocity brought back to
+       ``v_max`` in the new direction.
+
+    During the pre-phase the velocity may exceed ``v_max`` and the
+    acceleration its limit (the start state forces it); each round only
+    reduces the excess.
     """
     V, A1, J1, A2, J2 = L
-    if _start_violation(v0, a0, L) is None:
-        return []
     out: list = []
-    s = 1.0 if v0 > 0.0 or (v0 == 0.0 and a0 > 0.0) else -1.0
-    v, a = s * v0, s * a0
-    # 1. acceleration back within its regime limit
-    r: list = []
-    if a > A1:
-        K.ramp(a, A1, J1, J2, r)
-    elif a < -A2 and v > 0.0:
-        K.ramp(a, -A2, J1, J2, r)
-    if r:
-        v, a = K.integrate_va(r, v, a)
-        out += r
-    # 2. velocity back within v_max
-    vn = _natural_velocity(v, a, (V, A1, J1, A2, J2))
-    if abs(vn) > V * (1.0 + K.LIMIT_RTOL) or abs(v) > V:
-        target = math.copysign(V, vn)
-        b = K.bump(v, a, target, 0.0, L)
-        if b is None:
-            Am, Jm = min(A1, A2), min(J1, J2)
-            b = K.bump(v, a, target, 0.0, (V, Am, Jm, Am, Jm))
-        if b is None:
-            return out  # caller reports the state as unrecoverable
-        out += b
-    return out if s > 0 else K.negate(out)
+    v, a = v0, a0
+    for _ in range(BRAKE_MAX_ROUNDS):
+        if _start_violation(v, a, L) is None:
+            break
+        s = 1.0 if v > 0.0 or (v == 0.0 and a > 0.0) else -1.0
+        fv, fa = s * v, s * a  # frame: velocity >= 0
+        r: list = []
+        if fa > A1 * (1.0 + K.LIMIT_RTOL):
+            K.ramp(fa, A1, J1, J2, r)
+        elif fa < -A2 * (1.0 + K.LIMIT_RTOL):
+            K.ramp(fa, -A2, J1, J2, r)
+        elif _reverses_too_hard(fv, fa, L):
+            K.ramp(fa, -A1, J1, J2, r)
+        else:
+            vn = _natural_velocity(fv, fa, L)
+            if fv > V * (1.0 + K.LIMIT_RTOL) and fa < 0.0 and abs(vn) <= V:
+                r.append(((fv - V) / -fa, 0.0, fa))
+            elif fv > V * (1.0 + K.LIMIT_RTOL) or vn > V:
+                b = K.bump(fv, fa, V, 0.0, L)
+                if b is None:
+                    break
+                r += b
+            elif vn < -V:
+                K.ramp(fa, 0.0, J1, J2, r)
+            else:  # pragma: no cover - _start_violation has no other case
+                break
+        ph = r if s > 0 else K.negate(r)
+        v, a = K.integrate_va(ph, v, a)
+        out += ph
+    return out
 
 
 def _duration_arg(duration: Any, limits: AxisLimits) -> float | None:
