@@ -23,6 +23,8 @@ from state_reference import (
     exact_check,
     goal_error,
     random_case,
+    ruckig_duration,
+    ruckig_fixed,
 )
 
 LIM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0)
@@ -160,22 +162,22 @@ def test_fixed_duration_exact_and_valid():
 
 
 def test_blocked_interval_is_reported():
-    # moving at full speed away from a goal just behind: reversing at once is
-    # fastest; arriving a bit later would need a velocity beyond the limits
+    # cruising at 0.5 towards a goal 0.5 ahead that must be passed at 0.5:
+    # the fastest way speeds up and slows down (0.947 s), cruising takes 1 s,
+    # but between about 1.065 s and 3.350 s no profile keeps the limits
+    # (the axis cannot lose enough distance without stopping and coming back)
     lim = AxisLimits(v_max=1.0, a_max=1.0, j_max=1.0)
-    s, g = (0.0, 1.0, 0.0), (0.0, -1.0, 0.0)
+    s, g = (0.0, 0.5, 0.0), (0.5, 0.5, 0.0)
     p = plan_state_to_state(s, g, lim)
-    found = None
-    for f in np.linspace(1.0001, 3.0, 60):
-        try:
-            plan_state_to_state(s, g, lim, duration=p.duration * f)
-        except BlockedDurationError as err:
-            found = err
-            break
-    assert found is not None
-    lo, hi = found.interval
-    assert p.duration <= lo < hi
-    assert found.minimum == pytest.approx(p.duration)
+    assert p.duration == pytest.approx(ruckig_duration(s, g, 1.0, 1.0, 1.0), rel=1e-9)
+    _assert_valid(plan_state_to_state(s, g, lim, duration=1.0), lim)
+    with pytest.raises(BlockedDurationError, match=r"lies in a blocked interval \(1.06") as err:
+        plan_state_to_state(s, g, lim, duration=2.0)
+    lo, hi = err.value.interval
+    assert err.value.minimum == pytest.approx(p.duration)
+    # ruckig (asked for at least T) agrees on both ends of the gap
+    assert ruckig_fixed(s, g, 1.0, 1.0, 1.0, lo * (1 - 1e-6)) == pytest.approx(lo * (1 - 1e-6), rel=1e-9)
+    assert ruckig_fixed(s, g, 1.0, 1.0, 1.0, lo * (1 + 1e-6)) == pytest.approx(hi, rel=1e-9)
     _assert_valid(plan_state_to_state(s, g, lim, duration=hi), lim)
     _assert_valid(plan_state_to_state(s, g, lim, duration=lo), lim)
 

@@ -26,6 +26,7 @@ _COMMAND_MODULES = (
     "trajkit.cli._paths",
     "trajkit.cli._pallet",
     "trajkit.cli._run",
+    "trajkit.cli._hmi",
 )
 
 

@@ -66,6 +66,9 @@ BLEND_TRIES = 3
 #: Margin on the velocity window scanned for fixed-duration profiles.
 WINDOW_MARGIN = 1.01
 
+#: A boundary acceleration this close to its limit counts as at the limit.
+SNAP_RTOL = 1e-12
+
 #: Relative round-off allowance when a closed-form peak lands on a branch end.
 ROUND_RTOL = 4e-16
 
@@ -205,17 +208,17 @@ def _bump_frame(dv, a0, a1, A1, J1, A2, J2):
     rdd = ramp_dv_dt
     for b in range(4):
         if b == 0:
-            if hi > A1:
+            if hi > A1 * (1.0 + SNAP_RTOL):
                 continue
-            inner, outer, J, ksign, side, plat = (hi if hi > 0.0 else 0.0), A1, J1, 1.0, 1.0, A1
+            inner, outer, J, ksign, side, plat = (min(hi, A1) if hi > 0.0 else 0.0), A1, J1, 1.0, 1.0, A1
         elif b == 1:
             if hi >= 0.0:
                 continue
             inner, outer, J, ksign, side, plat = 0.0, hi, J2, 1.0, -1.0, None
         elif b == 2:
-            if lo < -A2:
+            if lo < -A2 * (1.0 + SNAP_RTOL):
                 continue
-            inner, outer, J, ksign, side, plat = (lo if lo < 0.0 else 0.0), -A2, J2, -1.0, -1.0, -A2
+            inner, outer, J, ksign, side, plat = (max(lo, -A2) if lo < 0.0 else 0.0), -A2, J2, -1.0, -1.0, -A2
         else:
             if lo <= 0.0:
                 continue
