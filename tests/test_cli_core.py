@@ -160,6 +160,20 @@ def test_move_bad_input(capsys, tmp_path, monkeypatch, extra, match):
     assert os.listdir(tmp_path) == []  # nothing written
 
 
+def test_plot_without_matplotlib_is_one_line(capsys, monkeypatch, tmp_path):
+    import trajkit.plot
+
+    def missing():
+        raise ImportError("plotting needs matplotlib: pip install 'trajkit[plot]'")
+
+    monkeypatch.setattr(trajkit.plot, "require_matplotlib", missing)
+    rc, out, err = run(capsys, *MOVE, "--plot", str(tmp_path / "m.png"))
+    assert rc == 2 and out == ""
+    assert err == ("trajkit move: error: --plot: plotting needs matplotlib: "
+                   "pip install 'trajkit[plot]'\n")
+    assert os.listdir(tmp_path) == []
+
+
 def test_move_missing_option_is_usage_error(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["move", "--goal", "1", "--v-max", "1", "--a-max", "2", "--j-max", "10"])

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -20,6 +21,9 @@ EXAMPLES = sorted(EXAMPLES_DIR.glob("[0-9]*.py"))
 #: Generous wall-clock guard per script on a slow CI machine [s] (a hang
 #: guard, not a timing assertion).
 EXAMPLE_TIMEOUT_S = 300
+
+#: How often to look for a free slot while waiting for a script to start [s].
+POLL_S = 0.05
 
 
 #: Lines that known examples must print (closed forms checked by hand):
@@ -37,17 +41,87 @@ def test_examples_are_found():
     assert "01_single_axis_move.py" in names and "02_multi_axis_ptp.py" in names
 
 
-@pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
-def test_example_runs(script, tmp_path):
+#: Example scripts run at the same time (each is mostly single-threaded and
+#: spends part of its time importing).
+PARALLEL = min(4, (os.cpu_count() or 1) + 1)
+
+
+class _Runs:
+    """Start the selected example scripts a few at a time, in the background.
+
+    Each test waits only for its own script, so failures are still reported
+    per example while the scripts overlap (their start-up is mostly imports).
+    """
+
+    def __init__(self, scripts, base):
+        self.pending = list(scripts)
+        self.running = {}
+        self.base = base
+        self.env = dict(os.environ, MPLBACKEND="Agg")
+
+    def _n_running(self):
+        return sum(p.poll() is None for p, _ in self.running.values())
+
+    def _start_more(self):
+        while self.pending and self._n_running() < PARALLEL:
+            script = self.pending.pop(0)
+            root = self.base / script.stem
+            cwd = root / "cwd"
+            cwd.mkdir(parents=True)
+            # output to files, not pipes: a chatty script can never block
+            with open(root / "stdout.txt", "w") as fo, open(root / "stderr.txt", "w") as fe:
+                proc = subprocess.Popen(
+                    [sys.executable, str(script), "--out", str(root / "out")],
+                    stdout=fo, stderr=fe, env=self.env, cwd=cwd,
+                )
+            self.running[script] = (proc, root)
+
+    def result(self, script):
+        """Wait for ``script``; return (CompletedProcess, out dir, cwd)."""
+        if script not in self.running:  # run it next
+            if script in self.pending:
+                self.pending.remove(script)
+            self.pending.insert(0, script)
+        deadline = time.monotonic() + EXAMPLE_TIMEOUT_S
+        while script not in self.running:
+            self._start_more()
+            if script not in self.running:
+                if time.monotonic() > deadline:
+                    pytest.fail(f"{script.name} never got a slot to run")
+                time.sleep(POLL_S)
+        proc, root = self.running[script]
+        try:
+            proc.wait(timeout=max(deadline - time.monotonic(), 1.0))
+        finally:
+            self._start_more()
+        done = subprocess.CompletedProcess(
+            proc.args, proc.returncode,
+            (root / "stdout.txt").read_text(), (root / "stderr.txt").read_text(),
+        )
+        return done, root / "out", root / "cwd"
+
+    def close(self):
+        for proc, _ in self.running.values():
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+
+@pytest.fixture(scope="module")
+def example_runs(request, tmp_path_factory):
     pytest.importorskip("matplotlib")
-    out = tmp_path / "out"
-    cwd = tmp_path / "cwd"
-    cwd.mkdir()
-    env = dict(os.environ, MPLBACKEND="Agg")
-    proc = subprocess.run(
-        [sys.executable, str(script), "--out", str(out)],
-        capture_output=True, text=True, timeout=EXAMPLE_TIMEOUT_S, env=env, cwd=cwd,
-    )
+    selected = [item.callspec.params["script"] for item in request.session.items
+                if getattr(item, "originalname", None) == "test_example_runs"
+                and hasattr(item, "callspec")]
+    runs = _Runs(selected, tmp_path_factory.mktemp("examples"))
+    runs._start_more()
+    yield runs
+    runs.close()
+
+
+@pytest.mark.parametrize("script", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_example_runs(script, example_runs):
+    proc, out, cwd = example_runs.result(script)
     assert proc.returncode == 0, f"{script.name} failed:\n{proc.stdout}\n{proc.stderr}"
     assert "Traceback" not in proc.stderr
     assert any(ch.isdigit() for ch in proc.stdout), "an example prints real numbers"

@@ -265,3 +265,23 @@ def test_hypothesis_against_reference(v, a, j, ra, rj, d, start):
     p = plan_move(start, start + d, lim)
     verify_profile(p, n_samples=0).raise_if_failed()
     assert p.duration == pytest.approx(_ref(p), rel=1e-9)
+
+
+# ------------------------------------------------------------ regressions
+def test_trapezoid_fixed_duration():
+    """Was ZeroDivisionError: both legs jerk-free and a stretched duration."""
+    lim = AxisLimits(1.0, 2.0, math.inf, 0.5, math.inf)
+    tmin = min_duration(1.0, lim)
+    for T in (tmin * (1 + 1e-14), tmin * 1.5, 5.0):
+        p = plan_move(0.0, 1.0, lim, duration=T)
+        verify_profile(p, expected_duration=T).raise_if_failed()
+        assert p.shape in ("trapezoid", "trapezoid+no-cruise")
+
+
+def test_fixed_duration_without_overflow():
+    """Was a zero cruise velocity: (t - q)^2 overflowed for a 1e159 s move."""
+    lim = AxisLimits(1e-150, 1e-150, 1.0, 3e-150, 0.5)
+    tmin = min_duration(1e9, lim)
+    p = plan_move(0.0, 1e9, lim, duration=2.0 * tmin)
+    verify_profile(p, expected_duration=2.0 * tmin).raise_if_failed()
+    assert abs(p.peak_velocity) == pytest.approx(1e9 / (2.0 * tmin), rel=1e-6)

@@ -215,3 +215,26 @@ def test_region_thresholds_to_the_ulp():
                     failures.append(((v, a, j, a2, j2, d), p.duration, ref,
                                      rep.violations, rq.violations))
     assert not failures, failures[:3]
+
+
+@pytest.mark.parametrize("exponent", [30, 150])
+def test_extreme_magnitudes_grid(exponent):
+    """Limits 10^-E, 1, 10^E, inf in every combination; distances 1e-100..1e100."""
+    import itertools
+
+    small, big = 10.0 ** -exponent, 10.0 ** exponent
+    values = (small, 1.0, big, math.inf)
+    failures = []
+    for d in (1e-100, 1e-30, 1e-9, 1.0, 1e9, 1e30, 1e100):
+        for v, a, j in itertools.product(values, values, values):
+            if math.isinf(a) and math.isinf(j):
+                continue
+            lim = AxisLimits(v, a, j, a * 3.0, j * 0.5)
+            p = plan_move(0.0, d, lim)
+            rep = verify_profile(p, n_samples=0)
+            T = 2.0 * p.duration
+            rq = verify_profile(plan_move(0.0, d, lim, duration=T), n_samples=0,
+                                expected_duration=T)
+            if not (math.isfinite(p.duration) and rep.ok and rq.ok):
+                failures.append((d, v, a, j, rep.violations, rq.violations))
+    assert not failures, failures[:3]

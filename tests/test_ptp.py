@@ -215,3 +215,26 @@ def test_export_failure_leaves_nothing(tmp_path):
     with pytest.raises(OSError):
         tr.to_csv(target)
     assert not target.exists()
+
+
+def test_phase_sync_is_the_fastest_straight_line():
+    """Duration = reference minimum of u: 0 -> 1 under the tightest scaled limits.
+
+    On the line every axis speeds up and slows down together, so the accel
+    (decel) limits of all axes bind u's accel (decel) leg at once.
+    """
+    import reference as R
+
+    rng = np.random.default_rng(99)
+    for _ in range(40):
+        n = int(rng.integers(2, 6))
+        s, g, lims = _random_problem(rng, n)
+        d = np.abs(g - s)
+        m = d > 0
+        if not m.any():
+            continue
+        scaled = [min(getattr(lim, f) / dk for lim, dk, mk in zip(lims, d, m) if mk)
+                  for f in ("v_max", "a_max", "j_max", "a_max_decel", "j_max_decel")]
+        ref = R.min_duration(1.0, *scaled)
+        tr = plan_ptp(s, g, lims, sync="phase")
+        assert tr.duration == pytest.approx(ref, rel=1e-9)

@@ -164,14 +164,14 @@ def test_fixed_duration_exact_and_valid():
 def test_blocked_interval_is_reported():
     # cruising at 0.5 towards a goal 0.5 ahead that must be passed at 0.5:
     # the fastest way speeds up and slows down (0.947 s), cruising takes 1 s,
-    # but between about 1.065 s and 3.350 s no profile keeps the limits
+    # but between about 1.078 s and 3.350 s no profile keeps the limits
     # (the axis cannot lose enough distance without stopping and coming back)
     lim = AxisLimits(v_max=1.0, a_max=1.0, j_max=1.0)
     s, g = (0.0, 0.5, 0.0), (0.5, 0.5, 0.0)
     p = plan_state_to_state(s, g, lim)
     assert p.duration == pytest.approx(ruckig_duration(s, g, 1.0, 1.0, 1.0), rel=1e-9)
     _assert_valid(plan_state_to_state(s, g, lim, duration=1.0), lim)
-    with pytest.raises(BlockedDurationError, match=r"lies in a blocked interval \(1.06") as err:
+    with pytest.raises(BlockedDurationError, match=r"lies in a blocked interval \(1.07") as err:
         plan_state_to_state(s, g, lim, duration=2.0)
     lo, hi = err.value.interval
     assert err.value.minimum == pytest.approx(p.duration)
@@ -260,3 +260,24 @@ def test_asymmetric_double_s_reference():
 
 def test_state_profile_type():
     assert isinstance(plan_state_to_state((0, 0, 0), (1, 0, 0), LIM), StateProfile)
+
+
+@pytest.mark.parametrize("lim", [
+    AxisLimits(1.0, 2.0, math.inf),
+    AxisLimits(1.0, 2.0, math.inf, 1.0, math.inf),
+    AxisLimits(math.inf, 2.0, 10.0),
+    AxisLimits(1.0, math.inf, 10.0),
+], ids=["trapezoid", "trapezoid-asym", "no-v-limit", "no-a-limit"])
+def test_infinite_limits(lim):
+    for d in (1e-3, 0.3, 1.0, 5.0):
+        p = plan_state_to_state((0.0, 0.0, 0.0), (d, 0.0, 0.0), lim)
+        assert p.duration == pytest.approx(plan_move(0.0, d, lim).duration, rel=1e-12)
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        a_cap = min(lim.a_max, lim.a_max_decel)
+        a0 = 0.0 if math.isinf(lim.j_max) else rng.uniform(-0.3, 0.3) * min(a_cap, 2.0)
+        s = (0.0, rng.uniform(-0.5, 0.5), a0)
+        g = (rng.uniform(-2, 2), rng.uniform(-0.5, 0.5), 0.0)
+        p = plan_state_to_state(s, g, lim)
+        assert exact_check(p, lim) is None
+        assert goal_error(p) < 1e-9

@@ -303,6 +303,14 @@ def _check_outputs(args: argparse.Namespace) -> None:
         from ..plot.profiles import _check_path
 
         _check_path(args.plot)
+        try:
+            from ..plot import require_matplotlib
+
+            require_matplotlib()
+        except ImportError as exc:  # one line, exit 2, instead of a traceback
+            from . import UsageError
+
+            raise UsageError(f"--plot: {exc}") from None
 
 
 def _check_sampling(args: argparse.Namespace, duration: float) -> float | None:

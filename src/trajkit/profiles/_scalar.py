@@ -157,7 +157,9 @@ def cruise_velocity(
             p = 0.5 * (1.0 / a1 + 1.0 / a2)
             q = 0.5 * (a1 / j1 + a2 / j2)
             b = t - q
-            return 2.0 * d / (b + _sqrt(max(b * b - 4.0 * p * d, 0.0)))
+            # 2d / (b + sqrt(b^2 - 4pd)), scaled by b so that b^2 cannot overflow
+            r = 4.0 * p * d / b / b
+            return 2.0 * d / (b * (1.0 + _sqrt(max(1.0 - r, 0.0))))
         u = _newton_decreasing(0.5 / ak, 0.5 * ak / jk, 1.0 / _sqrt(jo), d, t, u0)
         return u * u
     u = _newton_decreasing(0.0, 0.0, 1.0 / _sqrt(j1) + 1.0 / _sqrt(j2), d, t, u0)

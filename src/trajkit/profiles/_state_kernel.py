@@ -33,6 +33,7 @@ Building blocks
 from __future__ import annotations
 
 import math
+import sys
 
 from .._constants import GOAL_RTOL, LIMIT_RTOL
 
@@ -51,10 +52,13 @@ MARK_OFFSETS = (1e-6,)
 #: cannot be hit more precisely than their own representation.
 FLOAT_ULPS = 64.0
 
-_eps = 2.220446049250313e-16
+_eps = sys.float_info.epsilon
 
 #: Margin on the acceleration scan range ``sqrt(4 J V)``.
 ACC_CAP_FACTOR = 1.01
+
+#: Bisection steps locating the edge of a family's feasible parameter set.
+EDGE_BISECT = 48
 
 #: A local extremum of a scanned residual is searched for hidden roots when
 #: the parabola through it dips below this fraction of its sampled value.
@@ -138,7 +142,10 @@ def ramp(a_s, a_e, J1, J2, out):
         m = x + y
         J = J1 if m > 0.0 else J2
         if J == _inf:
-            continue  # acceleration jumps; the next phase carries a_start
+            # infinite jerk: the acceleration jumps; a zero-length phase
+            # carries the new value (a_start) so the end state is exact
+            out.append((0.0, 0.0, y))
+            continue
         dt = abs(y - x) / J
         out.append((dt, J if up else -J, x))
         dv += 0.5 * (x + y) * dt
@@ -298,8 +305,8 @@ def verify(phases, p0, v0, a0, L, goal, rtol=LIMIT_RTOL, check_goal=True):
     """
     V, A1, J1, A2, J2 = L
     p, v, a = p0, v0, a0
-    vscale = max(abs(v0), abs(goal[1]), 1e-300)
-    ascale = max(abs(a0), abs(goal[2]), 1e-300)
+    vscale = max(abs(v0), abs(goal[1]), TINY)
+    ascale = max(abs(a0), abs(goal[2]), TINY)
     vtol = V * rtol if V != _inf else 0.0
     vref = vscale
     for dt, j, a_s in phases:
@@ -353,7 +360,7 @@ def verify(phases, p0, v0, a0, L, goal, rtol=LIMIT_RTOL, check_goal=True):
     if check_goal:
         pg, vg, ag = goal
         T = total_time(phases)
-        pscale = max(abs(pg - p0), vscale * T, ascale * T * T, 1e-300)
+        pscale = max(abs(pg - p0), vscale * T, ascale * T * T, TINY)
         floor = FLOAT_ULPS * _eps * max(abs(p0), abs(pg))
         if abs(p - pg) > GOAL_RTOL * pscale + floor:
             return f"goal position missed by {p - pg!r}"
@@ -443,7 +450,7 @@ def _root(fun, x0, f0, x1, f1):
         return x1
     side = 0
     for _ in range(SCAN_MAX_ITER):
-        if abs(x1 - x0) <= SCAN_XRTOL * max(abs(x0), abs(x1)) + 1e-300:
+        if abs(x1 - x0) <= SCAN_XRTOL * max(abs(x0), abs(x1)) + TINY:
             break
         x = (x0 * f1 - x1 * f0) / (f1 - f0)
         if not (min(x0, x1) < x < max(x0, x1)):
@@ -510,7 +517,26 @@ def scan_roots(fun, grid):
     """All roots of ``fun`` on ``grid``: sign changes between grid points,
     plus pairs of roots hidden next to a local extremum of ``|fun|`` (found
     by golden-section search), each refined by :func:`_root`."""
-    vals = [(x, fun(x)) for x in grid]
+    raw = [(x, fun(x)) for x in grid]
+    # where the family stops existing (None), add its last valid point: a
+    # root often sits right at the edge of the feasible parameter set
+    vals = []
+    for i, (x, fx) in enumerate(raw):
+        if i > 0:
+            xp, fp = raw[i - 1]
+            if (fp is None) != (fx is None):
+                good, bad = (xp, x) if fx is None else (x, xp)
+                fgood = fp if fx is None else fx
+                for _ in range(EDGE_BISECT):
+                    mid = 0.5 * (good + bad)
+                    fm = fun(mid)
+                    if fm is None:
+                        bad = mid
+                    else:
+                        good, fgood = mid, fm
+                vals.append((good, fgood))
+        vals.append((x, fx))
+    vals.sort(key=lambda t: t[0])
     roots = []
     n = len(vals)
     for i in range(n):
@@ -608,7 +634,10 @@ def _candidates(start, goal, L, L_check):
     if V != _inf:
         lo, hi = -V, V
     else:
-        w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), 1e-300)
+        d = abs(pf - p0)
+        Jm, Amin = min(J1, J2), min(A1, A2)
+        dscale = (d * d * Jm) ** (1.0 / 3.0) if Jm != _inf else _sqrt(d * Amin)
+        w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), dscale, TINY)
         lo, hi = -2.0 * w, 2.0 * w
 
     def r1(vc):
@@ -769,15 +798,96 @@ def fixed_time_profile(start, goal, L, T, seeds=()):
             return ph
     below = [(e, i) for i, (e, _) in enumerate(pool) if e < 0.0]
     above = [(e, i) for i, (e, _) in enumerate(pool) if e > 0.0]
-    if not below or not above:
+    if below and above:
+        # try the closest pairs first
+        below.sort(reverse=True)
+        above.sort()
+        for eb, ib in below[:BLEND_TRIES]:
+            for ea, ia in above[:BLEND_TRIES]:
+                ph = blend(pool[ib][1], pool[ia][1], ea / (ea - eb))
+                if verify(ph, p0, v0, a0, L, goal) is None:
+                    return ph
+    return _f2_hold_fixed(start, goal, L, T)
+
+
+def f2_hold_profile(am, start, goal, L, T, first_is_ramp):
+    """F2 with a hold at the junction acceleration ``am`` lasting exactly ``T``.
+
+    ``first_is_ramp=False``: bump to ``(vm, am)``, hold ``th``, ramp to
+    ``af``; ``True``: ramp ``a0 -> am``, hold, bump to the goal. The hold
+    length solves the duration equation (bracketed root in ``th``).
+    """
+    _, v0, a0 = start
+    _, vf, af = goal
+    if first_is_ramp:
+        r, dv = _ramp_signed(a0, am, v0, L)
+    else:
+        r, dv = _ramp_signed(am, af, vf, L)
+    tr = total_time(r)
+
+    def build(th):
+        if first_is_ramp:
+            vm = v0 + dv + am * th
+            b = bump(vm, am, vf, af, L)
+            if b is None:
+                return None
+            return r + ([(th, 0.0, am)] if th > 0.0 else []) + b
+        vm = vf - dv - am * th
+        b = bump(v0, a0, vm, am, L)
+        if b is None:
+            return None
+        return b + ([(th, 0.0, am)] if th > 0.0 else []) + r
+
+    def excess(th):
+        ph = build(th)
+        if ph is None:
+            return None
+        return total_time(ph) - T
+
+    span = T - tr
+    if span <= 0.0:
         return None
-    # try the closest pairs first
-    below.sort(reverse=True)
-    above.sort()
-    for eb, ib in below[:BLEND_TRIES]:
-        for ea, ia in above[:BLEND_TRIES]:
-            ph = blend(pool[ib][1], pool[ia][1], ea / (ea - eb))
-            if verify(ph, p0, v0, a0, L, goal) is None:
+    e0 = excess(0.0)
+    e1 = excess(span)
+    if e0 is None or e1 is None or e0 > 0.0 or e1 < 0.0:
+        return None
+    th = _root(excess, 0.0, e0, span, e1)
+    if th is None:
+        return None
+    ph = build(th)
+    if ph is None:
+        return None
+    # absorb the root's round-off in the hold so the duration is exact
+    tt = total_time(ph)
+    if th > 0.0 and abs(tt - T) > 0.0:
+        k = (len(ph) - len(r) - 1) if not first_is_ramp else len(r)
+        dt, j, a = ph[k]
+        if j == 0.0 and a == am:
+            ph[k] = (max(dt + (T - tt), 0.0), 0.0, a)
+    return ph
+
+
+def _f2_hold_fixed(start, goal, L, T):
+    """Fixed-duration fallback over the F2-with-hold family (slow, rare)."""
+    V, A1, J1, A2, J2 = L
+    p0, v0, a0 = start
+    pf, vf, af = goal
+    Am, _, _ = natural_scale(start, goal, L)
+    if Am <= 0.0:
+        return None
+    Acap = max(A1 if A1 != _inf else Am, A2 if A2 != _inf else Am)
+    if V != _inf:
+        Acap = min(Acap, ACC_CAP_FACTOR * _sqrt(4.0 * max(J1, J2) * V))
+    Acap = max(Acap, abs(a0), abs(af))
+    for first in (False, True):
+        def r(am, first=first):
+            ph = f2_hold_profile(am, start, goal, L, T, first)
+            if ph is None:
+                return None
+            return integrate(ph, p0, v0, a0)[0] - pf
+        for am in scan_roots(r, _grid(-Acap, Acap, [a0, af, 0.0])):
+            ph = f2_hold_profile(am, start, goal, L, T, first)
+            if ph is not None and verify(ph, p0, v0, a0, L, goal) is None:
                 return ph
     return None
 

@@ -16,6 +16,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .._constants import DURATION_RTOL
 from .._validate import check_array
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
@@ -145,7 +146,7 @@ def plan_ptp_states(
             return traj
 
     tmin = max(p.duration for p in fastest)
-    if duration is not None and duration < tmin * (1.0 - 1e-12):
+    if duration is not None and duration < tmin * (1.0 - DURATION_RTOL):
         k = max(range(n), key=lambda i: fastest[i].duration)
         raise InfeasibleError(
             f"duration {duration!r} s is below the minimum synchronised duration "
@@ -190,7 +191,7 @@ def _phase_sync(s, g, lims, duration, Trajectory):
     for col, arr in ((1, s), (2, s), (1, g), (2, g)):
         x = arr[:, col]
         c = float(np.dot(x, u) / np.dot(u, u))
-        if np.abs(x - c * u).max() > COLLINEAR_RTOL * max(np.abs(x).max(), 1e-300):
+        if np.abs(x - c * u).max() > COLLINEAR_RTOL * max(np.abs(x).max(), np.finfo(float).tiny):
             return None
         coef.append(c)
     moving = [k for k in range(len(D)) if D[k] != 0.0]

@@ -156,7 +156,8 @@ def _cruise_velocity(d, t, vp, a1, j1, a2, j2, thr1, thr2):
             q = 0.5 * (a1[both] / j1[both] + a2[both] / j2[both])
             b = t[both] - q
             db = d[both]
-            out[both] = 2.0 * db / (b + np.sqrt(np.maximum(b * b - 4.0 * p * db, 0.0)))
+            r = 4.0 * p * db / b / b
+            out[both] = 2.0 * db / (b * (1.0 + np.sqrt(np.maximum(1.0 - r, 0.0))))
         if mixed.any():
             akm = ak[mixed]
             u = _newton_dec(0.5 / akm, 0.5 * akm / jk[mixed], 1.0 / np.sqrt(jo[mixed]),

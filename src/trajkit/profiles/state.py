@@ -36,8 +36,12 @@ __all__ = [
     "min_state_duration",
 ]
 
-#: Relative step used to bracket the end of a blocked duration interval.
-BLOCKED_SEARCH_RTOL = 1e-12
+#: Relative precision of the upper end of a blocked duration interval (the
+#: next feasible duration; the value returned is itself feasible).
+BLOCKED_SEARCH_RTOL = 1e-10
+
+#: Relative precision of the lower end of a blocked interval (informative).
+BLOCKED_LOWER_RTOL = 1e-7
 
 #: Maximum rounds of the brake pre-phase (each removes one kind of excess).
 BRAKE_MAX_ROUNDS = 6
@@ -517,7 +521,7 @@ def plan_state_to_state(
     tb = K.total_time(brake)
     main, fam, seeds = _min_time(s1, g, L, limits.name)
     tmin = tb + K.total_time(main)
-    if T is None or abs(T - tmin) <= DURATION_RTOL * max(tmin, 1e-300):
+    if T is None or abs(T - tmin) <= DURATION_RTOL * max(tmin, K.TINY):
         return _finish(s, g, brake, main, tmin, fam, limits)
     if T < tmin:
         raise InfeasibleError(
@@ -542,7 +546,7 @@ def _blocked_interval(s1, g, L, T, tmin, seeds):
     def ok(t):
         return K.fixed_time_profile(s1, g, L, t, seeds) is not None
 
-    step = max(T - tmin, BLOCKED_SEARCH_RTOL * max(T, 1e-300))
+    step = max(T - tmin, BLOCKED_SEARCH_RTOL * max(T, K.TINY))
     hi = T + step
     n = 0
     while not ok(hi):
@@ -560,7 +564,7 @@ def _blocked_interval(s1, g, L, T, tmin, seeds):
             lo_in = mid
     # lower end: between tmin (feasible) and T (infeasible)
     lo_ok, lo_in = tmin, T
-    while lo_in - lo_ok > BLOCKED_SEARCH_RTOL * lo_in:
+    while lo_in - lo_ok > BLOCKED_LOWER_RTOL * lo_in:
         mid = 0.5 * (lo_ok + lo_in)
         if ok(mid):
             lo_ok = mid
@@ -672,7 +676,7 @@ def plan_velocity(
             f"{vf!r}, acceleration {af!r} (please report this input)"
         )
     tmin = tb + K.total_time(main)
-    if T is not None and abs(T - tmin) > DURATION_RTOL * max(tmin, 1e-300):
+    if T is not None and abs(T - tmin) > DURATION_RTOL * max(tmin, K.TINY):
         if T < tmin:
             raise InfeasibleError(
                 f"duration {T!r} s{axis_label(limits.name)} is below the minimum duration "
@@ -705,7 +709,7 @@ def _velocity_fixed(s1, vf, af, L, T):
     Am, vn0, vnf = K.natural_scale(s1, (0.0, vf, af), L)
     V = L[0]
     tries = [vnf, vf, vn0, v0]
-    w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), 1e-300)
+    w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), K.TINY)
     lo, hi = (-V, V) if V != math.inf else (-2 * w, 2 * w)
     tries += sorted(K._grid(lo, hi, []), key=lambda x: abs(x - vnf))
     for vc in tries:

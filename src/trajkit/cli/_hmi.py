@@ -1,0 +1,47 @@
+"""Sub-command ``trajkit hmi``: the web HMI (needs the ``hmi`` extra: fastapi, uvicorn)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import errors
+
+__all__ = ["register"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``hmi`` to the ``trajkit`` parser."""
+    p = sub.add_parser(
+        "hmi",
+        help="start the web HMI (live axes, jobs, jog and teach) on 127.0.0.1",
+        description=(
+            "Start the web HMI: plan saddle, palletizing and robot-program jobs, run them in "
+            "real time with pause, resume, stop, emergency stop and feed override, jog and "
+            "teach points. Listens on 127.0.0.1 unless --host is given; any other address "
+            "needs --token (then open the printed address, which carries the token)."
+        ),
+    )
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=8765, help="TCP port (default 8765; 0: any free port)")
+    p.add_argument("--token", default=None, help="access token (required for a non-local --host)")
+    p.add_argument("--programs-dir", default=None, metavar="DIR",
+                   help="folder of saved program files (default ./trajkit-programs)")
+    p.set_defaults(func=_run)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..hmi.server import check_bind
+
+    check_bind(args.host, args.port, args.token)  # before importing the web stack
+    try:
+        from ..hmi.server import serve
+        import fastapi  # noqa: F401
+        import uvicorn  # noqa: F401
+    except ImportError as exc:
+        raise errors.TrajkitError(
+            f"the HMI needs fastapi and uvicorn ({exc.name} is missing): pip install 'trajkit[hmi]'"
+        ) from None
+    serve(args.host, args.port, args.token, args.programs_dir,
+          announce=lambda s: print(s, flush=True, file=sys.stdout))
+    return 0

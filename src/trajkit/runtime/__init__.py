@@ -1,0 +1,24 @@
+"""Runtime: streaming interpolator, step pulses, safety monitors, servo simulation.
+
+See ``docs/runtime.md`` for the API summary. The math kernels here
+(:func:`brake_profile`, :class:`ServoBank`, :class:`PulseAxis`) take and
+return numbers/arrays; :class:`Streamer` runs them once per control period.
+"""
+
+from ._brake import BrakeProfile, brake_profile, stop_position
+from .pulses import PulseAxis, PulseRateFault, edge_times, pulse_count, pulse_counts
+from .safety import QUANTITIES, REACTIONS, RuntimeFault, SafetyConfig
+from .servo import ServoBank, ServoParams
+from .simulate import MotionTiming, SimulationReport, simulate
+from .source import ProgramSource, as_source
+from .streamer import STATES, RuntimeEvent, Setpoint, Streamer
+
+__all__ = [
+    "BrakeProfile", "brake_profile", "stop_position",
+    "PulseAxis", "PulseRateFault", "edge_times", "pulse_count", "pulse_counts",
+    "QUANTITIES", "REACTIONS", "RuntimeFault", "SafetyConfig",
+    "ServoBank", "ServoParams",
+    "MotionTiming", "SimulationReport", "simulate",
+    "ProgramSource", "as_source",
+    "STATES", "RuntimeEvent", "Setpoint", "Streamer",
+]

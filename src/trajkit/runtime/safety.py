@@ -1,0 +1,180 @@
+"""Safety configuration, the runtime fault type and the per-cycle limit monitors.
+
+Monitors (every cycle, on the *candidate* setpoint before it is output):
+
+- ``position``: the commanded position outside the soft range, or the
+  position where the minimum-time brake from the commanded state would end
+  outside it (look-ahead, so the stop itself stays inside the range);
+- ``velocity``: ``|v| > v_max``, or, while ``|v|`` grows, the velocity the
+  jerk-limited ramp-down of the acceleration would reach,
+  ``|v| + a^2 / (2 j_max)``, above ``v_max`` (look-ahead, so the brake from
+  the last good state never overspeeds);
+- ``acceleration``: ``|a|`` above ``a_max`` while ``|v|`` grows
+  (``v a > 0``), above ``a_max_decel`` while it shrinks;
+- ``following error``: ``|commanded - measured|`` above the configured limit
+  (needs the servo simulation);
+- ``pulse rate``: more pulses in a period than ``max_pulse_rate`` allows.
+
+All comparisons allow the relative tolerance :data:`MONITOR_RTOL`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._constants import LIMIT_RTOL
+from ..errors import InvalidInputError, SafetyFault
+from ._brake import stop_position
+
+__all__ = ["SafetyConfig", "RuntimeFault", "QUANTITIES", "REACTIONS", "MONITOR_RTOL"]
+
+#: Relative tolerance of the monitors (float round-off of planned profiles).
+MONITOR_RTOL = LIMIT_RTOL
+
+#: Quantities the monitors check.
+QUANTITIES = ("position", "velocity", "acceleration", "following error", "pulse rate")
+
+#: Fault reactions: ``"controlled"`` (minimum-time brake / stop on the path)
+#: or ``"emergency"`` (output buffer cleared, drives off, brakes engaged).
+REACTIONS = ("controlled", "emergency")
+
+_DEFAULT_REACTIONS = {
+    "position": "controlled",
+    "velocity": "controlled",
+    "acceleration": "controlled",
+    "following error": "emergency",
+    "pulse rate": "controlled",
+    "emergency stop": "emergency",
+}
+
+
+class RuntimeFault(SafetyFault):
+    """A monitor tripped on a given cycle.
+
+    Attributes
+    ----------
+    axis : str
+        Axis name.
+    quantity : str
+        One of :data:`QUANTITIES` (or ``"emergency stop"``).
+    value, limit : float
+        The offending value and the limit it crossed [axis units].
+    cycle : int
+        Cycle on which it was detected (its setpoint was not output).
+    t : float
+        Time of that cycle [s].
+    """
+
+    def __init__(self, axis: str, quantity: str, value: float, limit: float,
+                 cycle: int, t: float, detail: str = "") -> None:
+        msg = (f"{quantity} {value!r} of axis {axis} exceeds the limit {limit!r} "
+               f"at cycle {cycle} (t = {t:.6g} s){detail}")
+        if quantity == "emergency stop":
+            msg = f"emergency stop at cycle {cycle} (t = {t:.6g} s){detail}"
+        super().__init__(msg)
+        self.axis = axis
+        self.quantity = quantity
+        self.value = value
+        self.limit = limit
+        self.cycle = cycle
+        self.t = t
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Monitor limits and fault reactions.
+
+    Parameters
+    ----------
+    following_error : float or sequence of float or None
+        Largest following error per axis [unit] (``inf``: off). ``None``:
+        50 times the servo in-position window.
+    reactions : dict, optional
+        ``quantity -> "controlled" | "emergency"``, overriding the defaults
+        (``"following error"`` -> emergency, everything else -> controlled).
+    look_ahead : bool
+        Use the braking look-ahead of the position and velocity monitors.
+    """
+
+    following_error: Any = None
+    reactions: dict = field(default_factory=dict)
+    look_ahead: bool = True
+
+    def __post_init__(self) -> None:
+        for q, r in self.reactions.items():
+            if q not in _DEFAULT_REACTIONS:
+                raise InvalidInputError(
+                    f"reaction for unknown quantity {q!r}; expected one of {QUANTITIES}")
+            if r not in REACTIONS:
+                raise InvalidInputError(
+                    f"reaction {r!r} for {q} must be one of {REACTIONS}")
+
+    def reaction(self, quantity: str) -> str:
+        """The configured reaction to a fault of ``quantity``."""
+        return self.reactions.get(quantity, _DEFAULT_REACTIONS[quantity])
+
+
+class Monitors:
+    """Vectorised per-cycle limit checks of a machine's axes (internal)."""
+
+    def __init__(self, limits, names, fe_max: np.ndarray, look_ahead: bool) -> None:
+        self.limits = limits
+        self.names = names
+        r = 1.0 + MONITOR_RTOL
+        self.vmax = np.array([lm.v_max for lm in limits]) * r
+        self.vmax_raw = np.array([lm.v_max for lm in limits])
+        self.amax = np.array([lm.a_max for lm in limits]) * r
+        self.adec = np.array([lm.a_max_decel for lm in limits]) * r
+        self.jmax = np.array([lm.j_max for lm in limits])
+        self.pmin = np.array([lm.position_min for lm in limits])
+        self.pmax = np.array([lm.position_max for lm in limits])
+        span = np.where(np.isfinite(self.pmax - self.pmin), np.abs(self.pmax - self.pmin), 1.0)
+        self.ptol = MONITOR_RTOL * np.maximum(span, 1.0)
+        self.ranged = [k for k in range(len(limits))
+                       if math.isfinite(limits[k].position_min) or math.isfinite(limits[k].position_max)]
+        self.fe_max = fe_max
+        self.look_ahead = look_ahead
+
+    def check(self, q, v, a, measured=None):
+        """First violation as ``(axis index, quantity, value, limit)`` or None."""
+        lo, hi = self.pmin - self.ptol, self.pmax + self.ptol
+        bad = (q < lo) | (q > hi)
+        if bad.any():
+            k = int(np.argmax(bad))
+            return k, "position", float(q[k]), float(self.pmin[k] if q[k] < lo[k] else self.pmax[k])
+        if self.look_ahead:
+            for k in self.ranged:
+                if v[k] == 0.0 and a[k] == 0.0:
+                    continue
+                x = stop_position(q[k], v[k], a[k], self.limits[k])
+                if x < lo[k] or x > hi[k]:
+                    lim = self.pmin[k] if x < lo[k] else self.pmax[k]
+                    return k, "position", float(x), float(lim)
+        av = np.abs(v)
+        bad = av > self.vmax
+        if self.look_ahead:
+            grow = (v * a) > 0.0
+            if grow.any():
+                vpk = np.where(grow, av + a * a / (2.0 * self.jmax), av)
+                bad = bad | (vpk > self.vmax)
+                av = np.where(grow, vpk, av)
+        if bad.any():
+            k = int(np.argmax(bad))
+            return k, "velocity", float(av[k]), float(self.vmax_raw[k])
+        lim = np.where(v * a > 0.0, self.amax, np.where(v == 0.0, self.amax, self.adec))
+        bad = np.abs(a) > lim
+        if bad.any():
+            k = int(np.argmax(bad))
+            raw = self.limits[k].a_max if lim[k] == self.amax[k] else self.limits[k].a_max_decel
+            return k, "acceleration", float(a[k]), float(raw)
+        if measured is not None:
+            fe = np.abs(q - measured)
+            bad = fe > self.fe_max
+            if bad.any():
+                k = int(np.argmax(bad))
+                return k, "following error", float(fe[k]), float(self.fe_max[k])
+        return None

@@ -1,0 +1,740 @@
+"""The streaming fixed-period interpolator: one setpoint per control period.
+
+How it works
+------------
+The program is a function of *program time* ``tau``: ``Q(tau)`` with
+derivatives ``Q'`` and ``Q''`` (:class:`~trajkit.runtime.source.ProgramSource`).
+The streamer advances ``tau`` at a *rate* ``s = dtau/dt`` in ``[0, 1]``
+(the feed override; ``s = 0`` is a stop on the path) and outputs::
+
+    q = Q(tau),   q' = Q'(tau) s,   q'' = Q''(tau) s^2 + Q'(tau) s'
+
+The rate follows a jerk-limited law towards its target (override, or 0 when
+paused / stopping on the path): ``|s'| <= sigma1``, ``|s''| <= sigma2``
+(:attr:`Streamer.rate_limits`, by default ``min_i a_i / v_i`` and
+``min_i j_i / v_i`` over the axes). On top of that, each cycle ``s'`` is
+clipped to the *admissible interval* in which every axis keeps its
+acceleration limit with the leg semantics of
+:class:`~trajkit.limits.AxisLimits`, ``-a_max_decel <= sign(Q') q'' <= a_max``.
+That interval always contains 0 (the program itself is within its limits
+and ``s^2 <= 1``), so the clip is always possible, and it proves, cycle by
+cycle, that a feed override change or a pause never exceeds a velocity or
+acceleration limit: ``|q'| = |Q'| s <= v_max`` and ``q''`` inside its
+bounds by construction. The jerk of the stream is smoothed by ``sigma2``
+but not proven (``q''' = Q''' s^3 + 3 Q'' Q' ... `` can exceed ``j_max``
+when the override changes while an axis uses its full jerk).
+
+Controlled stop: on a continuous-path (LIN/CIRC) segment, and for every
+pause, the target rate becomes 0 and the machine stops on the path; on
+joint (PTP) segments and for position/velocity/acceleration faults each
+axis brakes in minimum time from its commanded velocity and acceleration
+(:func:`~trajkit.runtime.brake_profile`). Emergency stop: the output buffer
+is cleared (the last output position is held), the drives are disabled and
+the brakes engaged.
+
+State machine::
+
+    idle --start--> running --stop--> stopping --(at rest)--> idle
+    running/stopping --fault--> stopping --(at rest)--> fault
+    any --estop--> fault;   fault --reset--> reset --(1 cycle)--> idle
+
+``start()`` after a stop resumes the program where it stopped; when the
+machine left the path (per-axis brake, emergency stop) it first moves back
+to the path point on a rest-to-rest PTP move.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Iterator, Sequence
+
+import numpy as np
+
+from .._validate import check_finite, check_positive
+from ..errors import InvalidInputError
+from ..limits import AxisLimits
+from ._brake import BrakeProfile, brake_phases
+from .pulses import PulseAxis, check_pulse_equivalents, pulse_count
+from .safety import Monitors, RuntimeFault, SafetyConfig
+from .servo import ServoBank, ServoParams
+from .source import ProgramSource, as_source
+
+__all__ = ["Streamer", "Setpoint", "RuntimeEvent", "STATES", "BLOCK_CYCLES",
+           "RATE_SNAP", "REENTRY_ATOL"]
+
+_log = logging.getLogger("trajkit.runtime")
+
+#: Runtime states.
+STATES = ("idle", "running", "stopping", "fault", "reset")
+
+#: Setpoints sampled ahead in one vectorised call while the rate is steady.
+BLOCK_CYCLES = 256
+
+#: The rate snaps to its target when within this distance (and ``s'`` tiny).
+RATE_SNAP = 1e-9
+
+#: A held position within this distance [unit] of the path point needs no re-entry move.
+REENTRY_ATOL = 1e-9
+
+#: Default rate limits as a fraction of ``min_i a_i / v_i`` and ``min_i j_i / v_i``.
+RATE_LIMIT_FRACTION = 0.5
+
+#: Default following-error limit as a multiple of the servo in-position window.
+FE_WINDOW_FACTOR = 50.0
+
+
+@dataclass
+class Setpoint:
+    """One control period's output.
+
+    Attributes
+    ----------
+    cycle : int
+        Cycle number (0-based).
+    t : float
+        Time of this setpoint, ``cycle * period`` [s].
+    state : str
+        One of :data:`STATES` after this cycle.
+    paused : bool
+    tau : float
+        Program time [s].
+    progress : float
+        ``tau / duration`` in [0, 1].
+    motion : int
+        Index of the running motion (``source.motion_labels``).
+    override : float
+        Current rate ``s`` in [0, 1] (the applied override).
+    position, velocity, acceleration : ndarray, shape (n_axes,)
+        Commanded joint state [unit, unit/s, unit/s^2].
+    actual : ndarray, shape (n_axes,) or None
+        Simulated measured position (servo simulation) [unit].
+    following_error : ndarray, shape (n_axes,) or None
+        ``position - actual`` [unit].
+    pulses : ndarray of int, shape (n_axes,) or None
+        Signed pulses emitted this period.
+    pulse_count : ndarray of int, shape (n_axes,) or None
+        Accumulated pulse count (equals ``round(position / pulse_equivalent)``).
+    fault : RuntimeFault or None
+        The fault detected on this cycle.
+    """
+
+    cycle: int
+    t: float
+    state: str
+    paused: bool
+    tau: float
+    progress: float
+    motion: int
+    override: float
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    actual: np.ndarray | None = None
+    following_error: np.ndarray | None = None
+    pulses: np.ndarray | None = None
+    pulse_count: np.ndarray | None = None
+    fault: RuntimeFault | None = None
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (lists of floats / ints)."""
+        def lst(x):
+            return None if x is None else [float(v) if isinstance(v, (float, np.floating))
+                                           else int(v) for v in x]
+        return {
+            "cycle": self.cycle, "t": self.t, "state": self.state, "paused": self.paused,
+            "tau": self.tau, "progress": self.progress, "motion": self.motion,
+            "override": self.override, "position": lst(self.position),
+            "velocity": lst(self.velocity), "acceleration": lst(self.acceleration),
+            "actual": lst(self.actual), "following_error": lst(self.following_error),
+            "pulses": lst(self.pulses), "pulse_count": lst(self.pulse_count),
+            "fault": None if self.fault is None else str(self.fault),
+        }
+
+
+@dataclass(frozen=True)
+class RuntimeEvent:
+    """An entry of the event log.
+
+    Attributes
+    ----------
+    cycle : int
+    t : float [s]
+    kind : str
+        ``start``, ``override``, ``pause``, ``paused``, ``resume``, ``stop``,
+        ``stopped``, ``estop``, ``fault``, ``reset``, ``reentry``,
+        ``in_position``, ``finished`` or ``rejected``.
+    state : str
+        State after the event.
+    message : str
+    """
+
+    cycle: int
+    t: float
+    kind: str
+    state: str
+    message: str
+
+
+class Streamer:
+    """Streaming interpolator with override, pause, controlled stop, safety, pulses and servo.
+
+    Parameters
+    ----------
+    program : ProgramSource or anything :func:`as_source` accepts
+    period : float
+        Control period [s], > 0.
+    limits : sequence of AxisLimits, optional
+        Limits the monitors enforce (default: the program's joint limits).
+    servo : ServoParams or sequence of ServoParams, optional
+        Simulate the servo axes (actual position, following error).
+    pulse_equivalents : float or sequence of float, optional
+        Travel per pulse per axis [unit/pulse]; enables pulse output.
+    max_pulse_rate : float or sequence of float
+        Largest pulse rate per axis [pulses/s] (default: no check).
+    safety : SafetyConfig, optional
+    wait_in_position : bool
+        Hold program time at ``program.stop_points`` until every axis is in
+        position (needs ``servo``).
+    rate_limits : (float, float), optional
+        ``(sigma1 [1/s], sigma2 [1/s^2])``: largest rate of change of the
+        override and of that rate.
+
+    Notes
+    -----
+    Commands (:meth:`start`, :meth:`set_override`, :meth:`pause`,
+    :meth:`resume`, :meth:`stop`, :meth:`estop`, :meth:`reset`,
+    :meth:`inject_encoder_jump`) are thread-safe: they are queued and
+    applied at the start of the next cycle.
+    """
+
+    def __init__(self, program: Any, period: float, *, limits: Sequence[AxisLimits] | None = None,
+                 servo: ServoParams | Sequence[ServoParams] | None = None,
+                 pulse_equivalents: Any = None, max_pulse_rate: Any = math.inf,
+                 safety: SafetyConfig | None = None, wait_in_position: bool = False,
+                 rate_limits: tuple[float, float] | None = None) -> None:
+        self.source: ProgramSource = as_source(program)
+        src = self.source
+        self.period = check_positive(period, "period")
+        n = src.n_axes
+        self.n_axes = n
+        lims = tuple(limits) if limits is not None else src.limits
+        if len(lims) != n:
+            raise InvalidInputError(f"limits must have {n} AxisLimits, got {len(lims)}")
+        self.limits = tuple(lm.with_name(nm) if lm.name is None else lm
+                            for lm, nm in zip(lims, src.names))
+        self.safety = safety if safety is not None else SafetyConfig()
+        self.servo = None
+        if servo is not None:
+            self.servo = ServoBank(servo, n, self.period, src.start_position)
+        fe = self.safety.following_error
+        if fe is None:
+            fe = (FE_WINDOW_FACTOR * self.servo.window) if self.servo is not None else np.full(n, np.inf)
+        fe = np.broadcast_to(np.asarray(fe, dtype=float), (n,)).copy()
+        if np.any(~(fe > 0)):
+            raise InvalidInputError(f"following_error limits must be > 0, got {fe.tolist()}")
+        self.monitors = Monitors(self.limits, src.names, fe, self.safety.look_ahead)
+        self.pulse_axes = None
+        if pulse_equivalents is not None:
+            eqs = check_pulse_equivalents(pulse_equivalents, n)
+            rates = np.broadcast_to(np.asarray(max_pulse_rate, dtype=float), (n,))
+            self.pulse_axes = [PulseAxis(e, r, p, nm) for e, r, p, nm in
+                               zip(eqs, rates, src.start_position, src.names)]
+        self.wait_in_position = bool(wait_in_position) and self.servo is not None
+        if rate_limits is None:
+            vm = np.array([lm.v_max for lm in self.limits])
+            am = np.array([min(lm.a_max, lm.a_max_decel) for lm in self.limits])
+            jm = np.array([min(lm.j_max, lm.j_max_decel) for lm in self.limits])
+            s1 = RATE_LIMIT_FRACTION * float(np.min(am / vm))
+            s2 = RATE_LIMIT_FRACTION * float(np.min(jm / vm))
+            rate_limits = (s1 if math.isfinite(s1) and s1 > 0 else 1.0,
+                           s2 if math.isfinite(s2) and s2 > 0 else 1e3)
+        self.rate_limits = (check_positive(rate_limits[0], "rate_limits[0]"),
+                            check_positive(rate_limits[1], "rate_limits[1]"))
+        self._am = np.array([lm.a_max for lm in self.limits])
+        self._ad = np.array([lm.a_max_decel for lm in self.limits])
+        # ---- run state
+        self._lock = threading.Lock()
+        self._cmds: deque = deque()
+        self.state = "idle"
+        self.paused = False
+        self.finished = False
+        self.fault: RuntimeFault | None = None
+        self.events: list[RuntimeEvent] = []
+        self.cycle = 0
+        self.override = 1.0
+        self.tau = 0.0
+        self.s = 0.0
+        self.sd = 0.0
+        self._mode = "hold"  # hold | path | brake | detour
+        self._stop_kind = None  # None | "command" | "fault"
+        self._path_stop = False
+        self._q = src.start_position.copy()
+        self._v = np.zeros(n)
+        self._a = np.zeros(n)
+        self._blk = None
+        self._brake = None
+        self._detour = None
+        self._stops = list(src.stop_points) if self.wait_in_position else []
+        self._settle = 0
+        self._waiting = False
+        self.stop_log: list[tuple[float, float, float]] = []
+        self._wait_since = None
+        self._last = None
+
+    # ================================================================ commands
+    def _push(self, *cmd) -> None:
+        with self._lock:
+            self._cmds.append(cmd)
+
+    def start(self) -> None:
+        """Start (idle -> running), or resume the program after a stop/reset."""
+        self._push("start")
+
+    def set_override(self, percent: float) -> None:
+        """Set the feed override [%] in 0..100 (applied smoothly).
+
+        Raises
+        ------
+        InvalidInputError
+            Outside 0..100 or not finite.
+        """
+        x = check_finite(percent, "override")
+        if not 0.0 <= x <= 100.0:
+            raise InvalidInputError(f"override must be in [0, 100] %, got {x!r}")
+        self._push("override", x / 100.0)
+
+    def pause(self) -> None:
+        """Stop on the path (controlled); :meth:`resume` continues."""
+        self._push("pause")
+
+    def resume(self) -> None:
+        """Continue after :meth:`pause`."""
+        self._push("resume")
+
+    def stop(self) -> None:
+        """Controlled stop (running -> stopping -> idle)."""
+        self._push("stop")
+
+    def estop(self) -> None:
+        """Emergency stop: clear the output, disable the drives, engage the brakes."""
+        self._push("estop")
+
+    def reset(self) -> None:
+        """Acknowledge a fault (fault -> reset -> idle)."""
+        self._push("reset")
+
+    def inject_encoder_jump(self, axis: int, delta: float) -> None:
+        """Fault injection: the measured position of ``axis`` jumps by ``delta`` [unit]."""
+        if self.servo is None:
+            raise InvalidInputError("inject_encoder_jump needs the servo simulation (servo=...)")
+        if not 0 <= int(axis) < self.n_axes:
+            raise InvalidInputError(f"axis must be in [0, {self.n_axes}), got {axis!r}")
+        self._push("encoder", int(axis), check_finite(delta, "delta"))
+
+    # ================================================================ helpers
+    @property
+    def t(self) -> float:
+        """Time of the next cycle [s]."""
+        return self.cycle * self.period
+
+    def _event(self, kind: str, message: str) -> None:
+        ev = RuntimeEvent(self.cycle, self.t, kind, self.state, message)
+        self.events.append(ev)
+        _log.info("cycle %d: %s: %s", self.cycle, kind, message)
+
+    def snapshot(self) -> dict:
+        """JSON-ready status: state, progress, override, last setpoint, fault, last events."""
+        last = self._last.to_dict() if self._last is not None else None
+        return {
+            "state": self.state, "paused": self.paused, "finished": self.finished,
+            "cycle": self.cycle, "t": self.t, "tau": self.tau,
+            "progress": self.tau / self.source.duration if self.source.duration > 0 else 1.0,
+            "motion": self.source.motion_at(self.tau),
+            "motion_label": self.source.motion_labels[self.source.motion_at(self.tau)],
+            "override_target": self.override, "rate": self.s,
+            "fault": None if self.fault is None else str(self.fault),
+            "setpoint": last,
+            "events": [ev.__dict__ for ev in self.events[-20:]],
+        }
+
+    def _path_rest(self) -> bool:
+        return self.s == 0.0 and self.sd == 0.0
+
+    def _apply(self, cmd) -> None:
+        kind = cmd[0]
+        if kind == "override":
+            self.override = cmd[1]
+            self._event("override", f"override {100 * cmd[1]:g} %")
+        elif kind == "encoder":
+            self.servo.inject_encoder_jump(cmd[1], cmd[2])
+            self._event("encoder", f"encoder of axis {self.source.names[cmd[1]]} jumps by {cmd[2]!r}")
+        elif kind == "start":
+            if self.state != "idle" or self.finished:
+                self._event("rejected", f"start rejected in state {self.state}"
+                            + (" (program finished)" if self.finished else ""))
+                return
+            self.state = "running"
+            self.paused = False
+            self._begin_motion()
+            self._event("start", f"start at program time {self.tau:.6g} s")
+        elif kind == "pause":
+            if self.state == "running" and not self.paused:
+                self.paused = True
+                self._event("pause", "pause: stopping on the path")
+        elif kind == "resume":
+            if self.state == "running" and self.paused:
+                self.paused = False
+                self._event("resume", "resume")
+            else:
+                self._event("rejected", f"resume rejected in state {self.state}")
+        elif kind == "stop":
+            if self.state == "running":
+                self._begin_stop("command")
+                self._event("stop", "controlled stop")
+        elif kind == "estop":
+            if self.state in ("running", "stopping", "idle"):
+                f = RuntimeFault("all", "emergency stop", 0.0, 0.0, self.cycle, self.t)
+                self._emergency(f)
+        elif kind == "reset":
+            if self.state == "fault":
+                self.state = "reset"
+                self.fault = None
+                if self.servo is not None:
+                    self.servo.release_brake()
+                    self._q = self.servo.measured.copy()  # re-sync the command to the feedback
+                    self._v[:] = 0.0
+                    self._a[:] = 0.0
+                    if self.pulse_axes is not None:
+                        for k, pa in enumerate(self.pulse_axes):
+                            pa.count = pulse_count(self._q[k], pa.pulse_equivalent)
+                self._event("reset", "fault reset")
+            else:
+                self._event("rejected", f"reset rejected in state {self.state}")
+
+    def _begin_motion(self) -> None:
+        qp, qdp, _ = self.source.sample(self.tau)
+        off = np.abs(qp[0] - self._q)
+        if np.any(off > REENTRY_ATOL * np.maximum(1.0, np.abs(qp[0]))):
+            from ..trajectory import plan_ptp
+
+            lims = [AxisLimits(lm.v_max, lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel,
+                               name=lm.name) for lm in self.limits]
+            self._detour = (plan_ptp(self._q, qp[0], lims), 0)
+            self._mode = "detour"
+            self.s = self.sd = 0.0
+            self._event("reentry", f"re-entry move of {self._detour[0].duration:.6g} s to the "
+                        f"path at program time {self.tau:.6g} s")
+            return
+        self._mode = "path"
+        self._blk = None
+        # at rest on the path (start, stop point): full rate at once; else ramp from 0
+        self.s = self.override if not np.any(qdp[0]) else 0.0
+        self.sd = 0.0
+
+    def _begin_stop(self, why: str) -> None:
+        self.state = "stopping"
+        self._stop_kind = why
+        if self._mode == "path" and self.source.on_path(self.tau):
+            self._path_stop = True
+            self._blk = None
+            return
+        self._start_brake()
+
+    def _start_brake(self) -> None:
+        n = self.n_axes
+        profs = []
+        for k in range(n):
+            lm = self.limits[k]
+            ph = brake_phases(self._v[k], self._a[k], lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel)
+            profs.append(BrakeProfile((self._q[k], self._v[k], self._a[k]), ph))
+        T = max(p.duration for p in profs)
+        m = int(math.ceil(T / self.period - 1e-12)) + 1
+        tt = np.arange(1, m + 1) * self.period
+        Q = np.empty((m, n))
+        V = np.empty((m, n))
+        A = np.empty((m, n))
+        for k, p in enumerate(profs):
+            s = p.sample(tt)
+            Q[:, k], V[:, k], A[:, k] = s.position, s.velocity, s.acceleration
+        self._brake = (profs, Q, V, A, 0)
+        self._mode = "brake"
+        self._blk = None
+
+    def _emergency(self, fault: RuntimeFault) -> None:
+        self.fault = fault
+        self._mode = "hold"
+        self._v = np.zeros(self.n_axes)
+        self._a = np.zeros(self.n_axes)
+        self._brake = None
+        self._detour = None
+        self.s = self.sd = 0.0
+        self._path_stop = False
+        self.paused = False
+        if self.servo is not None:
+            self.servo.engage_brake()
+        self.state = "fault"
+        self._event("estop" if fault.quantity == "emergency stop" else "fault",
+                    f"{fault} -> emergency stop (output cleared, brakes engaged)")
+
+    # ================================================================ one cycle
+    def _rate_step(self, Qd: np.ndarray, Qdd: np.ndarray) -> float:
+        """Choose ``s'`` for this cycle (jerk-limited law, admissible interval)."""
+        s, sd, dt = self.s, self.sd, self.period
+        target = 0.0 if (self.paused or self._path_stop) else self.override
+        s1, s2 = self.rate_limits
+        e = target - s
+        if abs(e) <= RATE_SNAP and abs(sd) <= s2 * dt:
+            self.s = target
+            return 0.0
+        # braking curve with half the s'' budget, so the rate-limited s' can
+        # follow it without lagging (no jump in s' when the target is reached)
+        des = math.copysign(min(s1, math.sqrt(s2 * abs(e))), e)
+        # the same braking curve towards the bounds 0 and 1 of the rate
+        des = min(max(des, -math.sqrt(s2 * s)), math.sqrt(s2 * max(1.0 - s, 0.0)))
+        new = sd + min(max(des - sd, -s2 * dt), s2 * dt)
+        if abs(e) <= s2 * dt * dt and abs(new) <= 2.0 * s2 * dt:
+            new = e / dt  # last step: land on the target
+        new = min(max(new, -s / dt), (1.0 - s) / dt)
+        # admissible interval: -a_dec <= sign(Q') (Q'' s^2 + Q' s') <= a_max
+        g = np.abs(Qd)
+        m = g > 0.0
+        if m.any():
+            sg = np.sign(Qd[m])
+            h = sg * Qdd[m] * s * s
+            lo = float(np.max((-self._ad[m] - h) / g[m]))
+            hi = float(np.min((self._am[m] - h) / g[m]))
+            new = min(max(new, min(lo, 0.0)), max(hi, 0.0))
+        return new
+
+    def _path_candidate(self):
+        src = self.source
+        dt = self.period
+        steady = (self.sd == 0.0 and not self.paused and not self._path_stop
+                  and self.s == self.override and not self._waiting)
+        if steady and self.s > 0.0:
+            blk = self._blk
+            if blk is None or blk[4] >= blk[0].size or blk[0][blk[4]] != self.tau:
+                taus = self.tau + self.s * dt * np.arange(BLOCK_CYCLES + 1)
+                nxt = self._stops[0] if self._stops else src.duration
+                taus = np.minimum(taus, nxt)
+                Q, Qd, Qdd = src.sample(taus)
+                blk = [taus, Q, Qd, Qdd, 0]
+                self._blk = blk
+            i = blk[4]
+            blk[4] = i + 1
+            q, qd, qdd = blk[1][i], blk[2][i], blk[3][i]
+            sd = 0.0
+            tau_next = blk[0][i + 1] if i + 1 < blk[0].size else None
+        else:
+            self._blk = None
+            Q, Qd, Qdd = src.sample(self.tau)
+            q, qd, qdd = Q[0], Qd[0], Qdd[0]
+            sd = 0.0 if self._waiting else self._rate_step(qd, qdd)
+            tau_next = None
+        s = self.s
+        v = qd * s
+        a = qdd * (s * s) + qd * sd
+        if tau_next is None:
+            tau_next = self.tau + s * dt + 0.5 * sd * dt * dt
+        return q, v, a, tau_next, s + sd * dt, sd
+
+    def step(self) -> Setpoint:
+        """Run one control period and return its setpoint."""
+        with self._lock:
+            cmds = list(self._cmds)
+            self._cmds.clear()
+        for c in cmds:
+            self._apply(c)
+        if self.state == "reset":
+            self.state = "idle"
+        n = self.n_axes
+        k = self.cycle
+        t = k * self.period
+        measured = None
+        if self.servo is not None:
+            if k > 0:
+                self.servo.step(self._q, self._v, self._a)
+            measured = self.servo.measured
+        fault_now = None
+        path_next = None
+        mode = self._mode
+        if mode == "path":
+            q, v, a, tau_next, s_next, sd = self._path_candidate()
+            path_next = (tau_next, s_next, sd)
+        elif mode == "brake":
+            profs, Q, V, A, i = self._brake
+            q, v, a = Q[i], V[i], A[i]
+            self._brake = (profs, Q, V, A, i + 1)
+        elif mode == "detour":
+            traj, i = self._detour
+            smp = traj.sample(np.array([(i + 1) * self.period]))
+            q, v, a = smp.position[0], smp.velocity[0], smp.acceleration[0]
+            self._detour = (traj, i + 1)
+        else:
+            q, v, a = self._q, self._v, self._a
+        # ---- monitors (on the candidate, before it is output)
+        if self.state in ("running", "stopping") and mode in ("path", "detour", "brake"):
+            chk = self.monitors.check(q, v, a, measured if self.state == "running" else None)
+            if chk is None and self.pulse_axes is not None and self.state == "running":
+                for j, pa in enumerate(self.pulse_axes):
+                    rate = abs(pulse_count(q[j], pa.pulse_equivalent) - pa.count) / self.period
+                    if rate > pa.max_rate:
+                        chk = (j, "pulse rate", rate, pa.max_rate)
+                        break
+            if chk is not None and (self.state == "running" or mode != "brake"):
+                j, qty, val, lim = chk
+                fault_now = RuntimeFault(self.source.names[j], qty, val, lim, k, t)
+                if self.safety.reaction(qty) == "emergency":
+                    self._emergency(fault_now)
+                    q, v, a = self._q, self._v, self._a
+                else:
+                    self.fault = fault_now
+                    self._event("fault", f"{fault_now} -> controlled stop")
+                    self.state = "stopping"
+                    self._stop_kind = "fault"
+                    self._path_stop = False
+                    self._start_brake()  # per-axis brake from the last good state
+                    profs, Q, V, A, i = self._brake
+                    q, v, a = Q[0], V[0], A[0]
+                    self._brake = (profs, Q, V, A, 1)
+                path_next = None
+        # ---- commit the output
+        if path_next is not None and self._mode == "path":
+            tau_next, s_next, sd = path_next
+            self.sd = sd
+            self.s = min(max(s_next, 0.0), 1.0)
+            if self._stops and tau_next >= self._stops[0]:
+                tau_next = self._stops[0]
+            self.tau = min(tau_next, self.source.duration)
+            self._path_bookkeeping(q, measured)
+        elif self._mode == "brake" and self._brake is not None and self._brake[4] >= self._brake[1].shape[0]:
+            self._at_rest_after_stop()
+        elif self._mode == "detour" and self._detour is not None:
+            traj, i = self._detour
+            if i * self.period >= traj.duration:
+                self._detour = None
+                self._mode = "path"
+                self._blk = None
+                self.s = 0.0
+                self.sd = 0.0
+                q = self.source.sample(self.tau)[0][0]
+                v = np.zeros(n)
+                a = np.zeros(n)
+        self._q = np.array(q, dtype=float)
+        self._v = np.array(v, dtype=float)
+        self._a = np.array(a, dtype=float)
+        pulses = counts = None
+        if self.pulse_axes is not None:
+            pulses = np.empty(n, dtype=np.int64)
+            counts = np.empty(n, dtype=np.int64)
+            for j, pa in enumerate(self.pulse_axes):
+                c = pulse_count(self._q[j], pa.pulse_equivalent)
+                d = c - pa.count
+                pa.count = c
+                if d:
+                    pa.direction = 1 if d > 0 else -1
+                pulses[j] = d
+                counts[j] = c
+        fe = None if measured is None else self._q - measured
+        src = self.source
+        sp = Setpoint(
+            k, t, self.state, self.paused, self.tau,
+            self.tau / src.duration if src.duration > 0 else 1.0,
+            src.motion_at(self.tau), self.s, self._q, self._v, self._a,
+            None if measured is None else measured.copy(), fe, pulses, counts, fault_now,
+        )
+        self._last = sp
+        self.cycle = k + 1
+        return sp
+
+    def _path_bookkeeping(self, q, measured) -> None:
+        src = self.source
+        if self._path_stop and self._path_rest():
+            self._at_rest_after_stop()
+            return
+        if self.paused and self._path_rest() and not getattr(self, "_pause_logged", False):
+            self._pause_logged = True
+            self._event("paused", f"paused on the path at program time {self.tau:.6g} s")
+        if not self.paused:
+            self._pause_logged = False
+        if self._stops and self.tau >= self._stops[0]:
+            if not self._waiting:
+                self._waiting = True
+                self._wait_since = self.t
+                self._settle = 0
+                self._blk = None
+            fe = np.abs(q - measured)
+            self._settle = self._settle + 1 if np.all(fe <= self.servo.window) else 0
+            if self._settle >= self.servo.settle_cycles:
+                sp_tau = self._stops.pop(0)
+                self.stop_log.append((sp_tau, self._wait_since, self.t + self.period))
+                self._waiting = False
+                self._event("in_position", f"in position at program time {sp_tau:.6g} s")
+            else:
+                return
+        if self.tau >= src.duration and not self._waiting:
+            self.finished = True
+            self.state = "idle"
+            self._mode = "hold"
+            self._event("finished", f"program finished at t = {self.t + self.period:.6g} s")
+
+    def _at_rest_after_stop(self) -> None:
+        self._mode = "hold"
+        self._brake = None
+        self._path_stop = False
+        self.s = self.sd = 0.0
+        if self._stop_kind == "fault":
+            self.state = "fault"
+            self._event("stopped", "at rest after the fault stop")
+        else:
+            self.state = "idle"
+            self._event("stopped", "at rest after the controlled stop")
+        self._stop_kind = None
+
+    # ================================================================ loops
+    def __iter__(self) -> Iterator[Setpoint]:
+        """Yield setpoints until the machine rests in ``idle`` or ``fault``.
+
+        Starts the program first when it is idle and has not run yet.
+        """
+        if self.state == "idle" and self.cycle == 0 and not self._cmds:
+            self.start()
+        while True:
+            sp = self.step()
+            yield sp
+            if sp.state in ("idle", "fault") and self._mode == "hold" and not self._cmds:
+                return
+
+    async def astream(self, paced: bool = True) -> Any:
+        """Asynchronous iterator of setpoints (same end condition as iteration).
+
+        Parameters
+        ----------
+        paced : bool
+            Sleep so that cycle ``k`` is produced at ``k * period`` after the
+            first one (event-loop time); otherwise only yield control.
+        """
+        loop = asyncio.get_running_loop()
+        t0 = loop.time()
+        for sp in self:
+            yield sp
+            if paced:
+                delay = t0 + (sp.cycle + 1) * self.period - loop.time()
+                await asyncio.sleep(max(delay, 0.0))
+            else:
+                await asyncio.sleep(0)
+
+    def run(self, max_cycles: int | None = None) -> list[Setpoint]:
+        """Iterate to the end (or ``max_cycles``) and return the setpoints."""
+        out = []
+        for sp in self:
+            out.append(sp)
+            if max_cycles is not None and len(out) >= max_cycles:
+                break
+        return out

@@ -1,0 +1,317 @@
+"""In-process tests of the HMI's JSON API (FastAPI TestClient): validation, state, files, token."""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("fastapi")
+pytest.importorskip("httpx")
+
+from fastapi.testclient import TestClient  # noqa: E402
+
+from trajkit.errors import InvalidInputError  # noqa: E402
+from trajkit.hmi.app import create_app  # noqa: E402
+from trajkit.hmi.server import check_bind, url_of  # noqa: E402
+
+#: Longest wait for a run to reach a state [s] (never asserted as a time).
+WAIT_S = 30.0
+
+#: A short saddle pass (about 2.3 s) on a coarse period.
+FAST_SADDLE = {"kind": "saddle", "feed_mm_s": 300, "period_s": 0.01, "z_vmax_mm_s": 1000,
+               "theta_vmax_deg_s": 720, "accel_mm_s2": 5000, "jerk_mm_s3": 100000,
+               "theta_amax_deg_s2": 10000, "theta_jmax_deg_s3": 500000,
+               "z_amax_mm_s2": 10000, "z_jmax_mm_s3": 500000}
+
+
+@pytest.fixture
+def client(tmp_path):
+    app = create_app(programs_dir=tmp_path / "programs")
+    with TestClient(app) as c:
+        c.session = app.state.session
+        yield c
+
+
+def wait_state(client, *states):
+    deadline = time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        st = client.get("/api/status").json()["state"]
+        if st in states:
+            return st
+        time.sleep(0.01)
+    raise AssertionError(f"state {st!r} never became one of {states}")
+
+
+def error_of(resp, code):
+    assert resp.status_code == code, resp.text
+    return resp.json()["error"]
+
+
+# ----------------------------------------------------------------- validation
+@pytest.mark.parametrize("field, value, pattern", [
+    ("feed_mm_s", -5, r"feed_mm_s: Input should be greater than 0 \(got -5\)"),
+    ("feed_mm_s", "abc", r"feed_mm_s: Input should be a valid number.*\(got 'abc'\)"),
+    ("feed_mm_s", "", r"feed_mm_s: Input should be a valid number"),
+    ("period_s", 0.5, r"period_s: Input should be less than or equal to 0.1 \(got 0.5\)"),
+    ("period_s", 1e-6, r"period_s: Input should be greater than or equal to 0.0001"),
+    ("angle_deg", 180, r"angle_deg: Input should be less than 180"),
+    ("tolerance_mm", "nan", r"tolerance_mm: .*finite"),
+    ("bogus", 1, r"bogus: Extra inputs are not permitted"),
+])
+def test_bad_saddle_value_is_refused_and_changes_nothing(client, field, value, pattern):
+    events = client.get("/api/events").json()["events"]
+    msg = error_of(client.post("/api/job", json={"kind": "saddle", field: value}), 422)
+    assert re.search(pattern, msg), msg
+    assert client.session.job is None
+    assert client.get("/api/job").json() == {"job": None}
+    assert client.get("/api/events").json()["events"] == events
+
+
+def test_library_refusal_names_values_in_mm(client):
+    msg = error_of(client.post("/api/job", json={"kind": "saddle", "main_radius_mm": 90}), 400)
+    assert "R=90.0" in msg and "r=100.0" in msg and msg.endswith("[mm]")
+    assert client.session.job is None
+
+
+def test_unknown_kind_and_bad_json(client):
+    assert "kind must be one of saddle, pallet, program" in error_of(
+        client.post("/api/job", json={"kind": "laser"}), 400)
+    assert error_of(client.post("/api/job", content=b"{not json",
+                                headers={"content-type": "application/json"}), 422)
+
+
+def test_saddle_job_preview_starts_on_the_seam(client):
+    res = client.post("/api/job", json={"kind": "saddle", "main_radius_mm": 150,
+                                        "branch_radius_mm": 100, "feed_mm_s": 60})
+    assert res.status_code == 200, res.text
+    job = res.json()
+    assert [a["name"] for a in job["axes"]] == ["theta", "Z"]
+    assert [a["unit"] for a in job["axes"]] == ["deg", "mm"]
+    p = np.array(job["path_mm"])
+    # theta = 0: the seam point (r sin 0, r cos 0, sqrt(R^2 - 0)) = (0, 100, 150) mm
+    np.testing.assert_allclose(p[0], [0.0, 100.0, 150.0], atol=1e-3)
+    # every preview point lies on both pipes (branch: x^2 + y^2 = r^2; main along y: x^2 + z^2 = R^2)
+    np.testing.assert_allclose(np.hypot(p[:, 0], p[:, 1]), 100.0, atol=1e-3)
+    np.testing.assert_allclose(np.hypot(p[:, 0], p[:, 2]), 150.0, atol=1e-3)
+    # the loaded table: setpoints every period, positions and the seed's Z(theta) agree
+    tb = client.session.job
+    assert np.allclose(np.diff(tb.t[:-1]), tb.period)
+    th, z = tb.q[:, 0], tb.q[:, 1]
+    np.testing.assert_allclose(z, np.sqrt(0.15 ** 2 - (0.1 * np.sin(th)) ** 2), atol=1e-12)
+    assert job["summary"]["feed_mm_s"] == 60
+    assert job["duration_s"] == pytest.approx(tb.duration)
+
+
+def test_pallet_job_matches_the_library(client):
+    from trajkit.palletizing import plan_cycle, seed_scenario
+
+    res = client.post("/api/job", json={"kind": "pallet", "planner": "ptp", "layers": 1})
+    assert res.status_code == 200, res.text
+    job = res.json()
+    ref = plan_cycle(seed_scenario(layers=1), "ptp")
+    assert job["summary"]["boxes"] == 5
+    assert job["summary"]["duration_s"] == pytest.approx(ref.total_s, rel=1e-12)
+    assert [a["name"] for a in job["axes"]] == ["A", "B", "C", "D"]
+    assert "layers: Input should be less than or equal to 5 (got 6)" in error_of(
+        client.post("/api/job", json={"kind": "pallet", "layers": 6}), 422)
+    assert "planner: Input should be 'ptp' or 'merged'" in error_of(
+        client.post("/api/job", json={"kind": "pallet", "planner": "fast"}), 422)
+
+
+def test_bad_program_names_line_and_field(client):
+    text = ("robot: arm6\npoints:\n  a: {joints_deg: [0, 20, 10, 0, 60, 0]}\n"
+            "program:\n  - PTP: a\n  - LIN: a\n    speed_mm_s: 0\n")
+    msg = error_of(client.post("/api/job", json={"kind": "program", "text": text}), 400)
+    assert msg.startswith("program:7: program[1].speed_mm_s: Input should be greater than 0"), msg
+    assert client.session.job is None
+
+
+# ----------------------------------------------------------------- run control
+def test_one_run_at_a_time_and_estop(client):
+    assert "no job loaded" in error_of(client.post("/api/run/start"), 409)
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    job = client.session.job
+    assert client.post("/api/run/start").json()["state"] == "running"
+    assert "cannot start while a run is running" in error_of(client.post("/api/run/start"), 409)
+    msg = error_of(client.post("/api/job", json={"kind": "pallet"}), 409)
+    assert "cannot load a job while a run is" in msg
+    assert client.session.job is job
+    assert "cannot jog" in error_of(client.post("/api/jog", json={"joint": "J1", "step": 5}), 409)
+    assert "cannot teach" in error_of(client.post("/api/teach", json={"name": "p1"}), 409)
+    assert "nothing to reset" in error_of(client.post("/api/run/reset"), 409)
+
+    client.post("/api/run/estop")
+    assert wait_state(client, "fault") == "fault"
+    sess = client.session
+    assert 0.0 <= sess.last_estop_latency_s <= job.period
+    tau = sess.drive.tau
+    time.sleep(5 * job.period)
+    assert sess.drive.tau == tau  # nothing moves after the emergency stop
+    st = client.get("/api/status").json()
+    assert all(a["velocity"] == 0.0 for a in st["axes"])
+    assert "reset first" in error_of(client.post("/api/run/start"), 409)
+    assert any(e["level"] == "fault" and "EMERGENCY STOP" in e["text"]
+               for e in client.get("/api/events").json()["events"])
+    assert client.post("/api/run/reset").json()["state"] == "idle"
+    assert client.post("/api/run/start").json()["state"] == "running"
+    client.post("/api/run/stop")
+    assert wait_state(client, "idle") == "idle"
+
+
+def test_estop_at_rest_latches_a_fault(client):
+    assert client.post("/api/run/estop").json()["state"] == "fault"
+    assert "reset first" in error_of(client.post("/api/jog", json={"joint": "J1", "step": 5}), 409)
+    assert client.post("/api/run/reset").json()["state"] == "idle"
+
+
+def test_pause_resume_and_run_to_the_end(client):
+    client.post("/api/job", json=FAST_SADDLE)
+    client.post("/api/run/start")
+    client.post("/api/run/pause")
+    assert wait_state(client, "paused") == "paused"
+    tau = client.session.drive.tau
+    time.sleep(0.1)
+    assert client.session.drive.tau == tau
+    assert "cannot pause" in error_of(client.post("/api/run/pause"), 409)
+    client.post("/api/run/resume")
+    assert wait_state(client, "idle") == "idle"
+    st = client.get("/api/status").json()
+    assert st["progress"] == pytest.approx(1.0)
+    ev = [e["text"] for e in client.get("/api/events").json()["events"]]
+    assert any(t.startswith("run 1 complete") for t in ev)
+
+
+@pytest.mark.parametrize("value, pattern", [
+    (101, r"percent: Input should be less than or equal to 100"),
+    (-1, r"percent: Input should be greater than or equal to 0"),
+    ("fast", r"percent: Input should be a valid number"),
+])
+def test_override_validation(client, value, pattern):
+    assert re.search(pattern, error_of(client.post("/api/override", json={"percent": value}), 422))
+    assert client.get("/api/status").json()["override_pct"] == 100.0
+
+
+def test_override_accepted(client):
+    assert client.post("/api/override", json={"percent": 40}).json()["override_pct"] == 40.0
+
+
+def test_unknown_run_command(client):
+    assert "run command must be one of" in error_of(client.post("/api/run/explode"), 400)
+
+
+# ----------------------------------------------------------------- jog, teach, programs
+def test_jog_teach_build_and_files(client, tmp_path):
+    sess = client.session
+    info = client.get("/api/robot").json()
+    assert info["robot"] == "scara" and [j["name"] for j in info["joints"]] == ["J1", "J2", "J3", "J4"]
+    q0 = sess.q.copy()
+    msg = error_of(client.post("/api/jog", json={"joint": "J3", "step": -10}), 400)
+    assert "J3" in msg and "-10.000 mm" in msg and "[0.000, 200.000] mm" in msg
+    assert "joint must be one of J1, J2, J3, J4" in error_of(
+        client.post("/api/jog", json={"joint": "A1", "step": 5}), 400)
+    assert "jog step must not be zero" in error_of(client.post("/api/jog", json={"joint": "J1", "step": 0}), 422)
+    np.testing.assert_array_equal(sess.q, q0)
+
+    client.post("/api/teach", json={"name": "home"})
+    assert client.post("/api/jog", json={"joint": "J3", "step": 40}).status_code == 200
+    wait_state(client, "idle")
+    assert sess.q[2] == pytest.approx(0.04, abs=1e-12)  # jogs land exactly on the target
+    client.post("/api/jog", json={"joint": "J1", "step": 30})
+    wait_state(client, "idle")
+    assert math.degrees(sess.q[0]) == pytest.approx(30.0, abs=1e-9)
+    client.post("/api/teach", json={"name": "p2"})
+    assert "name: String should match pattern" in error_of(
+        client.post("/api/teach", json={"name": "../x"}), 422)
+
+    assert "point 'p9' is not taught" in error_of(client.post(
+        "/api/program/build", json={"steps": [{"op": "PTP", "point": "p9"}]}), 400)
+    assert "CIRC to p2 needs a via point" in error_of(client.post(
+        "/api/program/build", json={"steps": [{"op": "CIRC", "point": "p2"}]}), 400)
+    text = client.post("/api/program/build", json={"steps": [
+        {"op": "PTP", "point": "home"}, {"op": "LIN", "point": "p2", "speed_mm_s": 100}]}).json()["text"]
+    assert "J3_mm: 40.0" in text and "J1_deg: 30.0" in text
+
+    # the built program plays back to the taught points (joint space)
+    res = client.post("/api/job", json={"kind": "program", "text": text})
+    assert res.status_code == 200, res.text
+    tb = sess.job
+    np.testing.assert_allclose(tb.q[0], [0, 0, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(tb.q[-1], [math.radians(30), 0, 0.04, 0], atol=1e-7)
+
+    # files: a bad program is not saved; a good one round-trips
+    pdir = Path(sess.programs_dir)
+    assert error_of(client.post("/api/programs", json={"name": "bad", "text": "robot: scara\n"}), 400)
+    assert not (pdir / "bad.yaml").exists()
+    assert "name: String should match pattern" in error_of(
+        client.post("/api/programs", json={"name": "../evil", "text": text}), 422)
+    assert client.post("/api/programs", json={"name": "cell_1", "text": text}).json()["saved"]
+    assert (pdir / "cell_1.yaml").read_text() == text
+    assert client.get("/api/programs").json() == {"programs": ["cell_1"]}
+    assert client.get("/api/programs/cell_1").json()["text"] == text
+    assert "no program named 'nope'" in error_of(client.get("/api/programs/nope"), 400)
+    assert "program name must match" in error_of(client.get("/api/programs/.hidden"), 400)
+    assert client.get("/api/programs/..%2Fcell_1").status_code in (400, 404)
+
+
+def test_change_robot(client):
+    assert client.post("/api/robot", json={"robot": "arm6"}).json()["robot"] == "arm6"
+    assert len(client.session.q) == 6
+    assert "robot: Input should be" in error_of(client.post("/api/robot", json={"robot": "kuka"}), 422)
+
+
+# ----------------------------------------------------------------- page, token, binding
+def test_page_is_self_contained(client):
+    html = client.get("/").text
+    assert "<title>trajkit HMI</title>" in html
+    srcs = re.findall(r'(?:src|href)="([^"]+)"', html)
+    assert srcs and all(s.startswith("/static/") for s in srcs), srcs
+    for s in srcs:
+        assert client.get(s).status_code == 200, s
+    js = client.get("/static/hmi.js").text
+    assert "http://" not in js and "https://" not in js
+    assert client.get("/static/vendor/uPlot.LICENSE").status_code == 200
+
+
+def test_token_required_everywhere(tmp_path):
+    app = create_app(token="s3cret-token", programs_dir=tmp_path)
+    with TestClient(app) as c:
+        assert error_of(c.get("/api/status"), 401) == "missing or wrong token"
+        assert c.get("/api/status", headers={"X-Trajkit-Token": "wrong-token"}).status_code == 401
+        assert c.get("/api/status", headers={"X-Trajkit-Token": "s3cret-token"}).status_code == 200
+        assert c.get("/api/status", headers={"Authorization": "Bearer s3cret-token"}).status_code == 200
+        assert c.get("/api/status?token=s3cret-token").status_code == 200
+        assert c.post("/api/run/estop").status_code == 401
+        assert app.state.session.state == "idle"
+        assert c.get("/").status_code == 401
+        assert c.get("/?token=s3cret-token").status_code == 200
+
+
+def test_check_bind():
+    check_bind("127.0.0.1", 8765, None)
+    check_bind("::1", 0, None)
+    check_bind("localhost", 8765, None)
+    with pytest.raises(InvalidInputError, match=r"host '0.0.0.0' .* requires --token"):
+        check_bind("0.0.0.0", 8765, None)
+    with pytest.raises(InvalidInputError, match=r"host '192.168.1.5' .* requires --token"):
+        check_bind("192.168.1.5", 8765, None)
+    check_bind("0.0.0.0", 8765, "long-enough-token")
+    with pytest.raises(InvalidInputError, match=r"token must have at least 8 characters, got 3"):
+        check_bind("0.0.0.0", 8765, "abc")
+    with pytest.raises(InvalidInputError, match=r"port must be an integer in 0..65535, got 70000"):
+        check_bind("127.0.0.1", 70000, None)
+    assert url_of("127.0.0.1", 8765, None) == "http://127.0.0.1:8765/"
+    assert url_of("::1", 80, "tok") == "http://[::1]:80/?token=tok"
+
+
+def test_cli_refuses_public_bind_without_token(capsys):
+    from trajkit.cli import main
+
+    assert main(["hmi", "--host", "0.0.0.0", "--port", "8765"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == ("trajkit hmi: error: host '0.0.0.0' is not this machine only (127.0.0.1): "
+                           "binding to it requires --token")
