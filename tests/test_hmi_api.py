@@ -149,9 +149,13 @@ def test_one_run_at_a_time_and_estop(client):
     assert wait_state(client, "fault") == "fault"
     sess = client.session
     assert 0.0 <= sess.last_estop_latency_s <= job.period
-    tau = sess.drive.tau
+    tau, q = sess.drive.tau, sess.drive.last.position.copy()
+    estops = [e for e in sess.drive.streamer.events if e.kind == "estop"]
+    assert len(estops) == 1
     time.sleep(5 * job.period)
     assert sess.drive.tau == tau  # nothing moves after the emergency stop
+    np.testing.assert_array_equal(sess.drive.last.position, q)
+    np.testing.assert_array_equal(sess.drive.last.velocity, 0.0)
     st = client.get("/api/status").json()
     assert all(a["velocity"] == 0.0 for a in st["axes"])
     assert "reset first" in error_of(client.post("/api/run/start"), 409)

@@ -21,12 +21,14 @@ def print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[Any]
         for r in cells:
             print("  ".join(c.rjust(w) for c, w in zip(r, widths)))
         return
-    table = Table(title=title)
+    from rich.markup import escape
+
+    table = Table(title=escape(title))
     for h in columns:
-        table.add_column(str(h), justify="right")
+        table.add_column(escape(str(h)), justify="right", overflow="fold")
     for r in cells:
-        table.add_row(*r)
-    Console(width=max(100, 0)).print(table)
+        table.add_row(*(escape(c) for c in r))
+    Console(soft_wrap=False).print(table)
 
 
 def print_json(obj: Any) -> None:

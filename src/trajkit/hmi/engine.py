@@ -9,9 +9,9 @@ first control tick whose nominal time is at or after the arrival, so an
 emergency stop takes effect within one control period (the measured latency
 is logged).
 
-The motion itself comes from a *drive* (:class:`PlaybackDrive`): it turns
-the planned table and the commands into commanded and actual axis states
-each tick.
+The motion itself comes from the runtime (:class:`RuntimeDrive` over
+:class:`trajkit.runtime.Streamer` with its servo simulation); this module
+only paces it in real time and reports what it does.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import logging
 import math
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import InvalidInputError, TrajkitError
 from .jobs import MM, JobTable
 
-__all__ = ["Session", "ConflictError", "STATES", "PlaybackDrive", "SNAPSHOT_PERIOD_S"]
+__all__ = ["Session", "ConflictError", "STATES", "RuntimeDrive", "SNAPSHOT_PERIOD_S"]
 
 log = logging.getLogger("trajkit")
 
@@ -43,56 +43,78 @@ LOOP_SLEEP_S = 0.004
 #: Snapshots (live values) are refreshed at least this often [s].
 SNAPSHOT_PERIOD_S = 0.02
 
-#: Feed-rate ramp of the playback: the time scale changes by at most this
-#: much per second [1/s] (pause, resume, stop, override changes).
-RATE_SLEW_PER_S = 2.0
-
 #: Events kept in the log.
 MAX_EVENTS = 500
 
 #: Points of the actual tool path kept for the path view.
 TRAIL_POINTS = 4000
 
-#: Below this the time scale counts as stopped.
-RATE_EPS = 1e-9
+#: Longest wait of a command for the run loop to apply it [s].
+COMMAND_WAIT_S = 2.0
+
+#: One actual tool point is kept every this many control periods.
+TRAIL_EVERY = 5
 
 
 class ConflictError(TrajkitError):
     """The command is not allowed in the present state (e.g. start while a run is active)."""
 
 
-class PlaybackDrive:
-    """Plays a :class:`JobTable` back with a slewed time scale (feed override).
+class RuntimeDrive:
+    """One job on the runtime: a :class:`trajkit.runtime.Streamer` with the servo simulation.
 
-    The plan time ``tau`` advances by ``rate * dt`` per tick; ``rate`` moves
-    towards its target (override, or 0 to pause/stop) by at most
-    ``RATE_SLEW_PER_S * dt`` per tick. The commanded velocity is the planned
-    one times ``rate``. An emergency stop sets ``rate = 0`` in the tick it
-    is applied (the command holds the last position).
+    The streamer does the motion (jerk-limited feed-rate law for override,
+    pause and controlled stop, emergency stop, monitors, servo axes); this
+    class only forwards commands, steps it once per control period and
+    translates its state for the page.
     """
 
     def __init__(self, table: JobTable) -> None:
+        from ..runtime import ServoParams, Streamer
+
         self.table = table
-        self.tau = 0.0
-        self.rate = 0.0
-        self.target = 1.0
+        self.streamer = Streamer(table.source(), table.period, servo=ServoParams())
+        self._seen = 0
+        self.last = None
 
-    def tick(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Advance one control period; return commanded q, qd [SI] and tool xyz [m]."""
-        step = RATE_SLEW_PER_S * dt
-        self.rate += max(-step, min(step, self.target - self.rate))
-        self.tau = min(self.table.duration, self.tau + self.rate * dt)
-        q, qd, xyz = self.table.state_at(self.tau)
-        return q, qd * self.rate, xyz
+    def command(self, name: str, value: Any = None) -> None:
+        """Queue a command for the next control period."""
+        st = self.streamer
+        if name == "override":
+            st.set_override(100.0 * value)
+        else:
+            getattr(st, {"estop": "estop", "start": "start", "pause": "pause", "resume": "resume",
+                         "stop": "stop", "reset": "reset"}[name])()
 
-    def halt(self) -> None:
-        """Emergency stop: the time scale drops to zero now."""
-        self.rate = 0.0
-        self.target = 0.0
+    def step(self):
+        """Run one control period; return the streamer's setpoint."""
+        self.last = self.streamer.step()
+        return self.last
+
+    @property
+    def state(self) -> str:
+        """The HMI state: idle, running, pausing, paused, stopping or fault."""
+        st = self.streamer
+        if st.state == "running" and st.paused:
+            return "paused" if st.s == 0.0 and st.sd == 0.0 else "pausing"
+        if st.state == "reset":
+            return "fault"
+        return st.state
 
     @property
     def finished(self) -> bool:
-        return self.tau >= self.table.duration
+        """True when the program ran to its end."""
+        return bool(self.streamer.finished)
+
+    @property
+    def tau(self) -> float:
+        """Program time [s]."""
+        return float(self.streamer.tau)
+
+    def new_events(self) -> list:
+        evs = self.streamer.events[self._seen:]
+        self._seen += len(evs)
+        return evs
 
 
 @dataclass
@@ -100,6 +122,7 @@ class _Command:
     name: str
     arrival: float  # perf_counter
     value: Any = None
+    done: threading.Event = field(default_factory=threading.Event)
 
 
 class Session:
@@ -123,7 +146,7 @@ class Session:
         self._closing = False
         self.state = "idle"
         self.job: JobTable | None = None
-        self.drive: PlaybackDrive | None = None
+        self.drive: RuntimeDrive | None = None
         self.override = 1.0
         self.events: list[dict] = []
         self._event_id = 0
@@ -139,7 +162,7 @@ class Session:
         self.q = None
         self.points: dict[str, np.ndarray] = {}
         self.set_robot("scara", log_event=False)
-        self._publish(None, None, None)
+        self._publish()
 
     # ------------------------------------------------------------------ events
     def event(self, level: str, text: str) -> None:
@@ -246,62 +269,73 @@ class Session:
                            f"{table.t.size} setpoints every {table.period * 1e3:g} ms")
 
     def start(self, table: JobTable | None = None) -> int:
-        """Start the loaded job (or ``table``, e.g. a jog, without loading it); returns the run id."""
+        """Start the loaded job (or ``table``, e.g. a jog, without loading it); returns the run id.
+
+        After a controlled stop or a reset fault of the same job, start
+        continues it where it stopped (the runtime first moves back to the
+        path if the machine left it); otherwise the job starts from its
+        beginning.
+        """
         with self._lock:
             self._require_inactive("start")
             if table is None and self.job is None:
                 raise ConflictError("no job loaded: plan a job first")
             table = table or self.job
-            self.run_id += 1
-            self.drive = PlaybackDrive(table)
-            self.drive.target = self.override
-            self.trail.clear()
-            self._trail_total = 0
-            self.ticks = 0
+            drive = self.drive
+            resume = drive is not None and drive.table is table and not drive.finished
+            if not resume:
+                drive = RuntimeDrive(table)
+                drive.command("override", self.override)
+                self.run_id += 1
+                self.trail.clear()
+                self._trail_total = 0
+                self.ticks = 0
+                self.drive = drive
+            cmd = _Command("start", self._clock())
+            self._cmds.append(cmd)
             self.state = "running"
             self._ensure_thread()
             self._wake.set()
-        self.event("info", f"run {self.run_id} started: {table.title}")
+        self.event("info", f"run {self.run_id} {'continued' if resume else 'started'}: {table.title}")
+        cmd.done.wait(COMMAND_WAIT_S)
         return self.run_id
 
-    def command(self, name: str, value: Any = None) -> None:
-        """Queue a run command: pause, resume, stop, estop, reset, override."""
+    def command(self, name: str, value: Any = None, wait: bool = True) -> None:
+        """Queue a run command (pause, resume, stop, estop, reset, override) for the next period.
+
+        With ``wait`` it returns once the run loop has applied it (at most
+        :data:`COMMAND_WAIT_S`).
+        """
         with self._lock:
             st = self.state
             if name == "estop":
-                if st not in _ACTIVE:  # latch the fault even at rest
-                    self.state = "fault"
-                    self.drive = None
-                    self.last_estop_latency_s = 0.0
-                    self.event("fault", "EMERGENCY STOP (machine at rest)")
-                    self._publish(None, None, None)
-                    return
-            elif name == "pause":
-                if st != "running":
-                    raise ConflictError(f"cannot pause: the run is {st}")
-            elif name == "resume":
-                if st not in ("paused", "pausing"):
-                    raise ConflictError(f"cannot resume: the run is {st}")
-            elif name == "stop":
-                if st not in ("running", "pausing", "paused"):
-                    raise ConflictError(f"cannot stop: the run is {st}")
-            elif name == "reset":
-                if st != "fault":
-                    raise ConflictError(f"nothing to reset: the state is {st}")
-                self.state = "idle"
-                self.drive = None
-                self.event("info", "emergency stop reset")
-                self._publish(None, None, None)
-                return
+                pass  # always accepted; at rest it latches the fault
+            elif name == "pause" and st != "running":
+                raise ConflictError(f"cannot pause: the run is {st}")
+            elif name == "resume" and st not in ("paused", "pausing"):
+                raise ConflictError(f"cannot resume: the run is {st}")
+            elif name == "stop" and st not in ("running", "pausing", "paused"):
+                raise ConflictError(f"cannot stop: the run is {st}")
+            elif name == "reset" and st != "fault":
+                raise ConflictError(f"nothing to reset: the state is {st}")
             elif name == "override":
                 self.override = float(value)
-                if st not in _ACTIVE:
-                    self._publish(None, None, None)
-                    return
-            else:  # pragma: no cover - the app only sends known names
-                raise InvalidInputError(f"unknown command {name!r}")
-            self._cmds.append(_Command(name, self._clock(), value))
+            if self.drive is None:
+                if name == "estop":
+                    self.state = "fault"
+                    self.last_estop_latency_s = 0.0
+                    self.event("fault", "EMERGENCY STOP (machine at rest)")
+                elif name == "reset":
+                    self.state = "idle"
+                    self.event("info", "emergency stop reset")
+                self._publish()
+                return
+            cmd = _Command(name, self._clock(), value)
+            self._cmds.append(cmd)
+            self._ensure_thread()
             self._wake.set()
+        if wait:
+            cmd.done.wait(COMMAND_WAIT_S)
 
     def _ensure_thread(self) -> None:
         if self._thread is None or not self._thread.is_alive():
@@ -320,20 +354,28 @@ class Session:
     def _loop(self) -> None:
         while not self._closing:
             with self._lock:
-                active = self.state in _ACTIVE
-            if not active:
+                drive = self.drive
+                busy = drive is not None and (self._cmds or self.state in _ACTIVE)
+            if not busy:
                 self._wake.wait(0.1)
                 self._wake.clear()
                 continue
-            self._run_active()
+            try:
+                self._run(drive)
+            except Exception as exc:  # a runtime error must not kill the HMI
+                log.exception("hmi run loop")
+                with self._lock:
+                    self.state = "fault"
+                    for c in self._cmds:
+                        c.done.set()
+                    self._cmds.clear()
+                self.event("fault", f"run aborted by an internal error: {exc}")
 
-    def _run_active(self) -> None:
-        with self._lock:
-            drive = self.drive
-            dt = drive.table.period
+    def _run(self, drive: RuntimeDrive) -> None:
+        """Tick ``drive`` in real time until it rests with no command pending."""
+        dt = drive.table.period
         t0 = self._clock()
         k = 0
-        q = qd = xyz = None
         last_pub = -math.inf
         while not self._closing:
             now = self._clock()
@@ -342,101 +384,103 @@ class Session:
                 while k < due:
                     k += 1
                     nominal = t0 + k * dt
-                    self._apply_commands(drive, nominal, dt)
-                    if self.state not in _ACTIVE:
-                        break
-                    q, qd, xyz = drive.tick(dt)
+                    # commands that arrived before this period starts are applied in it
+                    applied = []
+                    while self._cmds and self._cmds[0].arrival <= nominal:
+                        c = self._cmds.popleft()
+                        drive.command(c.name, c.value)
+                        applied.append(c)
+                        if c.name == "estop":
+                            self.last_estop_latency_s = nominal - c.arrival
+                    sp = drive.step()
                     self.ticks += 1
-                    if self.ticks % max(1, int(round(SNAPSHOT_PERIOD_S / dt / 2))) == 0:
-                        self.trail.append((xyz / MM).round(4).tolist())
-                        self._trail_total += 1
-                    self._after_tick(drive, q)
-                    if self.state not in _ACTIVE:
+                    self.state = drive.state
+                    if applied:
+                        self._publish()
+                        for c in applied:
+                            c.done.set()
+                    self._log_runtime_events(drive)
+                    if self.ticks % TRAIL_EVERY == 0 or self.state not in _ACTIVE:
+                        self._add_trail(drive, sp)
+                    if self.state not in _ACTIVE and not self._cmds:
                         break
-                if self.state not in _ACTIVE:
-                    self._finish_run(drive, q)
-                    return
-                if now - last_pub >= SNAPSHOT_PERIOD_S and q is not None:
-                    self._publish(q, qd, xyz)
+                if now - last_pub >= SNAPSHOT_PERIOD_S or self.state not in _ACTIVE:
+                    self._publish()
                     last_pub = now
+                if self.state not in _ACTIVE and not self._cmds:
+                    self._rest(drive)
+                    return
             time.sleep(min(LOOP_SLEEP_S, dt))
 
-    def _apply_commands(self, drive: PlaybackDrive, nominal: float, dt: float) -> None:
-        while self._cmds and self._cmds[0].arrival <= nominal:
-            c = self._cmds.popleft()
-            if c.name == "estop":
-                if self.state in _ACTIVE:
-                    drive.halt()
-                    self.state = "fault"
-                    self.last_estop_latency_s = nominal - c.arrival
-                    self.event("fault", f"EMERGENCY STOP at t = {drive.tau:.3f} s of the plan: "
-                                        f"output cleared, axes braked (applied "
-                                        f"{1e3 * (nominal - c.arrival):.2f} ms after the request, "
-                                        f"period {dt * 1e3:g} ms)")
-            elif c.name == "pause" and self.state == "running":
-                drive.target = 0.0
-                self.state = "pausing"
-                self.event("info", "pause: slowing down")
-            elif c.name == "resume" and self.state in ("paused", "pausing"):
-                drive.target = self.override
-                self.state = "running"
-                self.event("info", "resumed")
-            elif c.name == "stop" and self.state in ("running", "pausing", "paused"):
-                drive.target = 0.0
-                self.state = "stopping"
-                self.event("info", "controlled stop")
-            elif c.name == "override":
-                if self.state == "running":
-                    drive.target = self.override
-                self.event("info", f"feed override {100 * c.value:.0f} %")
+    def _add_trail(self, drive: RuntimeDrive, sp) -> None:
+        q = sp.actual if sp.actual is not None else sp.position
+        tool = drive.table.tool_of(q) if drive.table.tool_of is not None else None
+        if tool is not None:
+            self.trail.append((np.asarray(tool) / MM).round(4).tolist())
+            self._trail_total += 1
 
-    def _after_tick(self, drive: PlaybackDrive, q: np.ndarray) -> None:
-        if self.state == "pausing" and drive.rate <= RATE_EPS:
-            self.state = "paused"
-            self.event("info", f"paused at t = {drive.tau:.3f} s of the plan")
-        elif self.state == "stopping" and drive.rate <= RATE_EPS:
-            self.state = "idle"
-            self.event("info", f"stopped at t = {drive.tau:.3f} s of the plan (run aborted)")
-        elif self.state == "running" and drive.finished:
-            self.state = "idle"
-            self.event("info", f"run {self.run_id} complete: {drive.table.duration:.3f} s planned")
+    def _log_runtime_events(self, drive: RuntimeDrive) -> None:
+        for ev in drive.new_events():
+            if ev.kind in ("override",):
+                continue
+            level = "fault" if ev.kind in ("estop", "fault") else "warning" if ev.kind == "rejected" else "info"
+            text = ev.message
+            if ev.kind == "estop":
+                lat = self.last_estop_latency_s
+                text = (f"EMERGENCY STOP at t = {drive.streamer.tau:.3f} s of the plan: output cleared, "
+                        f"brakes engaged (applied {1e3 * (lat or 0.0):.2f} ms after the request, "
+                        f"period {drive.table.period * 1e3:g} ms)")
+            elif ev.kind == "finished":
+                text = f"run {self.run_id} complete: {drive.table.title}, {drive.table.duration:.3f} s planned"
+            self.event(level, text)
 
-    def _finish_run(self, drive: PlaybackDrive, q) -> None:
-        if q is not None and drive.table.robot is not None:
-            if drive.table.robot != self.robot_name:
-                from ..robot.models import robot_by_name
+    def _rest(self, drive: RuntimeDrive) -> None:
+        """The run rests: the jog/teach joints follow the machine (same robot)."""
+        sp = drive.last
+        if sp is None or drive.table.robot is None:
+            return
+        if drive.table.robot != self.robot_name:
+            from ..robot.models import robot_by_name
 
-                self.robot_name, self.robot, self.points = drive.table.robot, robot_by_name(drive.table.robot), {}
-            self.q = np.array(q, dtype=float)
-        self._publish(q, None if q is None else np.zeros_like(q), None if q is None else
-                      drive.table.state_at(drive.tau)[2], keep_values=True)
+            self.robot_name, self.robot, self.points = drive.table.robot, robot_by_name(drive.table.robot), {}
+        q = np.array(sp.position, dtype=float)
+        if drive.finished:
+            # the streamer's last setpoint is Q(duration - period), one period short of
+            # the goal (reported to the runtime's owner); the machine ends at the goal
+            q = drive.streamer.source.sample(np.array([drive.streamer.source.duration]))[0][0]
+        self.q = np.array(q, dtype=float)
 
     # ------------------------------------------------------------------ snapshot
-    def _publish(self, q, qd, xyz, keep_values: bool = False) -> None:
-        job, drive = self.job, self.drive
+    def _publish(self) -> None:
+        drive = self.drive
         snap = {
             "state": self.state,
             "run_id": self.run_id,
             "override_pct": 100.0 * self.override,
-            "job": None if job is None else job.title,
+            "job": None if self.job is None else self.job.title,
             "server_time": time.time(),
         }
+        sp = None if drive is None else drive.last
         if drive is not None:
-            snap["plan_time_s"] = drive.tau
-            snap["duration_s"] = drive.table.duration
-            snap["progress"] = drive.tau / drive.table.duration if drive.table.duration > 0 else 1.0
-            snap["rate"] = drive.rate
-        if q is not None and drive is not None:
+            st = drive.streamer
             tb = drive.table
-            snap["axes"] = [{"name": n, "unit": u, "position": float(p * s), "velocity": float(v * s)}
-                            for n, u, p, v, s in zip(tb.axis_names, tb.axis_units, q, qd, tb.axis_scale)]
-            snap["tool_mm"] = (np.asarray(xyz) / MM).tolist()
-        elif keep_values and self._snap.get("axes"):
-            snap["axes"] = [dict(a, velocity=0.0) for a in self._snap["axes"]]
-            snap["tool_mm"] = self._snap.get("tool_mm")
-        elif self._snap.get("axes") and self.state in ("fault", "idle"):
-            snap["axes"] = [dict(a, velocity=0.0) for a in self._snap["axes"]]
-            snap["tool_mm"] = self._snap.get("tool_mm")
+            snap["run_title"] = tb.title
+            snap["plan_time_s"] = st.tau
+            T = st.source.duration
+            snap["duration_s"] = T
+            snap["progress"] = st.tau / T if T > 0 else 1.0
+            snap["rate"] = st.s
+            snap["fault"] = None if st.fault is None else str(st.fault)
+        if sp is not None:
+            tb = drive.table
+            act = sp.actual if sp.actual is not None else sp.position
+            snap["axes"] = [
+                {"name": n, "unit": u, "position": float(p * s), "actual": float(a * s),
+                 "velocity": float(v * s), "following_error": float((p - a) * s)}
+                for n, u, p, a, v, s in zip(tb.axis_names, tb.axis_units, sp.position, act,
+                                            sp.velocity, tb.axis_scale)]
+            if tb.tool_of is not None:
+                snap["tool_mm"] = (np.asarray(tb.tool_of(act)) / MM).tolist()
         self._snap = snap
 
     def snapshot(self) -> dict:

@@ -64,6 +64,9 @@ EDGE_BISECT = 48
 #: the parabola through it dips below this fraction of its sampled value.
 PROMISING_FRACTION = 0.5
 
+#: Points of the (nested, slower) F2-with-hold scan for fixed durations.
+HOLD_SCAN_POINTS = 10
+
 #: Closest candidates from each side tried for a blend (fixed duration).
 BLEND_TRIES = 3
 
@@ -885,7 +888,7 @@ def _f2_hold_fixed(start, goal, L, T):
             if ph is None:
                 return None
             return integrate(ph, p0, v0, a0)[0] - pf
-        for am in scan_roots(r, _grid(-Acap, Acap, [a0, af, 0.0])):
+        for am in scan_roots(r, _grid(-Acap, Acap, [a0, af, 0.0], n=HOLD_SCAN_POINTS)):
             ph = f2_hold_profile(am, start, goal, L, T, first)
             if ph is not None and verify(ph, p0, v0, a0, L, goal) is None:
                 return ph

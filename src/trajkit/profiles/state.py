@@ -38,10 +38,10 @@ __all__ = [
 
 #: Relative precision of the upper end of a blocked duration interval (the
 #: next feasible duration; the value returned is itself feasible).
-BLOCKED_SEARCH_RTOL = 1e-10
+BLOCKED_SEARCH_RTOL = 1e-9
 
 #: Relative precision of the lower end of a blocked interval (informative).
-BLOCKED_LOWER_RTOL = 1e-7
+BLOCKED_LOWER_RTOL = 1e-6
 
 #: Maximum rounds of the brake pre-phase (each removes one kind of excess).
 BRAKE_MAX_ROUNDS = 6

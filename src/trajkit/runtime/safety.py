@@ -138,43 +138,66 @@ class Monitors:
                        if math.isfinite(limits[k].position_min) or math.isfinite(limits[k].position_max)]
         self.fe_max = fe_max
         self.look_ahead = look_ahead
+        self._lo = (self.pmin - self.ptol).tolist()
+        self._hi = (self.pmax + self.ptol).tolist()
+        self._pmin = self.pmin.tolist()
+        self._pmax = self.pmax.tolist()
+        self._vm = self.vmax.tolist()
+        self._vraw = self.vmax_raw.tolist()
+        self._am = self.amax.tolist()
+        self._ad = self.adec.tolist()
+        self._jm = self.jmax.tolist()
+        self._fe = [float(x) for x in fe_max]
 
     def check(self, q, v, a, measured=None):
-        """First violation as ``(axis index, quantity, value, limit)`` or None."""
-        lo, hi = self.pmin - self.ptol, self.pmax + self.ptol
-        bad = (q < lo) | (q > hi)
-        if bad.any():
-            k = int(np.argmax(bad))
-            return k, "position", float(q[k]), float(self.pmin[k] if q[k] < lo[k] else self.pmax[k])
+        """First violation as ``(axis index, quantity, value, limit)`` or None.
+
+        Scalar Python over the axes (faster than numpy for a handful of axes).
+        """
+        ql, vl, al = q.tolist(), v.tolist(), a.tolist()
+        for k in range(len(ql)):
+            x = ql[k]
+            if x < self._lo[k] or x > self._hi[k]:
+                lim = self._pmin[k] if x < self._lo[k] else self._pmax[k]
+                return k, "position", x, lim
         if self.look_ahead:
             for k in self.ranged:
-                if v[k] == 0.0 and a[k] == 0.0:
+                vk, ak = vl[k], al[k]
+                if vk == 0.0 and ak == 0.0:
                     continue
-                x = stop_position(q[k], v[k], a[k], self.limits[k])
-                if x < lo[k] or x > hi[k]:
-                    lim = self.pmin[k] if x < lo[k] else self.pmax[k]
-                    return k, "position", float(x), float(lim)
-        av = np.abs(v)
-        bad = av > self.vmax
-        if self.look_ahead:
-            grow = (v * a) > 0.0
-            if grow.any():
-                vpk = np.where(grow, av + a * a / (2.0 * self.jmax), av)
-                bad = bad | (vpk > self.vmax)
-                av = np.where(grow, vpk, av)
-        if bad.any():
-            k = int(np.argmax(bad))
-            return k, "velocity", float(av[k]), float(self.vmax_raw[k])
-        lim = np.where(v * a > 0.0, self.amax, np.where(v == 0.0, self.amax, self.adec))
-        bad = np.abs(a) > lim
-        if bad.any():
-            k = int(np.argmax(bad))
-            raw = self.limits[k].a_max if lim[k] == self.amax[k] else self.limits[k].a_max_decel
-            return k, "acceleration", float(a[k]), float(raw)
+                x = ql[k]
+                # cheap bound of the stopping distance first; exact brake only when near
+                room = min(x - self._lo[k], self._hi[k] - x)
+                if room > self._reach(k, vk, ak):
+                    continue
+                xs = stop_position(x, vk, ak, self.limits[k])
+                if xs < self._lo[k] or xs > self._hi[k]:
+                    lim = self._pmin[k] if xs < self._lo[k] else self._pmax[k]
+                    return k, "position", xs, lim
+        for k in range(len(vl)):
+            vk, ak = vl[k], al[k]
+            av = abs(vk)
+            if self.look_ahead and vk * ak > 0.0:
+                av = av + ak * ak / (2.0 * self._jm[k])
+            if av > self._vm[k]:
+                return k, "velocity", av, self._vraw[k]
+            if vk * ak < 0.0:
+                if abs(ak) > self._ad[k]:
+                    return k, "acceleration", ak, self.limits[k].a_max_decel
+            elif abs(ak) > self._am[k]:
+                return k, "acceleration", ak, self.limits[k].a_max
         if measured is not None:
-            fe = np.abs(q - measured)
-            bad = fe > self.fe_max
-            if bad.any():
-                k = int(np.argmax(bad))
-                return k, "following error", float(fe[k]), float(self.fe_max[k])
+            ml = measured.tolist()
+            for k in range(len(ql)):
+                fe = abs(ql[k] - ml[k])
+                if fe > self._fe[k]:
+                    return k, "following error", fe, self._fe[k]
         return None
+
+    def _reach(self, k: int, v: float, a: float) -> float:
+        """Upper bound of the stopping distance of axis ``k`` from ``(v, a)`` [unit]."""
+        lm = self.limits[k]
+        av, aa = abs(v), abs(a)
+        vpk = av + aa * aa / (2.0 * lm.j_max)
+        tb = aa / lm.j_max + aa / lm.j_max_decel + vpk / lm.a_max_decel + 2.0 * lm.a_max_decel / lm.j_max_decel
+        return vpk * tb

@@ -149,9 +149,8 @@ class ServoBank:
             )
         self.n = n_axes
         self.period = check_positive(period, "period")
-        self.x = np.array(position, dtype=float).reshape(n_axes).copy()
-        self.v = np.zeros(n_axes)
-        self.integ = np.zeros(n_axes)
+        self._z = np.zeros((n_axes, 5))
+        self._z[:, 0] = np.array(position, dtype=float).reshape(n_axes)
         self.encoder_offset = np.zeros(n_axes)
         self.braking = False
         phi = np.empty((n_axes, 5, 5))
@@ -167,12 +166,40 @@ class ServoBank:
         self._phi = phi
         self._gam = gam
         self._a_drive = np.array([p.a_drive for p in self.params])
+        self._limited = bool(np.isfinite(self._a_drive).any())
         self._brake = np.array([p.brake_deceleration for p in self.params])
         self.window = np.array([p.in_position for p in self.params])
         self.settle_cycles = max(p.settle_cycles for p in self.params)
         self._gains = np.array([[p.kp, p.kv, p.ki, p.ff_velocity, p.ff_acceleration,
                                  p.inertia_ratio] for p in self.params])
         self._sub = max(p.substeps for p in self.params)
+
+    @property
+    def x(self) -> np.ndarray:
+        """Actual load position, shape (n_axes,) [unit]."""
+        return self._z[:, 0]
+
+    @x.setter
+    def x(self, value) -> None:
+        self._z[:, 0] = value
+
+    @property
+    def v(self) -> np.ndarray:
+        """Actual velocity, shape (n_axes,) [unit/s]."""
+        return self._z[:, 1]
+
+    @v.setter
+    def v(self, value) -> None:
+        self._z[:, 1] = value
+
+    @property
+    def integ(self) -> np.ndarray:
+        """Velocity-loop integrator state, shape (n_axes,) [unit/s^2]."""
+        return self._z[:, 2]
+
+    @integ.setter
+    def integ(self, value) -> None:
+        self._z[:, 2] = value
 
     @property
     def measured(self) -> np.ndarray:
@@ -186,12 +213,12 @@ class ServoBank:
     def engage_brake(self) -> None:
         """Disable the drives and engage the holding brakes (emergency stop)."""
         self.braking = True
-        self.integ[:] = 0.0
+        self._z[:, 2] = 0.0
 
     def release_brake(self, resync: bool = True) -> None:
         """Re-enable the drives (after a reset)."""
         self.braking = False
-        self.integ[:] = 0.0
+        self._z[:, 2] = 0.0
 
     def step(self, x_ref: np.ndarray, v_ref: np.ndarray, a_ref: np.ndarray) -> None:
         """Advance one period from the setpoint ``(x_ref, v_ref, a_ref)`` (n_axes,) each."""
@@ -205,17 +232,16 @@ class ServoBank:
             self.v = sgn * np.maximum(sp - b * h, 0.0)
             return
         xr = x_ref - self.encoder_offset
-        if np.isfinite(self._a_drive).any():
+        if self._limited:
             kp, kv, ki, fv, fa, _ = self._gains.T
             u = fa * a_ref + kv * (fv * v_ref + kp * (xr - self.x) - self.v) + self.integ
             if np.any(np.abs(u) > self._a_drive):
                 self._step_saturated(xr, v_ref, a_ref)
                 return
-        z = np.stack([self.x, self.v, self.integ, xr, v_ref], axis=1)
-        z = np.einsum("nij,nj->ni", self._phi, z) + self._gam * a_ref[:, None]
-        self.x = z[:, 0]
-        self.v = z[:, 1]
-        self.integ = z[:, 2]
+        z = self._z
+        z[:, 3] = xr
+        z[:, 4] = v_ref
+        self._z = np.einsum("nij,nj->ni", self._phi, z) + self._gam * a_ref[:, None]
 
     def _step_saturated(self, xr, vr, ar) -> None:
         kp, kv, ki, fv, fa, rho = self._gains.T

@@ -245,6 +245,7 @@ class Streamer:
             rates = np.broadcast_to(np.asarray(max_pulse_rate, dtype=float), (n,))
             self.pulse_axes = [PulseAxis(e, r, p, nm) for e, r, p, nm in
                                zip(eqs, rates, src.start_position, src.names)]
+            self._peq = [pa.pulse_equivalent for pa in self.pulse_axes]
         self.wait_in_position = bool(wait_in_position) and self.servo is not None
         if rate_limits is None:
             vm = np.array([lm.v_max for lm in self.limits])
@@ -286,6 +287,7 @@ class Streamer:
         self.stop_log: list[tuple[float, float, float]] = []
         self._wait_since = None
         self._last = None
+        self._mcache = None
 
     # ================================================================ commands
     def _push(self, *cmd) -> None:
@@ -579,13 +581,16 @@ class Streamer:
         else:
             q, v, a = self._q, self._v, self._a
         # ---- monitors (on the candidate, before it is output)
+        counts = None
         if self.state in ("running", "stopping") and mode in ("path", "detour", "brake"):
             chk = self.monitors.check(q, v, a, measured if self.state == "running" else None)
             if chk is None and self.pulse_axes is not None and self.state == "running":
+                counts = [math.floor(x / e + 0.5) for x, e in zip(q.tolist(), self._peq)]
                 for j, pa in enumerate(self.pulse_axes):
-                    rate = abs(pulse_count(q[j], pa.pulse_equivalent) - pa.count) / self.period
+                    rate = abs(counts[j] - pa.count) / self.period
                     if rate > pa.max_rate:
                         chk = (j, "pulse rate", rate, pa.max_rate)
+                        counts = None
                         break
             if chk is not None and (self.state == "running" or mode != "brake"):
                 j, qty, val, lim = chk
@@ -604,6 +609,7 @@ class Streamer:
                     q, v, a = Q[0], V[0], A[0]
                     self._brake = (profs, Q, V, A, 1)
                 path_next = None
+                counts = None
         # ---- commit the output
         if path_next is not None and self._mode == "path":
             tau_next, s_next, sd = path_next
@@ -626,32 +632,42 @@ class Streamer:
                 q = self.source.sample(self.tau)[0][0]
                 v = np.zeros(n)
                 a = np.zeros(n)
-        self._q = np.array(q, dtype=float)
-        self._v = np.array(v, dtype=float)
-        self._a = np.array(a, dtype=float)
-        pulses = counts = None
+        # rows of the sampled blocks are never written to: no copies needed
+        self._q, self._v, self._a = q, v, a
+        pulses = None
         if self.pulse_axes is not None:
-            pulses = np.empty(n, dtype=np.int64)
-            counts = np.empty(n, dtype=np.int64)
+            if counts is None:
+                counts = [math.floor(x / e + 0.5) for x, e in zip(q.tolist(), self._peq)]
+            d = []
             for j, pa in enumerate(self.pulse_axes):
-                c = pulse_count(self._q[j], pa.pulse_equivalent)
-                d = c - pa.count
-                pa.count = c
-                if d:
-                    pa.direction = 1 if d > 0 else -1
-                pulses[j] = d
-                counts[j] = c
+                dj = counts[j] - pa.count
+                pa.count = counts[j]
+                if dj:
+                    pa.direction = 1 if dj > 0 else -1
+                d.append(dj)
+            pulses = np.array(d, dtype=np.int64)
+            counts = np.array(counts, dtype=np.int64)
         fe = None if measured is None else self._q - measured
         src = self.source
         sp = Setpoint(
             k, t, self.state, self.paused, self.tau,
             self.tau / src.duration if src.duration > 0 else 1.0,
-            src.motion_at(self.tau), self.s, self._q, self._v, self._a,
+            self._motion_index(), self.s, self._q, self._v, self._a,
             None if measured is None else measured.copy(), fe, pulses, counts, fault_now,
         )
         self._last = sp
         self.cycle = k + 1
         return sp
+
+    def _motion_index(self) -> int:
+        c = self._mcache
+        if c is None or not (c[1] <= self.tau < c[2]):
+            i = self.source.motion_at(self.tau)
+            ms = self.source.motion_starts
+            lo = ms[i] if i > 0 else -math.inf
+            hi = ms[i + 1] if i + 1 < ms.size else math.inf
+            c = self._mcache = (i, lo, hi)
+        return c[0]
 
     def _path_bookkeeping(self, q, measured) -> None:
         src = self.source

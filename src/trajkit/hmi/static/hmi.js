@@ -91,7 +91,8 @@
       const tr = document.createElement("tr");
       tr.dataset.axis = a.name;
       tr.innerHTML = `<td class="name" style="color:${COLORS[i % COLORS.length]}">${a.name}</td>` +
-        `<td class="axis-pos">&ndash;<small>${a.unit}</small></td><td class="axis-vel">&ndash;<small>${a.unit}/s</small></td>`;
+        `<td class="axis-pos">&ndash;<small>${a.unit}</small></td><td class="axis-act">&ndash;<small>${a.unit}</small></td>` +
+        `<td class="axis-vel">&ndash;<small>${a.unit}/s</small></td><td class="axis-fe">&ndash;<small>${a.unit}</small></td>`;
       tb.append(tr);
     });
     if (key === axesKey && charts) return;
@@ -189,6 +190,10 @@
         if (!r) return;
         r.querySelector(".axis-pos").innerHTML = a.position.toFixed(3) + `<small>${a.unit}</small>`;
         r.querySelector(".axis-vel").innerHTML = a.velocity.toFixed(3) + `<small>${a.unit}/s</small>`;
+        if (a.actual !== undefined) {
+          r.querySelector(".axis-act").innerHTML = a.actual.toFixed(3) + `<small>${a.unit}</small>`;
+          r.querySelector(".axis-fe").innerHTML = a.following_error.toExponential(1) + `<small>${a.unit}</small>`;
+        }
       });
       pushChart(snap);
     }
