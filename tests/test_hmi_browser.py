@@ -229,7 +229,11 @@ def test_jog_teach_build_save_load(hmi_server, page):
     page.wait_for_function("document.getElementById('state').textContent === 'idle'"
                            " && document.querySelector('#joints').textContent.includes('20.000 deg')")
     page.click("#btn-teach")  # p2
-    page.wait_for_function("document.querySelectorAll('#step-point option').length === 2")
+    try:
+        page.wait_for_function("document.querySelectorAll('#step-point option').length === 2", timeout=3000)
+    except Exception:
+        print("MSG", page.inner_text("#msg"), "STATE", page.inner_text("#state"), page.inner_text("#events"), page.inner_text("#joints"), page.input_value("#teach-name"))
+        raise
     assert set(sess.points) == {"p1", "p2"}
 
     page.select_option("#step-op", "PTP")

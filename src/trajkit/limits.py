@@ -109,11 +109,13 @@ class AxisLimits:
         return self.a_max == self.a_max_decel and self.j_max == self.j_max_decel
 
     def with_name(self, name: str | int | None) -> "AxisLimits":
-        """Return a copy carrying ``name`` for error messages."""
-        return AxisLimits(
-            self.v_max, self.a_max, self.j_max, self.a_max_decel, self.j_max_decel,
-            self.position_min, self.position_max, name,
-        )
+        """Return a copy carrying ``name`` for error messages (no re-validation)."""
+        new = object.__new__(AxisLimits)
+        for f in ("v_max", "a_max", "j_max", "a_max_decel", "j_max_decel",
+                  "position_min", "position_max"):
+            object.__setattr__(new, f, getattr(self, f))
+        object.__setattr__(new, "name", name)
+        return new
 
     def scaled(self, factor: float) -> "AxisLimits":
         """Return limits for a coordinate scaled by ``factor`` > 0 (unit change).

@@ -15,9 +15,15 @@ import numpy as np
 from ._atomicio import atomic_write
 from ._constants import DURATION_RTOL, PERIOD_RTOL
 from ._validate import check_array, check_positive
-from .errors import InvalidInputError
+from .errors import InfeasibleError, InvalidInputError
 from .limits import AxisLimits
-from .profiles.profile import Profile, _plan_unchecked, min_duration
+from .profiles.profile import (
+    Profile,
+    _min_solution,
+    _plan_solved,
+    _plan_unchecked,
+    _rest_profile,
+)
 
 __all__ = ["Trajectory", "TrajectorySample", "plan_ptp", "SYNC_MODES"]
 
@@ -168,8 +174,11 @@ def _atomic_write(path: str | os.PathLike, text: str) -> None:
 
 
 def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[AxisLimits]:
+    """One AxisLimits per axis; unnamed ones are named by their index (for messages)."""
     if isinstance(limits, AxisLimits):
-        return [limits.with_name(i) if limits.name is None else limits for i in range(n)]
+        if limits.name is not None:
+            return [limits] * n
+        return [limits.with_name(i) for i in range(n)]
     try:
         lims = list(limits)
     except TypeError:
@@ -180,14 +189,14 @@ def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[Ax
         raise InvalidInputError(
             f"limits has {len(lims)} entries but start/goal have {n} axes"
         )
-    out = []
     for i, lim in enumerate(lims):
         if not isinstance(lim, AxisLimits):
             raise InvalidInputError(
                 f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}"
             )
-        out.append(lim.with_name(i) if lim.name is None else lim)
-    return out
+        if lim.name is None:
+            lims[i] = lim.with_name(i)
+    return lims
 
 
 def plan_ptp(
@@ -259,15 +268,21 @@ def plan_ptp(
         return Trajectory([_plan_unchecked(a, b, lim, None) for a, b, lim in zip(sl, gl, lims)], "none")
 
     if sync == "time":
-        tmin = max(min_duration(b - a, lim) for a, b, lim in zip(sl, gl, lims))
+        # step 1: each axis' fastest profile; the slowest sets the common duration
+        sols = [None if b == a else _min_solution(abs(b - a), lim)
+                for a, b, lim in zip(sl, gl, lims)]
+        tmin = max((sol[1] for sol in sols if sol is not None), default=0.0)
         T = tmin if duration is None else duration
         if duration is not None and duration < tmin * (1.0 - DURATION_RTOL):
-            from .errors import InfeasibleError
             raise InfeasibleError(
                 f"duration {duration!r} s is below the minimum synchronised duration {tmin:.15g} s",
                 minimum=tmin,
             )
-        axes = [_plan_unchecked(a, b, lim, T) for a, b, lim in zip(sl, gl, lims)]
+        # step 2: every axis for exactly that duration
+        axes = [
+            _rest_profile(a, lim, T) if sol is None else _plan_solved(a, b, lim, sol[0], sol[1], T)
+            for a, b, lim, sol in zip(sl, gl, lims, sols)
+        ]
         return Trajectory(axes, "time")
 
     # phase: one normalised profile u(t) in [0, 1]; axis k = s_k + D_k u(t).

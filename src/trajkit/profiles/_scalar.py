@@ -46,6 +46,13 @@ def leg_time(v: float, a: float, j: float) -> float:
     return 2.0 * _sqrt(v / j)
 
 
+def _lt(v: float, a: float, j: float, thr: float) -> float:
+    """:func:`leg_time` with the leg's threshold ``thr`` already known."""
+    if v >= thr:
+        return v / a + a / j
+    return 2.0 * _sqrt(v / j)
+
+
 def leg_phases(v: float, a: float, j: float) -> tuple[float, float, float]:
     """Return ``(t_jerk, t_const, a_peak)`` of the ramp between rest and ``v``."""
     if v <= 0.0:
@@ -100,18 +107,18 @@ def _newton_decreasing(p: float, q: float, c: float, d: float, t: float, u: floa
 
 def peak_velocity(d: float, v_max: float, a1: float, j1: float, a2: float, j2: float) -> float:
     """Peak velocity of the minimum-time rest-to-rest move over distance ``d > 0``."""
-    if v_max != _inf:
-        dist_v = 0.5 * v_max * (leg_time(v_max, a1, j1) + leg_time(v_max, a2, j2))
-        if dist_v <= d:
-            return v_max
     t1 = leg_threshold(a1, j1)
     t2 = leg_threshold(a2, j2)
+    if v_max != _inf:
+        dist_v = 0.5 * v_max * (_lt(v_max, a1, j1, t1) + _lt(v_max, a2, j2, t2))
+        if dist_v <= d:
+            return v_max
     if t1 <= t2:
         lo, hi, ak, jk, jo = t1, t2, a1, j1, j2
     else:
         lo, hi, ak, jk, jo = t2, t1, a2, j2, j1
-    if lo != _inf and 0.5 * lo * (leg_time(lo, a1, j1) + leg_time(lo, a2, j2)) < d:
-        if hi != _inf and 0.5 * hi * (leg_time(hi, a1, j1) + leg_time(hi, a2, j2)) <= d:
+    if lo != _inf and 0.5 * lo * (_lt(lo, a1, j1, t1) + _lt(lo, a2, j2, t2)) < d:
+        if hi != _inf and 0.5 * hi * (_lt(hi, a1, j1, t1) + _lt(hi, a2, j2, t2)) <= d:
             # both legs reach their acceleration limits: p v^2 + q v = d
             p = 0.5 * (1.0 / a1 + 1.0 / a2)
             q = 0.5 * (a1 / j1 + a2 / j2)
@@ -148,10 +155,10 @@ def cruise_velocity(
         lo, hi, ak, jk, jo = t2, t1, a2, j2, j1
     u0 = _sqrt(d / t)  # Vc >= d/t always: a universal start left of the root
     if lo < v_peak and lo != _inf and (
-        lo == 0.0 or 0.5 * (leg_time(lo, a1, j1) + leg_time(lo, a2, j2)) + d / lo > t
+        lo == 0.0 or 0.5 * (_lt(lo, a1, j1, t1) + _lt(lo, a2, j2, t2)) + d / lo > t
     ):
         if hi < v_peak and hi != _inf and (
-            hi == 0.0 or 0.5 * (leg_time(hi, a1, j1) + leg_time(hi, a2, j2)) + d / hi > t
+            hi == 0.0 or 0.5 * (_lt(hi, a1, j1, t1) + _lt(hi, a2, j2, t2)) + d / hi > t
         ):
             # both saturated: p v^2 - (t - q) v + d = 0, smaller root
             p = 0.5 * (1.0 / a1 + 1.0 / a2)

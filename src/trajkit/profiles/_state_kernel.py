@@ -67,6 +67,14 @@ PROMISING_FRACTION = 0.5
 #: Points of the (nested, slower) F2-with-hold scan for fixed durations.
 HOLD_SCAN_POINTS = 10
 
+#: The hold length is solved to this fraction of the duration (the hold then
+#: absorbs the remainder exactly), in at most ``HOLD_MAX_ITER`` steps.
+HOLD_TIME_RTOL = 1e-13
+HOLD_MAX_ITER = 60
+
+#: Edge bisection steps in the F2-with-hold scan.
+HOLD_EDGE_BISECT = 20
+
 #: Closest candidates from each side tried for a blend (fixed duration).
 BLEND_TRIES = 3
 
@@ -445,14 +453,17 @@ def f2_profile(am, start, goal, L, first_is_ramp):
     return r + b
 
 
-def _root(fun, x0, f0, x1, f1):
-    """Bracketed root (Illinois regula falsi + bisection safeguard)."""
+def _root(fun, x0, f0, x1, f1, ftol=0.0, max_iter=SCAN_MAX_ITER):
+    """Bracketed root (Illinois regula falsi + bisection safeguard).
+
+    Stops when the bracket is below ``SCAN_XRTOL`` relative or ``|f| <= ftol``.
+    """
     if f0 == 0.0:
         return x0
     if f1 == 0.0:
         return x1
     side = 0
-    for _ in range(SCAN_MAX_ITER):
+    for _ in range(max_iter):
         if abs(x1 - x0) <= SCAN_XRTOL * max(abs(x0), abs(x1)) + TINY:
             break
         x = (x0 * f1 - x1 * f0) / (f1 - f0)
@@ -464,7 +475,7 @@ def _root(fun, x0, f0, x1, f1):
             fx = fun(x)
             if fx is None:
                 return None
-        if fx == 0.0:
+        if abs(fx) <= ftol:
             return x
         if (fx > 0.0) == (f0 > 0.0):
             x0, f0 = x, fx
@@ -516,7 +527,7 @@ def _promising(x0, f0, x1, f1, x2, f2):
     return (fv > 0.0) != (f1 > 0.0) or abs(fv) < PROMISING_FRACTION * abs(f1)
 
 
-def scan_roots(fun, grid):
+def scan_roots(fun, grid, edge_steps=None):
     """All roots of ``fun`` on ``grid``: sign changes between grid points,
     plus pairs of roots hidden next to a local extremum of ``|fun|`` (found
     by golden-section search), each refined by :func:`_root`."""
@@ -530,7 +541,7 @@ def scan_roots(fun, grid):
             if (fp is None) != (fx is None):
                 good, bad = (xp, x) if fx is None else (x, xp)
                 fgood = fp if fx is None else fx
-                for _ in range(EDGE_BISECT):
+                for _ in range(EDGE_BISECT if edge_steps is None else edge_steps):
                     mid = 0.5 * (good + bad)
                     fm = fun(mid)
                     if fm is None:
@@ -728,7 +739,7 @@ def insert_cruise(phases, v0, dT):
     return out
 
 
-def fixed_time_profile(start, goal, L, T, seeds=()):
+def fixed_time_profile(start, goal, L, T, seeds=(), hold=True):
     """A verified profile of exactly ``T`` s, or ``None``.
 
     Candidates of exactly ``T`` s:
@@ -738,7 +749,9 @@ def fixed_time_profile(start, goal, L, T, seeds=()):
       of the position error between two scan points is refined to a root);
     * every profile in ``seeds`` (faster solutions, e.g. the minimum-time
       candidates) with a cruise inserted at its fastest or slowest
-      zero-acceleration point.
+      zero-acceleration point;
+    * with ``hold=True``, last, F2 with a hold at the junction acceleration
+      (a nested root; slow, so the blocked-interval search leaves it out).
 
     When no root is exact, the two candidates closest to the goal position
     from below and above are blended: their convex combination has the same
@@ -810,7 +823,7 @@ def fixed_time_profile(start, goal, L, T, seeds=()):
                 ph = blend(pool[ib][1], pool[ia][1], ea / (ea - eb))
                 if verify(ph, p0, v0, a0, L, goal) is None:
                     return ph
-    return _f2_hold_fixed(start, goal, L, T)
+    return _f2_hold_fixed(start, goal, L, T) if hold else None
 
 
 def f2_hold_profile(am, start, goal, L, T, first_is_ramp):
@@ -854,7 +867,7 @@ def f2_hold_profile(am, start, goal, L, T, first_is_ramp):
     e1 = excess(span)
     if e0 is None or e1 is None or e0 > 0.0 or e1 < 0.0:
         return None
-    th = _root(excess, 0.0, e0, span, e1)
+    th = _root(excess, 0.0, e0, span, e1, ftol=HOLD_TIME_RTOL * T, max_iter=HOLD_MAX_ITER)
     if th is None:
         return None
     ph = build(th)
@@ -888,7 +901,8 @@ def _f2_hold_fixed(start, goal, L, T):
             if ph is None:
                 return None
             return integrate(ph, p0, v0, a0)[0] - pf
-        for am in scan_roots(r, _grid(-Acap, Acap, [a0, af, 0.0], n=HOLD_SCAN_POINTS)):
+        for am in scan_roots(r, _grid(-Acap, Acap, [a0, af, 0.0], n=HOLD_SCAN_POINTS),
+                             edge_steps=HOLD_EDGE_BISECT):
             ph = f2_hold_profile(am, start, goal, L, T, first)
             if ph is not None and verify(ph, p0, v0, a0, L, goal) is None:
                 return ph

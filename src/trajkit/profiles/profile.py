@@ -315,12 +315,7 @@ def min_duration(distance: float, limits: AxisLimits) -> float:
     d = abs(float(distance))
     if d == 0.0:
         return 0.0
-    a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
-    vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2)
-    t = K.leg_time(vp, a1, j1) + K.leg_time(vp, a2, j2)
-    if vp == limits.v_max:
-        t += max(d - 0.5 * vp * t, 0.0) / vp
-    return t
+    return _min_solution(d, limits)[1]
 
 
 def plan_move(
@@ -384,26 +379,46 @@ def plan_move(
     return _plan_unchecked(s, g, limits, duration if duration is None else T)
 
 
-def _plan_unchecked(s: float, g: float, limits: AxisLimits, T: float | None) -> Profile:
-    d = g - s
-    sign = 1.0 if d > 0 else -1.0
-    d = abs(d)
-    if d == 0.0:
-        dur = 0.0 if T is None else T
-        return Profile(s, g, dur, 0.0, (0.0, 0.0, 0.0, dur, 0.0, 0.0, 0.0),
-                       (0.0,) * 7, 0.0, 0.0, 0.0, limits)
+def _min_solution(d: float, limits: AxisLimits) -> tuple[float, float]:
+    """Step 1 for a distance ``d > 0``: ``(peak velocity, minimum duration)``."""
     a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
     vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2)
     tmin = K.leg_time(vp, a1, j1) + K.leg_time(vp, a2, j2)
     if vp == limits.v_max:
         tmin += max(d - 0.5 * vp * tmin, 0.0) / vp
+    return vp, tmin
+
+
+def _plan_solved(
+    s: float, g: float, limits: AxisLimits, vp: float, tmin: float, T: float | None,
+    axis: str | int | None = None,
+) -> Profile:
+    """Step 2: the profile of a move whose step-1 solution ``(vp, tmin)`` is known."""
+    d = g - s
+    sign = 1.0 if d > 0 else -1.0
+    d = abs(d)
     if T is None or T <= tmin:
         if T is not None and T < tmin * (1.0 - DURATION_RTOL):
             raise InfeasibleError(
-                f"duration {T!r} s{axis_label(limits.name)} is below the minimum "
-                f"duration {tmin:.15g} s for a move of distance {d!r}",
+                f"duration {T!r} s{axis_label(limits.name if axis is None else axis)} is below "
+                f"the minimum duration {tmin:.15g} s for a move of distance {d!r}",
                 minimum=tmin,
             )
         return _build(s, g, limits, d, vp, tmin, tmin, sign)
+    a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
     vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2)
     return _build(s, g, limits, d, vc, T, tmin, sign)
+
+
+def _rest_profile(s: float, limits: AxisLimits, T: float | None) -> Profile:
+    """A zero move that holds ``s`` for ``T`` seconds (0 when None)."""
+    dur = 0.0 if T is None else T
+    return Profile(s, s, dur, 0.0, (0.0, 0.0, 0.0, dur, 0.0, 0.0, 0.0),
+                   (0.0,) * 7, 0.0, 0.0, 0.0, limits)
+
+
+def _plan_unchecked(s: float, g: float, limits: AxisLimits, T: float | None) -> Profile:
+    if g == s:
+        return _rest_profile(s, limits, T)
+    vp, tmin = _min_solution(abs(g - s), limits)
+    return _plan_solved(s, g, limits, vp, tmin, T)

@@ -565,6 +565,7 @@ class Streamer:
             measured = self.servo.measured
         fault_now = None
         path_next = None
+        tau_out = self.tau
         mode = self._mode
         if mode == "path":
             q, v, a, tau_next, s_next, sd = self._path_candidate()
@@ -618,7 +619,7 @@ class Streamer:
             if self._stops and tau_next >= self._stops[0]:
                 tau_next = self._stops[0]
             self.tau = min(tau_next, self.source.duration)
-            self._path_bookkeeping(q, measured)
+            self._path_bookkeeping(q, measured, tau_out)
         elif self._mode == "brake" and self._brake is not None and self._brake[4] >= self._brake[1].shape[0]:
             self._at_rest_after_stop()
         elif self._mode == "detour" and self._detour is not None:
@@ -650,26 +651,26 @@ class Streamer:
         fe = None if measured is None else self._q - measured
         src = self.source
         sp = Setpoint(
-            k, t, self.state, self.paused, self.tau,
-            self.tau / src.duration if src.duration > 0 else 1.0,
-            self._motion_index(), self.s, self._q, self._v, self._a,
+            k, t, self.state, self.paused, tau_out,
+            tau_out / src.duration if src.duration > 0 else 1.0,
+            self._motion_index(tau_out), self.s, self._q, self._v, self._a,
             None if measured is None else measured.copy(), fe, pulses, counts, fault_now,
         )
         self._last = sp
         self.cycle = k + 1
         return sp
 
-    def _motion_index(self) -> int:
+    def _motion_index(self, tau: float) -> int:
         c = self._mcache
-        if c is None or not (c[1] <= self.tau < c[2]):
-            i = self.source.motion_at(self.tau)
+        if c is None or not (c[1] <= tau < c[2]):
+            i = self.source.motion_at(tau)
             ms = self.source.motion_starts
             lo = ms[i] if i > 0 else -math.inf
             hi = ms[i + 1] if i + 1 < ms.size else math.inf
             c = self._mcache = (i, lo, hi)
         return c[0]
 
-    def _path_bookkeeping(self, q, measured) -> None:
+    def _path_bookkeeping(self, q, measured, tau_out: float) -> None:
         src = self.source
         if self._path_stop and self._path_rest():
             self._at_rest_after_stop()
@@ -679,7 +680,7 @@ class Streamer:
             self._event("paused", f"paused on the path at program time {self.tau:.6g} s")
         if not self.paused:
             self._pause_logged = False
-        if self._stops and self.tau >= self._stops[0]:
+        if self._stops and tau_out >= self._stops[0]:
             if not self._waiting:
                 self._waiting = True
                 self._wait_since = self.t
@@ -694,7 +695,7 @@ class Streamer:
                 self._event("in_position", f"in position at program time {sp_tau:.6g} s")
             else:
                 return
-        if self.tau >= src.duration and not self._waiting:
+        if tau_out >= src.duration and not self._waiting:
             self.finished = True
             self.state = "idle"
             self._mode = "hold"
