@@ -100,6 +100,13 @@ def dense_check(prof, limits, n=2001, rtol=1e-9):
     amax = np.where(speeding, limits.a_max, limits.a_max_decel)
     if np.any(np.abs(a) > amax * (1 + rtol) + 1e-12):
         return "acceleration limit"
+    # jerk: the regime's limit; where v*a == 0 the regime is about to be set
+    # by the jerk itself, so either limit
+    jmax = np.where(speeding, limits.j_max,
+                    np.where(v * a < 0, limits.j_max_decel,
+                             max(limits.j_max, limits.j_max_decel)))
+    if np.any(np.abs(j) > jmax * (1 + rtol)):
+        return "jerk limit"
     # continuity of position and velocity (finite differences vs samples)
     if n > 2 and prof.duration > 0:
         # exact for a cubic: dp = dt (v0 + v1)/2 + dt^2 (a0 - a1)/12; a jerk
@@ -146,7 +153,7 @@ def random_case(rng, symmetric=True, scale=1.0):
             kind_v, kind_a = 3, 3
         return 0.0, 0.0
 
-    pick = lambda: int(rng.choice([0, 1, 2, 3, 3, 3]))  # noqa: E731
+    pick = lambda: int(rng.choice([0, 1, 2, 3, 3, 3]))
     v0, a0 = state(pick(), pick(), False)
     vf, af = state(pick(), pick(), True)
     p0 = rng.uniform(-1, 1) * V
@@ -257,6 +264,27 @@ def ruckig_fixed(start, goal, V, A, J, T):
     inp.max_acceleration = [A]
     inp.max_jerk = [J]
     inp.minimum_duration = T
+    traj = Trajectory(1)
+    res = Ruckig(1).calculate(inp, traj)
+    if res not in (Result.Working, Result.Finished):
+        return None
+    return traj.duration
+
+
+def ruckig_velocity_duration(start, goal_v, goal_a, V, A, J):
+    """Minimum duration of ruckig's velocity interface (position free)."""
+    from ruckig import ControlInterface, InputParameter, Result, Ruckig, Trajectory
+
+    inp = InputParameter(1)
+    inp.control_interface = ControlInterface.Velocity
+    inp.current_position = [start[0]]
+    inp.current_velocity = [start[1]]
+    inp.current_acceleration = [start[2]]
+    inp.target_velocity = [goal_v]
+    inp.target_acceleration = [goal_a]
+    inp.max_velocity = [V]
+    inp.max_acceleration = [A]
+    inp.max_jerk = [J]
     traj = Trajectory(1)
     res = Ruckig(1).calculate(inp, traj)
     if res not in (Result.Working, Result.Finished):

@@ -319,3 +319,23 @@ def test_cli_refuses_public_bind_without_token(capsys):
     err = capsys.readouterr().err
     assert err.strip() == ("trajkit hmi: error: host '0.0.0.0' is not this machine only (127.0.0.1): "
                            "binding to it requires --token")
+
+
+def test_cli_serves_on_localhost_and_prints_its_address(tmp_path):
+    import subprocess
+    import sys
+
+    import httpx
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "trajkit.cli", "hmi", "--port", "0", "--programs-dir", str(tmp_path)],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        line = proc.stdout.readline()
+        m = re.match(r"trajkit HMI on (http://127\.0\.0\.1:(\d+)/) ", line)
+        assert m, line
+        r = httpx.get(m.group(1) + "api/status", timeout=10)
+        assert r.status_code == 200 and r.json()["state"] == "idle"
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)

@@ -7,6 +7,15 @@ import math
 
 import numpy as np
 import pytest
+from state_reference import (
+    dense_check,
+    double_s_duration,
+    exact_check,
+    goal_error,
+    random_case,
+    ruckig_duration,
+    ruckig_fixed,
+)
 
 from trajkit import AxisLimits
 from trajkit.errors import InfeasibleError, InvalidInputError
@@ -16,15 +25,6 @@ from trajkit.profiles.state import (
     StateProfile,
     plan_state_to_state,
     plan_velocity,
-)
-from state_reference import (
-    dense_check,
-    double_s_duration,
-    exact_check,
-    goal_error,
-    random_case,
-    ruckig_duration,
-    ruckig_fixed,
 )
 
 LIM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0)

@@ -18,18 +18,10 @@ multiplies them by 10.
 
 from __future__ import annotations
 
-import math
 import os
 
 import numpy as np
 import pytest
-
-from trajkit import AxisLimits
-from trajkit.profiles.state import (
-    BlockedDurationError,
-    plan_state_to_state,
-    plan_velocity,
-)
 from state_reference import (
     dense_check,
     exact_check,
@@ -37,6 +29,14 @@ from state_reference import (
     random_case,
     ruckig_duration,
     ruckig_fixed,
+    ruckig_velocity_duration,
+)
+
+from trajkit import AxisLimits
+from trajkit.profiles.state import (
+    BlockedDurationError,
+    plan_state_to_state,
+    plan_velocity,
 )
 
 SCALE = 10 if os.environ.get("TRAJKIT_SWEEP") == "1" else 1
@@ -143,11 +143,10 @@ def test_velocity_interface_sweep():
         p = plan_velocity(s, g[1], g[2], limits=lim)
         _check(p, lim, dense=i % 20 == 0)
         assert p.goal_state[1:] == (g[1], g[2])
-        if L[1] == L[3] and L[2] == L[4] and (s[1], s[2]) != (g[1], g[2]):
-            # symmetric: no profile reaching (vf, af) is faster, whatever the
-            # position: ruckig in velocity control would agree; here we check
-            # against the position-constrained minimum, which cannot be faster
-            pass
+        if L[1] == L[3] and L[2] == L[4]:
+            # symmetric limits: ruckig's velocity interface gives the same time
+            ref = ruckig_velocity_duration(s, g[1], g[2], L[0], L[1], L[2])
+            assert p.duration == pytest.approx(ref, rel=1e-6, abs=1e-12), (i, s, g, L)
 
 
 def test_controlled_stop_sweep_with_brake():

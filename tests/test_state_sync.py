@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from state_reference import exact_check, goal_error
 
 from trajkit import AxisLimits
 from trajkit.errors import InfeasibleError, InvalidInputError
 from trajkit.profiles._state_sync import plan_ptp_states
 from trajkit.profiles.state import plan_state_to_state
-from state_reference import exact_check, goal_error
 
 LIMS = [
     AxisLimits(1.0, 2.0, 10.0, name="A"),

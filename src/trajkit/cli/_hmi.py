@@ -35,9 +35,10 @@ def _run(args: argparse.Namespace) -> int:
 
     check_bind(args.host, args.port, args.token)  # before importing the web stack
     try:
-        from ..hmi.server import serve
         import fastapi  # noqa: F401
         import uvicorn  # noqa: F401
+
+        from ..hmi.server import serve
     except ImportError as exc:
         raise errors.TrajkitError(
             f"the HMI needs fastapi and uvicorn ({exc.name} is missing): pip install 'trajkit[hmi]'"

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import asyncio
 import hmac
+import math
 import os
 import re
 from importlib import resources
@@ -61,6 +62,9 @@ __all__ = ["create_app", "WS_RATE_HZ"]
 #: Live updates per second over the WebSocket.
 WS_RATE_HZ = 25.0
 
+#: Control period of a jog when no job is loaded [s].
+JOG_PERIOD_S = 0.004
+
 _JOB_MODELS = {"saddle": SaddleJob, "pallet": PalletJob, "program": ProgramJob}
 _RUN_COMMANDS = ("start", "pause", "resume", "stop", "estop", "reset")
 
@@ -79,8 +83,7 @@ def _fmt_validation(exc: RequestValidationError) -> str:
         loc = [str(x) for x in err.get("loc", ()) if x not in ("body",)]
         field = ".".join(loc) or "request"
         msg = err.get("msg", "invalid")
-        if msg.startswith("Value error, "):
-            msg = msg[len("Value error, "):]
+        msg = msg.removeprefix("Value error, ")
         got = err.get("input")
         tail = "" if isinstance(got, (dict, list)) or got is None else f" (got {got!r})"
         parts.append(f"{field}: {msg}{tail}")
@@ -150,7 +153,7 @@ def create_app(token: str | None = None, programs_dir: str | os.PathLike | None 
     app.mount("/static", StaticFiles(directory=_static_dir()), name="static")
 
     @app.get("/", response_class=HTMLResponse)
-    async def index(request: Request):
+    def index(request: Request):
         if not _token_ok(_given(request.headers, request.query_params)):
             return HTMLResponse("<h1>401</h1><p>This HMI needs its token: open /?token=...</p>",
                                 status_code=401)
@@ -172,8 +175,7 @@ def create_app(token: str | None = None, programs_dir: str | os.PathLike | None 
             job = _JOB_MODELS[kind].model_validate(payload)
         except ValidationError as exc:
             raise RequestValidationError(exc.errors()) from None
-        with sess._lock:  # refuse before planning (planning takes a while)
-            sess._require_inactive("load a job")
+        sess.check_idle("load a job")  # refuse before planning (planning takes a while)
         table = plan_job(job)
         sess.load(table)
         return table.preview()
@@ -215,12 +217,11 @@ def create_app(token: str | None = None, programs_dir: str | os.PathLike | None 
             raise InvalidInputError(f"joint must be one of {', '.join(rb.joint_names)} of robot "
                                     f"{sess.robot_name}, got {req.joint!r}")
         k = rb.joint_names.index(req.joint)
-        unit = 3.141592653589793 / 180.0 if rb.joint_kinds[k] == "revolute" else 1e-3
-        with sess._lock:
-            sess._require_inactive("jog")
-            period = sess.job.period if sess.job is not None else 0.004
-            table = plan_jog(rb, sess.q, k, req.step * unit, req.speed_pct, period)
-            sess.start(table)
+        unit = math.pi / 180.0 if rb.joint_kinds[k] == "revolute" else 1e-3
+        q_now = sess.check_idle("jog")
+        period = sess.job.period if sess.job is not None else JOG_PERIOD_S
+        table = plan_jog(rb, q_now, k, req.step * unit, req.speed_pct, period)
+        sess.start(table)  # checks the state again (one run at a time)
         return sess.joint_info()
 
     @app.post("/api/teach", dependencies=dep)

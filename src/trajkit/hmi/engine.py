@@ -254,6 +254,12 @@ class Session:
         return yaml.safe_dump(doc, sort_keys=False, default_flow_style=None)
 
     # ------------------------------------------------------------------ run control
+    def check_idle(self, what: str) -> np.ndarray:
+        """Raise :class:`ConflictError` unless nothing runs; return the current joints."""
+        with self._lock:
+            self._require_inactive(what)
+            return self.q.copy()
+
     def _require_inactive(self, what: str) -> None:
         if self.state in _ACTIVE:
             raise ConflictError(f"cannot {what} while a run is {self.state}: stop it first")
@@ -304,8 +310,18 @@ class Session:
         """Queue a run command (pause, resume, stop, estop, reset, override) for the next period.
 
         With ``wait`` it returns once the run loop has applied it (at most
-        :data:`COMMAND_WAIT_S`).
+        :data:`COMMAND_WAIT_S`). An emergency stop for a running machine is
+        queued without waiting for the session lock (the run loop may hold
+        it for a batch of periods), so its arrival time is exact.
         """
+        arrival = self._clock()
+        if name == "estop" and self.drive is not None:
+            cmd = _Command(name, arrival)
+            self._cmds.append(cmd)  # deque.append is atomic
+            self._wake.set()
+            if wait:
+                cmd.done.wait(COMMAND_WAIT_S)
+            return
         with self._lock:
             st = self.state
             if name == "estop":
@@ -330,7 +346,7 @@ class Session:
                     self.event("info", "emergency stop reset")
                 self._publish()
                 return
-            cmd = _Command(name, self._clock(), value)
+            cmd = _Command(name, arrival, value)
             self._cmds.append(cmd)
             self._ensure_thread()
             self._wake.set()
@@ -470,6 +486,7 @@ class Session:
             snap["duration_s"] = T
             snap["progress"] = st.tau / T if T > 0 else 1.0
             snap["rate"] = st.s
+            snap["motion"] = st.source.motion_labels[st.source.motion_at(st.tau)]
             snap["fault"] = None if st.fault is None else str(st.fault)
         if sp is not None:
             tb = drive.table

@@ -221,8 +221,8 @@ def _bump_frame(dv, a0, a1, A1, J1, A2, J2):
     best_ap = None
     best_tp = 0.0
     best_t = _inf
-    hi = a0 if a0 > a1 else a1
-    lo = a1 if a0 > a1 else a0
+    hi = max(a1, a0)
+    lo = min(a0, a1)
     rdd = ramp_dv_dt
     for b in range(4):
         if b == 0:
@@ -252,10 +252,10 @@ def _bump_frame(dv, a0, a1, A1, J1, A2, J2):
             in2 = inner * inner
             s2 = (dv - (d1 + d2 - k * in2)) / k
             if s2 >= in2 * (1.0 - ROUND_RTOL) or s2 >= in2 - TINY:
-                r = _sqrt(s2 if s2 > in2 else in2)
+                r = _sqrt(max(in2, s2))
                 if r <= abs(outer) * (1.0 + ROUND_RTOL):
                     ao = abs(outer)
-                    ap = side * (r if r < ao else ao)
+                    ap = side * (min(ao, r))
         if ap is None and plat is not None and plat != _inf and plat != -_inf:
             d1, t1 = rdd(a0, plat, J1, J2)
             d2, t2 = rdd(plat, a1, J1, J2)

@@ -12,7 +12,8 @@ synchronisation layer (the lead moves it / wires it into ``plan_ptp``).
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,7 @@ from .state import (
     plan_state_to_state,
 )
 
-__all__ = ["plan_ptp_states", "STATE_SYNC_MODES"]
+__all__ = ["STATE_SYNC_MODES", "plan_ptp_states"]
 
 #: Accepted values of ``plan_ptp_states(..., sync=...)``.
 STATE_SYNC_MODES = ("time", "phase", "none")

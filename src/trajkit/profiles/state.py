@@ -17,7 +17,8 @@ described in ``docs/state-profiles.md``.
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -29,16 +30,20 @@ from . import _state_kernel as K
 from .profile import ProfileSample
 
 __all__ = [
-    "StateProfile",
     "BlockedDurationError",
+    "StateProfile",
+    "min_state_duration",
     "plan_state_to_state",
     "plan_velocity",
-    "min_state_duration",
 ]
 
 #: Relative precision of the upper end of a blocked duration interval (the
 #: next feasible duration; the value returned is itself feasible).
 BLOCKED_SEARCH_RTOL = 1e-9
+
+#: Relative precision of the upper end where only the slow F2-with-hold
+#: family reaches the feasible durations next to it.
+BLOCKED_HOLD_RTOL = 1e-4
 
 #: Relative precision of the lower end of a blocked interval (informative).
 BLOCKED_LOWER_RTOL = 1e-6
@@ -112,9 +117,22 @@ class StateProfile:
     """
 
     __slots__ = (
-        "start_state", "goal_state", "duration", "min_duration", "brake_duration",
-        "n_brake_phases", "phase_durations", "jerks", "phase_accelerations", "family",
-        "limits", "_tb", "_P", "_V", "_A", "_J",
+        "_A",
+        "_J",
+        "_P",
+        "_V",
+        "_tb",
+        "brake_duration",
+        "duration",
+        "family",
+        "goal_state",
+        "jerks",
+        "limits",
+        "min_duration",
+        "n_brake_phases",
+        "phase_accelerations",
+        "phase_durations",
+        "start_state",
     )
 
     def __init__(self, start_state, goal_state, phases, min_duration, n_brake_phases,
@@ -566,6 +584,20 @@ def _blocked_interval(s1, g, L, T, tmin, seeds):
             hi = mid
         else:
             lo_in = mid
+
+    def ok_full(t):
+        return K.fixed_time_profile(s1, g, L, t, seeds) is not None
+
+    # the slow F2-with-hold family may reach durations the fast ones miss:
+    # if it does just below the end found, refine the end with it
+    if ok_full(hi * (1.0 - BLOCKED_HOLD_RTOL)):
+        lo_in = T
+        while hi - lo_in > BLOCKED_HOLD_RTOL * hi:
+            mid = 0.5 * (lo_in + hi)
+            if ok_full(mid):
+                hi = mid
+            else:
+                lo_in = mid
     # lower end: between tmin (feasible) and T (infeasible)
     lo_ok, lo_in = tmin, T
     while lo_in - lo_ok > BLOCKED_LOWER_RTOL * lo_in:

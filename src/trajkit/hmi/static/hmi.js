@@ -7,7 +7,7 @@
   const TOKEN = params.get("token");
   const HISTORY_S = 20;
   let jobLoaded = false, plannedPath = [], trail = [], axesKey = "", charts = null;
-  let chartData = null, t0 = null, lastState = null, lastTool = null, steps = [];
+  let chartData = null, t0 = null, lastState = null, lastTool = null, steps = [], lastRun = null;
 
   // ------------------------------------------------------------------ API
   function showMsg(text, isError) {
@@ -75,7 +75,7 @@
         }
       } else add(k.replace(/_/g, " "), fmt(v));
     }
-    setupAxes(job.axes);
+    if (!lastRun) setupAxes(job.axes);  // after a run the table shows the machine until the next start
     drawPath(null);
     updateButtons(lastState || "idle");
   }
@@ -113,6 +113,15 @@
       pos: mk($("chart-pos"), "position", (u) => u, chartData.pos),
       vel: mk($("chart-vel"), "speed", (u) => u + "/s", chartData.vel),
     };
+  }
+  function ensureAxes(axes) {
+    const key = axes.map((a) => a.name + a.unit).join("|");
+    if (key !== axesKey) { setupAxes(axes); clearCharts(); }
+  }
+  function clearCharts() {
+    if (!chartData) return;
+    for (const arr of [chartData.pos, chartData.vel]) arr.forEach((a) => { a.length = 0; });
+    if (charts) { charts.pos.setData(chartData.pos); charts.vel.setData(chartData.vel); }
   }
   function pushChart(snap) {
     if (!charts || !snap.axes) return;
@@ -183,7 +192,9 @@
     }
     if (snap.trail_reset) trail = [];
     if (snap.trail && snap.trail.length) trail = trail.concat(snap.trail);
+    if (snap.run_id !== lastRun) { lastRun = snap.run_id; t0 = null; clearCharts(); }
     if (snap.axes) {
+      ensureAxes(snap.axes);
       const rows = $("axes").querySelectorAll("tbody tr");
       snap.axes.forEach((a, i) => {
         const r = rows[i];
@@ -201,7 +212,7 @@
       const pct = Math.max(0, Math.min(100, 100 * snap.progress));
       $("progress-bar").style.width = pct.toFixed(1) + "%";
       $("progress-text").textContent = pct.toFixed(1) + " %";
-      $("plan-time").textContent = "t = " + snap.plan_time_s.toFixed(3) + " / " + snap.duration_s.toFixed(3) + " s";
+      $("plan-time").textContent = (snap.motion ? snap.motion + "  |  " : "") + "t = " + snap.plan_time_s.toFixed(3) + " / " + snap.duration_s.toFixed(3) + " s";
     }
     if (document.activeElement !== $("override")) {
       $("override").value = Math.round(snap.override_pct);
@@ -230,13 +241,10 @@
   // ------------------------------------------------------------------ run control
   for (const cmd of ["start", "pause", "resume", "stop", "estop", "reset"]) {
     $("btn-" + cmd).addEventListener("click", async () => {
-      if (cmd === "start") { trail = []; t0 = null; if (chartData) buildCharts(axesFromTable()); }
+
       const res = await api("POST", "/api/run/" + cmd);
       if (res) showMsg(cmd === "estop" ? "EMERGENCY STOP: reset the fault to go on" : "");
     });
-  }
-  function axesFromTable() {
-    return [...$("axes").querySelectorAll("tbody tr")].map((r) => ({ name: r.dataset.axis, unit: r.querySelector(".axis-pos small").textContent }));
   }
   $("override").addEventListener("input", () => { $("override-val").textContent = $("override").value + " %"; });
   $("override").addEventListener("change", async () => { await api("POST", "/api/override", { percent: $("override").value }); });
