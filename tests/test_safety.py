@@ -59,6 +59,7 @@ def test_overspeed_command_detected_on_the_right_cycle():
     assert f.cycle == expected
     assert sps[f.cycle].fault is f
     assert "velocity" in str(f) and "of axis X exceeds the limit 1.0" in str(f)
+    assert str(f).endswith(f"at cycle {expected} (t = {expected * DT:.6g} s)")
     P, V, A = _arrays(sps)
     assert np.allclose(P[:f.cycle], s.position[:f.cycle], atol=1e-12)  # normal until then
     _within(V, A, lims)  # the stop too
@@ -75,6 +76,7 @@ def test_target_beyond_soft_limit_stops_inside_it():
     f = st.fault
     assert f.quantity == "position" and f.axis == "X" and f.limit == 0.6
     assert f.value > 0.6
+    assert "(where its minimum-time brake would end) of axis X exceeds the limit 0.6" in str(f)
     # independent: the first cycle whose minimum-time brake (state-profile planner)
     # would end beyond the limit
     s = prog.sample(np.arange(f.cycle + 1) * DT)

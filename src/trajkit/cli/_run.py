@@ -3,12 +3,16 @@
 Thin shell over :func:`trajkit.io.program.load_program` and
 :mod:`trajkit.robot`: prints the summary (time, segments, slow-downs, joint
 limit usage) as tables or JSON, and writes the joint trajectory and tool path
-as CSV and a figure on request.
+as CSV and a figure on request. ``--simulate`` runs the program through
+:func:`trajkit.runtime.simulate` (servo model, exact stops) and prints planned
+vs simulated time per segment; with ``--plot`` it also writes the following
+error figure.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 
 from ..errors import InvalidInputError
@@ -33,6 +37,12 @@ def register(subparsers: Any) -> None:
                    help="write the samples (t, joints in deg/mm, tool xyz in mm, tool speed)")
     p.add_argument("--plot", metavar="FILE.png", help="write a figure (joints, speed, tool path)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.add_argument("--simulate", action="store_true",
+                   help="run the program through the servo simulation (trajkit.runtime) and "
+                        "print planned vs simulated time per segment; with --plot also write "
+                        "the following error to FILE-following-error.png")
+    p.add_argument("--inertia-ratio", type=float, default=1.0, metavar="R",
+                   help="with --simulate: actual / nominal load inertia (default 1)")
     p.set_defaults(func=cmd_run)
 
 
@@ -50,12 +60,28 @@ def cmd_run(args: argparse.Namespace) -> int:
     summary["program"] = args.program
     summary["period_s"] = args.period
     summary["samples"] = int(samples.t.size)
+    report = None
+    if args.simulate:
+        from ..runtime import ServoParams, simulate
+
+        report = simulate(run, args.period, ServoParams(inertia_ratio=args.inertia_ratio))
+        summary["simulation"] = report.to_dict()
     if args.csv:
         run.to_csv(samples, args.csv)
     if args.plot:
         from ..plot.robot import plot_robot_run
 
         plot_robot_run(run, samples, args.plot)
+        if report is not None:
+            import os
+
+            from ..plot.runtime import plot_following_error
+
+            root, ext = os.path.splitext(args.plot)
+            fe_path = f"{root}-following-error{ext or '.png'}"
+            scale = [180.0 / math.pi if k == "revolute" else 1e3 for k in run.robot.joint_kinds]
+            plot_following_error(report, fe_path, scale=scale, unit="deg | mm")
+            summary["following_error_plot"] = fe_path
     if args.json:
         print_json(summary)
         return 0
@@ -80,6 +106,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         ["joint", "velocity", "acceleration"],
         [[lm["joint"], lm["velocity_ratio"], lm["acceleration_ratio"]] for lm in summary["limits"]],
     )
+    if report is not None:
+        print_table(
+            f"planned vs simulated time (servo simulation, period {args.period:g} s): "
+            f"planned {report.planned_s:.4f} s, simulated {report.simulated_s:.4f} s",
+            ["#", "motion", "planned [s]", "simulated [s]", "settling [s]"],
+            [[m.index, m.label, m.planned_s, m.simulated_s, m.settle_s] for m in report.motions]
+            + [["", "total", report.planned_s, report.simulated_s,
+                sum(m.settle_s for m in report.motions)]],
+        )
+        if "following_error_plot" in summary:
+            print(f"following error plot: {summary['following_error_plot']}")
     return 0
 
 

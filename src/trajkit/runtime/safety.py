@@ -13,7 +13,9 @@ Monitors (every cycle, on the *candidate* setpoint before it is output):
   (``v a > 0``), above ``a_max_decel`` while it shrinks;
 - ``following error``: ``|commanded - measured|`` above the configured limit
   (needs the servo simulation);
-- ``pulse rate``: more pulses in a period than ``max_pulse_rate`` allows.
+- ``pulse rate``: more pulses in a period than ``max_pulse_rate`` allows;
+- ``in position``: an exact stop waited longer than the servo's
+  ``settle_timeout`` for in-position (value and limit in seconds).
 
 All comparisons allow the relative tolerance :data:`MONITOR_RTOL`.
 """
@@ -36,7 +38,8 @@ __all__ = ["SafetyConfig", "RuntimeFault", "QUANTITIES", "REACTIONS", "MONITOR_R
 MONITOR_RTOL = LIMIT_RTOL
 
 #: Quantities the monitors check.
-QUANTITIES = ("position", "velocity", "acceleration", "following error", "pulse rate")
+QUANTITIES = ("position", "velocity", "acceleration", "following error", "pulse rate",
+              "in position")
 
 #: Fault reactions: ``"controlled"`` (minimum-time brake / stop on the path)
 #: or ``"emergency"`` (output buffer cleared, drives off, brakes engaged).
@@ -48,6 +51,7 @@ _DEFAULT_REACTIONS = {
     "acceleration": "controlled",
     "following error": "emergency",
     "pulse rate": "controlled",
+    "in position": "controlled",
     "emergency stop": "emergency",
 }
 
@@ -71,8 +75,8 @@ class RuntimeFault(SafetyFault):
 
     def __init__(self, axis: str, quantity: str, value: float, limit: float,
                  cycle: int, t: float, detail: str = "") -> None:
-        msg = (f"{quantity} {value!r} of axis {axis} exceeds the limit {limit!r} "
-               f"at cycle {cycle} (t = {t:.6g} s){detail}")
+        msg = (f"{quantity} {value!r}{detail} of axis {axis} exceeds the limit {limit!r} "
+               f"at cycle {cycle} (t = {t:.6g} s)")
         if quantity == "emergency stop":
             msg = f"emergency stop at cycle {cycle} (t = {t:.6g} s){detail}"
         super().__init__(msg)
@@ -150,7 +154,7 @@ class Monitors:
         self._fe = [float(x) for x in fe_max]
 
     def check(self, q, v, a, measured=None):
-        """First violation as ``(axis index, quantity, value, limit)`` or None.
+        """First violation as ``(axis index, quantity, value, limit[, detail])`` or None.
 
         Scalar Python over the axes (faster than numpy for a handful of axes).
         """
@@ -173,14 +177,17 @@ class Monitors:
                 xs = stop_position(x, vk, ak, self.limits[k])
                 if xs < self._lo[k] or xs > self._hi[k]:
                     lim = self._pmin[k] if xs < self._lo[k] else self._pmax[k]
-                    return k, "position", xs, lim
+                    return k, "position", xs, lim, " (where its minimum-time brake would end)"
         for k in range(len(vl)):
             vk, ak = vl[k], al[k]
             av = abs(vk)
-            if self.look_ahead and vk * ak > 0.0:
-                av = av + ak * ak / (2.0 * self._jm[k])
             if av > self._vm[k]:
                 return k, "velocity", av, self._vraw[k]
+            if self.look_ahead and vk * ak > 0.0:
+                pk = av + ak * ak / (2.0 * self._jm[k])
+                if pk > self._vm[k]:
+                    return (k, "velocity", pk, self._vraw[k],
+                            " (peak of the jerk-limited ramp-down of its acceleration)")
             if vk * ak < 0.0:
                 if abs(ak) > self._ad[k]:
                     return k, "acceleration", ak, self.limits[k].a_max_decel

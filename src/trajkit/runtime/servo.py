@@ -63,6 +63,9 @@ class ServoParams:
         In-position window [unit]: ``|following error|`` at or below it.
     settle_cycles : int
         Consecutive periods inside the window that count as "in position".
+    settle_timeout : float
+        Longest wait for in-position at an exact stop [s]; then the
+        ``"in position"`` monitor trips.
     substeps : int
         Explicit sub-steps per period when the drive limit is active.
     """
@@ -77,10 +80,12 @@ class ServoParams:
     brake_deceleration: float = 20.0
     in_position: float = 1e-4
     settle_cycles: int = 5
+    settle_timeout: float = 2.0
     substeps: int = 8
 
     def __post_init__(self) -> None:
-        for f in ("kp", "kv", "inertia_ratio", "brake_deceleration", "in_position"):
+        for f in ("kp", "kv", "inertia_ratio", "brake_deceleration", "in_position",
+                  "settle_timeout"):
             check_positive(getattr(self, f), f)
         check_positive(self.a_drive, "a_drive", allow_inf=True)
         if check_finite(self.ki, "ki") < 0:
@@ -170,6 +175,7 @@ class ServoBank:
         self._brake = np.array([p.brake_deceleration for p in self.params])
         self.window = np.array([p.in_position for p in self.params])
         self.settle_cycles = max(p.settle_cycles for p in self.params)
+        self.settle_timeout = max(p.settle_timeout for p in self.params)
         self._gains = np.array([[p.kp, p.kv, p.ki, p.ff_velocity, p.ff_acceleration,
                                  p.inertia_ratio] for p in self.params])
         self._sub = max(p.substeps for p in self.params)
@@ -253,9 +259,40 @@ class ServoBank:
             xs = xr + s * (vr + 0.5 * s * ar)
             vs = vr + s * ar
             vc = fv * vs + kp * (xs - x)
-            u = np.clip(fa * ar + kv * (vc - v) + integ, -self._a_drive, self._a_drive)
-            integ = integ + ki * (vc - v) * h
+            u_raw = fa * ar + kv * (vc - v) + integ
+            u = np.clip(u_raw, -self._a_drive, self._a_drive)
+            # anti-windup: integrate only while the drive is not at its limit
+            integ = np.where(u == u_raw, integ + ki * (vc - v) * h, integ)
             v_new = v + u / rho * h
             x = x + 0.5 * (v + v_new) * h
             v = v_new
         self.x, self.v, self.integ = x, v, integ
+
+
+def seed000_servo(robot: Any = None, inertia_ratio: float = 1.3) -> list[ServoParams]:
+    """Servo parameters used for the seed-000 palletizing comparison (joints A, B, C, D).
+
+    The paper gives none. These describe a moderately tuned industrial drive:
+    position gain 20 1/s, velocity loop 200 1/s with integral 5000 1/s^2,
+    full velocity feedforward and half acceleration feedforward, computed for
+    the nominal (empty-gripper) inertia, a load ``inertia_ratio`` times
+    heavier (the 100 kg payload), an in-position window of 0.1 mm on the
+    linear axes B, C and 0.1 mrad on the rotary axes A, D (about 0.14 mm at
+    the 1.4 m reach), held for 5 ms. They were the second of three sets
+    tried (see docs/runtime.md), not fitted to the paper.
+
+    Parameters
+    ----------
+    robot : CylindricalPalletizer, optional
+        Only its number of joints is used (4 by default).
+    inertia_ratio : float
+        Actual / nominal inertia.
+
+    Returns
+    -------
+    list of ServoParams, one per joint
+    """
+    n = len(getattr(robot, "joint_kinds", range(4)))
+    return [ServoParams(kp=20.0, kv=200.0, ki=5000.0, ff_velocity=1.0, ff_acceleration=0.5,
+                        inertia_ratio=inertia_ratio, in_position=1e-4, settle_cycles=5)
+            for _ in range(n)]

@@ -125,6 +125,12 @@ def simulate(program: Any, period: float, servo: ServoParams | Sequence[ServoPar
     Returns
     -------
     SimulationReport
+
+    Raises
+    ------
+    RuntimeFault
+        A monitor tripped (e.g. ``"in position"``: an axis never settled
+        within ``settle_timeout``).
     """
     servo = ServoParams() if servo is None else servo
     st = Streamer(program, period, limits=limits, servo=servo,
@@ -136,6 +142,8 @@ def simulate(program: Any, period: float, servo: ServoParams | Sequence[ServoPar
         ts.append(sp.t)
         taus.append(sp.tau)
         fes.append(sp.following_error)
+    if st.fault is not None:
+        raise st.fault
     t = np.array(ts)
     tau = np.array(taus)
     fe = np.array(fes).reshape(-1, n)

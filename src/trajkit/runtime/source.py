@@ -133,8 +133,11 @@ def _from_cycle_plan(plan) -> ProgramSource:
 
 def _from_robot_run(run) -> ProgramSource:
     def f(t):
-        s = run.sample(t)
-        return s.q, s.qd, s.qdd
+        # repeated times (a block clipped at a stop point) sampled once: RobotRun
+        # differentiates the tool path over its sample times
+        u, inv = np.unique(t, return_inverse=True)
+        s = run.sample(u)
+        return s.q[inv], s.qd[inv], s.qdd[inv]
     starts = [sg.t0 for sg in run.segments] or [0.0]
     labels = [f"{sg.kind} " + ", ".join(getattr(run.motions[i], "label", None) or str(i)
                                          for i in sg.motions) for sg in run.segments]

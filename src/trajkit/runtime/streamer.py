@@ -594,8 +594,9 @@ class Streamer:
                         counts = None
                         break
             if chk is not None and (self.state == "running" or mode != "brake"):
-                j, qty, val, lim = chk
-                fault_now = RuntimeFault(self.source.names[j], qty, val, lim, k, t)
+                j, qty, val, lim = chk[:4]
+                fault_now = RuntimeFault(self.source.names[j], qty, val, lim, k, t,
+                                         chk[4] if len(chk) > 4 else "")
                 if self.safety.reaction(qty) == "emergency":
                     self._emergency(fault_now)
                     q, v, a = self._q, self._v, self._a
@@ -688,6 +689,18 @@ class Streamer:
                 self._blk = None
             fe = np.abs(q - measured)
             self._settle = self._settle + 1 if np.all(fe <= self.servo.window) else 0
+            waited = self.t + self.period - self._wait_since
+            if self._settle < self.servo.settle_cycles and waited > self.servo.settle_timeout:
+                j = int(np.argmax(fe / self.servo.window))
+                f = RuntimeFault(self.source.names[j], "in position", float(waited),
+                                 self.servo.settle_timeout, self.cycle, self.t,
+                                 f" s (following error {float(fe[j])!r} > window {float(self.servo.window[j])!r})")
+                self.fault = f
+                self._waiting = False
+                self._stop_kind = "fault"
+                self._event("fault", str(f))
+                self._at_rest_after_stop()
+                return
             if self._settle >= self.servo.settle_cycles:
                 sp_tau = self._stops.pop(0)
                 self.stop_log.append((sp_tau, self._wait_since, self.t + self.period))
