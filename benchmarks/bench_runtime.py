@@ -47,7 +47,7 @@ def _moves(seed: int, n: int):
 
 
 def bench_streamer(cycles: int, servo: bool, seed: int) -> dict:
-    lims, trajs = _moves(seed, 40)
+    _, trajs = _moves(seed, 40)
     done = 0
     elapsed = 0.0
     i = 0
@@ -98,7 +98,7 @@ def bench_ruckig(cycles: int, seed: int) -> dict | None:
 
 
 def bench_jitter(seconds: float, seed: int) -> dict:
-    lims, trajs = _moves(seed, 40)
+    _, trajs = _moves(seed, 40)
     dt = 0.001
     n = int(round(seconds / dt))
     late = np.empty(n)

@@ -9,7 +9,14 @@ import pytest
 from conftest import sweep_size
 
 from trajkit import AxisLimits, InvalidInputError, plan_move, plan_ptp
-from trajkit.runtime import PulseAxis, PulseRateFault, Streamer, edge_times, pulse_count, pulse_counts
+from trajkit.runtime import (
+    PulseAxis,
+    PulseRateFault,
+    Streamer,
+    edge_times,
+    pulse_count,
+    pulse_counts,
+)
 
 
 def test_count_equals_position_rounded_over_many_moves():

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import math
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -191,11 +192,14 @@ def test_commands_from_another_thread_and_asyncio_form():
     st = Streamer(tr, DT)
     st.start()
     barrier = threading.Event()
+    done = threading.Event()
 
     def hmi():
         barrier.wait()
         for pct in (30.0, 80.0, 50.0, 100.0):
             st.set_override(pct)
+            time.sleep(0.001)
+        done.set()
 
     th = threading.Thread(target=hmi)
     th.start()
@@ -204,6 +208,10 @@ def test_commands_from_another_thread_and_asyncio_form():
         sps.append(sp)
         if sp.cycle == 100:
             barrier.set()
+        if 100 <= sp.cycle < 400 and not done.is_set():
+            time.sleep(0.0002)  # give the other thread time while the loop runs
+        if sp.cycle == 400:
+            assert done.wait(10.0)
     th.join()
     assert st.finished
     assert [e.message for e in st.events if e.kind == "override"] == [
@@ -330,3 +338,26 @@ def test_stop_distance_bound_of_the_look_ahead_monitor_is_an_upper_bound():
         b = brake_profile(0.0, vi, ai, BL)
         x = np.abs(b.sample(np.linspace(0, b.duration, 100)).position).max()
         assert x <= mon._reach(0, vi, ai) * (1 + MONITOR_RTOL)
+
+
+def test_pallet_plan_source_waits_in_position_at_each_trip_end():
+    from trajkit.palletizing import plan_cycle, seed_scenario
+    from trajkit.runtime import ServoParams
+
+    plan = plan_cycle(seed_scenario(), "merged")
+    src = as_source(plan)
+    ends = np.asarray(plan.trip_starts) + [tr.duration for tr in plan.trips]
+    assert np.allclose(src.stop_points, ends) and src.motion_labels[0] == "trip 0 (load)"
+    st = Streamer(src, DT, servo=ServoParams(inertia_ratio=1.3), wait_in_position=True)
+    n = int((ends[1] + 0.2) / DT)
+    sps = st.run(max_cycles=n)
+    assert len(st.stop_log) == 2
+    for (tau, since, release), end in zip(st.stop_log, ends[:2]):
+        assert tau == end and release > since
+        i = int(round(release / DT)) - 1  # the last cycle of the wait
+        fe = np.array([s.following_error for s in sps[i - 4:i + 1]])
+        assert np.all(np.abs(fe) <= 1e-4)  # in the window for settle_cycles periods
+    assert sps[-1].motion == 2 and 0 < sps[-1].progress < 1
+    # waiting holds program time: the stream is later than the plan by the settling
+    lag = sps[-1].t - sps[-1].tau
+    assert lag == pytest.approx(sum(r - s for _, s, r in st.stop_log), abs=3 * DT)

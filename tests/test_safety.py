@@ -8,7 +8,13 @@ import pytest
 
 from trajkit import AxisLimits, InvalidInputError, SafetyFault, plan_ptp
 from trajkit.profiles.state import plan_velocity
-from trajkit.runtime import RuntimeFault, SafetyConfig, ServoParams, Streamer, pulse_counts
+from trajkit.runtime import (
+    RuntimeFault,
+    SafetyConfig,
+    ServoParams,
+    Streamer,
+    pulse_counts,
+)
 
 DT = 0.001
 EQ = 1e-6  # pulse equivalent [m/pulse]
@@ -128,7 +134,7 @@ def test_following_error_trip_with_a_heavy_load():
     # without velocity feedforward the steady error at speed v is v / kp
     v = sps[f.cycle - 1].velocity[0]
     assert f.value == pytest.approx(v / servo.kp, rel=0.3)
-    P, V, A = _arrays(sps)
+    _, V, A = _arrays(sps)
     _within(V, A, _lims())
     assert sps[-1].state == "fault" and np.all(V[-1] == 0)
     _pulses_hold(sps)

@@ -179,7 +179,7 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
             return st[:, 0].T, st[:, 1].T, st[:, 2].T
 
         return ProgramSource(sampler, plan.duration, [machine.theta, machine.z], ("theta", "Z"),
-                             path_intervals=[(0.0, plan.duration)])
+                             motion_labels=["seam"], path_intervals=[(0.0, plan.duration)])
 
     def tool_of(q):  # the torch on the branch pipe at rotary angle theta and height Z
         return np.array([r * math.sin(q[0]), r * math.cos(q[0]), q[1]])

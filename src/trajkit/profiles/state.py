@@ -447,11 +447,36 @@ def _duration_arg(duration: Any, limits: AxisLimits) -> float | None:
 
 
 # -------------------------------------------------------------- planners
+def _pre_ramp(v, a, L):
+    """Ramp ``|a|`` down to ``a_max`` at the decel jerk while slowing down.
+
+    Used when no family member verifies from a slowing-down state with
+    ``|a| > a_max``: the families use the tighter jerk of both legs in a
+    bump that reverses the velocity, which can be too slow to bring ``|a|``
+    within ``a_max`` before the reversal; the decel jerk is not.
+    Returns the phases (empty when it does not apply).
+    """
+    V, A1, J1, A2, J2 = L
+    if not (v * a < 0.0 and abs(a) > A1):
+        return []
+    sgn = 1.0 if v > 0.0 else -1.0
+    r: list = []
+    K.ramp(sgn * a, -A1, J1, J2, r)
+    return r if sgn > 0 else K.negate(r)
+
+
 def _min_time(start, goal, L, name):
     """Fastest verified candidate; (phases, family, all candidates' phases)."""
     if start == goal and start[2] == 0.0:
         return [], "none", [[]]
     cands = K.candidates_min_time(start, goal, L)
+    if not cands:
+        pre = _pre_ramp(start[1], start[2], L)
+        if pre:
+            mid = K.integrate(pre, *start)
+            cands = [(t + K.total_time(pre), fam + "+pre", pre + ph)
+                     for t, fam, ph in K.candidates_min_time(mid, goal, L)]
+            cands = [c for c in cands if K.verify(c[2], *start, L, goal) is None]
     if not cands:
         raise InfeasibleError(
             f"no profile found from state {start!r} to {goal!r}{axis_label(name)} "
@@ -706,6 +731,14 @@ def plan_velocity(
     tb = K.total_time(brake)
     main = K.bump(s1[1], s1[2], vf, af, L) if (s1[1], s1[2]) != (vf, af) else []
     ok = main is not None and K.verify(main, *s1, L, (0.0, vf, af), check_goal=False) is None
+    if not ok:
+        pre = _pre_ramp(s1[1], s1[2], L)
+        if pre:
+            vm, am = K.integrate_va(pre, s1[1], s1[2])
+            b = K.bump(vm, am, vf, af, L)
+            if b is not None:
+                main = pre + b
+                ok = K.verify(main, *s1, L, (0.0, vf, af), check_goal=False) is None
     if not ok:
         raise InfeasibleError(
             f"no velocity profile found{axis_label(limits.name)} from {s!r} to velocity "

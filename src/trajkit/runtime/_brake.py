@@ -119,8 +119,18 @@ class BrakeProfile:
         Where the axis comes to rest [unit].
     """
 
-    __slots__ = ("start_state", "phase_durations", "jerks", "duration", "stop_position",
-                 "_tb", "_P", "_V", "_A", "_J")
+    __slots__ = (
+        "_A",
+        "_J",
+        "_P",
+        "_V",
+        "_tb",
+        "duration",
+        "jerks",
+        "phase_durations",
+        "start_state",
+        "stop_position",
+    )
 
     def __init__(self, start_state, phases):
         p, v, a = (float(x) for x in start_state)

@@ -17,7 +17,7 @@ import numpy as np
 from .._validate import axis_label, check_finite, check_positive
 from ..errors import InvalidInputError, SafetyFault
 
-__all__ = ["PulseAxis", "PulseRateFault", "pulse_count", "pulse_counts", "edge_times"]
+__all__ = ["PulseAxis", "PulseRateFault", "edge_times", "pulse_count", "pulse_counts"]
 
 
 class PulseRateFault(SafetyFault):

@@ -32,7 +32,7 @@ from .._constants import LIMIT_RTOL
 from ..errors import InvalidInputError, SafetyFault
 from ._brake import stop_position
 
-__all__ = ["SafetyConfig", "RuntimeFault", "QUANTITIES", "REACTIONS", "MONITOR_RTOL"]
+__all__ = ["MONITOR_RTOL", "QUANTITIES", "REACTIONS", "RuntimeFault", "SafetyConfig"]
 
 #: Relative tolerance of the monitors (float round-off of planned profiles).
 MONITOR_RTOL = LIMIT_RTOL
@@ -152,6 +152,10 @@ class Monitors:
         self._ad = self.adec.tolist()
         self._jm = self.jmax.tolist()
         self._fe = [float(x) for x in fe_max]
+        self._h_jm = [0.5 / lm.j_max for lm in limits]
+        self._ij = [1.0 / lm.j_max + 1.0 / lm.j_max_decel for lm in limits]
+        self._iad = [1.0 / lm.a_max_decel for lm in limits]
+        self._tad = [2.0 * lm.a_max_decel / lm.j_max_decel for lm in limits]
 
     def check(self, q, v, a, measured=None):
         """First violation as ``(axis index, quantity, value, limit[, detail])`` or None.
@@ -170,9 +174,12 @@ class Monitors:
                 if vk == 0.0 and ak == 0.0:
                     continue
                 x = ql[k]
-                # cheap bound of the stopping distance first; exact brake only when near
+                # cheap bound of the stopping distance first (_reach, inlined);
+                # the exact brake only when near the range ends
                 room = min(x - self._lo[k], self._hi[k] - x)
-                if room > self._reach(k, vk, ak):
+                av, aa = abs(vk), abs(ak)
+                vpk = av + aa * aa * self._h_jm[k]
+                if room > vpk * (aa * self._ij[k] + vpk * self._iad[k] + self._tad[k]):
                     continue
                 xs = stop_position(x, vk, ak, self.limits[k])
                 if xs < self._lo[k] or xs > self._hi[k]:
@@ -194,11 +201,10 @@ class Monitors:
             elif abs(ak) > self._am[k]:
                 return k, "acceleration", ak, self.limits[k].a_max
         if measured is not None:
-            ml = measured.tolist()
-            for k in range(len(ql)):
-                fe = abs(ql[k] - ml[k])
-                if fe > self._fe[k]:
-                    return k, "following error", fe, self._fe[k]
+            fe = np.abs(q - measured)
+            if (fe > self.fe_max).any():
+                k = int(np.argmax(fe > self.fe_max))
+                return k, "following error", float(fe[k]), self._fe[k]
         return None
 
     def _reach(self, k: int, v: float, a: float) -> float:

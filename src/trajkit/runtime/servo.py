@@ -26,8 +26,9 @@ the axis at ``brake_deceleration`` until it stops.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 from scipy.linalg import expm
@@ -35,7 +36,7 @@ from scipy.linalg import expm
 from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError
 
-__all__ = ["ServoParams", "ServoBank"]
+__all__ = ["ServoBank", "ServoParams"]
 
 
 @dataclass(frozen=True)
@@ -239,7 +240,7 @@ class ServoBank:
             return
         xr = x_ref - self.encoder_offset
         if self._limited:
-            kp, kv, ki, fv, fa, _ = self._gains.T
+            kp, kv, _, fv, fa, _ = self._gains.T
             u = fa * a_ref + kv * (fv * v_ref + kp * (xr - self.x) - self.v) + self.integ
             if np.any(np.abs(u) > self._a_drive):
                 self._step_saturated(xr, v_ref, a_ref)
@@ -247,7 +248,9 @@ class ServoBank:
         z = self._z
         z[:, 3] = xr
         z[:, 4] = v_ref
-        self._z = np.einsum("nij,nj->ni", self._phi, z) + self._gam * a_ref[:, None]
+        zn = np.matmul(self._phi, z[:, :, None])[:, :, 0]
+        zn += self._gam * a_ref[:, None]
+        self._z = zn
 
     def _step_saturated(self, xr, vr, ar) -> None:
         kp, kv, ki, fv, fa, rho = self._gains.T

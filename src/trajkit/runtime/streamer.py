@@ -49,10 +49,10 @@ import asyncio
 import logging
 import math
 import threading
-import time
 from collections import deque
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -65,8 +65,15 @@ from .safety import Monitors, RuntimeFault, SafetyConfig
 from .servo import ServoBank, ServoParams
 from .source import ProgramSource, as_source
 
-__all__ = ["Streamer", "Setpoint", "RuntimeEvent", "STATES", "BLOCK_CYCLES",
-           "RATE_SNAP", "REENTRY_ATOL"]
+__all__ = [
+    "BLOCK_CYCLES",
+    "RATE_SNAP",
+    "REENTRY_ATOL",
+    "STATES",
+    "RuntimeEvent",
+    "Setpoint",
+    "Streamer",
+]
 
 _log = logging.getLogger("trajkit.runtime")
 
@@ -258,6 +265,8 @@ class Streamer:
         self.rate_limits = (check_positive(rate_limits[0], "rate_limits[0]"),
                             check_positive(rate_limits[1], "rate_limits[1]"))
         self._am = np.array([lm.a_max for lm in self.limits])
+        self._vm = np.array([lm.v_max for lm in self.limits])
+        self._jm2 = 2.0 * np.array([lm.j_max for lm in self.limits])
         self._ad = np.array([lm.a_max_decel for lm in self.limits])
         # ---- run state
         self._lock = threading.Lock()
@@ -503,14 +512,18 @@ class Streamer:
         if abs(e) <= s2 * dt * dt and abs(new) <= 2.0 * s2 * dt:
             new = e / dt  # last step: land on the target
         new = min(max(new, -s / dt), (1.0 - s) / dt)
-        # admissible interval: -a_dec <= sign(Q') (Q'' s^2 + Q' s') <= a_max
+        # admissible interval: -a_dec <= sign(Q') (Q'' s^2 + Q' s') <= a_cap, with
+        # a_cap = min(a_max, sqrt(2 j_max (v_max - |v|))): the acceleration from which
+        # a ramp-down at j_max still ends at or below v_max (the velocity look-ahead)
         g = np.abs(Qd)
         m = g > 0.0
         if m.any():
+            gm = g[m]
             sg = np.sign(Qd[m])
             h = sg * Qdd[m] * s * s
-            lo = float(np.max((-self._ad[m] - h) / g[m]))
-            hi = float(np.min((self._am[m] - h) / g[m]))
+            cap = np.sqrt(np.maximum(self._jm2[m] * (self._vm[m] - gm * s), 0.0))
+            lo = float(np.max((-self._ad[m] - h) / gm))
+            hi = float(np.min((np.minimum(self._am[m], cap) - h) / gm))
             new = min(max(new, min(lo, 0.0)), max(hi, 0.0))
         return new
 

@@ -243,7 +243,7 @@
     $("btn-" + cmd).addEventListener("click", async () => {
 
       const res = await api("POST", "/api/run/" + cmd);
-      if (res) showMsg(cmd === "estop" ? "EMERGENCY STOP: reset the fault to go on" : "");
+      if (res) showMsg(cmd === "estop" ? "EMERGENCY STOP: reset the fault to go on" : "", cmd === "estop");
     });
   }
   $("override").addEventListener("input", () => { $("override-val").textContent = $("override").value + " %"; });
