@@ -91,7 +91,11 @@ def test_override_changes_never_exceed_velocity_or_acceleration(seed):
     tr, st, sps = _override_run(seed)
     P, V, A = _arrays(sps)
     assert st.finished and np.allclose(P[-1], tr.goal, atol=1e-12)
+    assert st.fault is None  # no monitor ever trips on an override change
     _check_limits(V, A, LIMS)
+    # the velocity look-ahead holds too: a ramp-down at j_max never overspeeds
+    peak = np.abs(V) + np.where(V * A > 0, A * A / (2 * 40.0), 0.0)
+    assert np.all(peak <= 1.0 * (1 + TOL))
     tau = np.array([s.tau for s in sps])
     assert np.all(np.diff(tau) >= 0)
     # always on the planned path: the output is the plan at program time tau
@@ -361,3 +365,18 @@ def test_pallet_plan_source_waits_in_position_at_each_trip_end():
     # waiting holds program time: the stream is later than the plan by the settling
     lag = sps[-1].t - sps[-1].tau
     assert lag == pytest.approx(sum(r - s for _, s, r in st.stop_log), abs=3 * DT)
+
+
+def test_override_step_sequence_while_accelerating_does_not_trip_the_monitors():
+    """Regression: the rate ramping back to 100 % while an axis sits at a_max used to
+    leave it at an acceleration from which the jerk-limited ramp-down overspeeds."""
+    st = Streamer(_ptp(), DT)
+    st.start()
+    sps = []
+    script = {100: 30.0, 101: 80.0, 102: 50.0, 104: 100.0}
+    while not st.finished and st.state != "fault":
+        if len(sps) in script:
+            st.set_override(script[len(sps)])
+        sps.append(st.step())
+    assert st.fault is None and st.finished
+    _check_limits(*_arrays(sps)[1:], LIMS)

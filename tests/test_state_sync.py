@@ -8,7 +8,7 @@ from state_reference import exact_check, goal_error
 
 from trajkit import AxisLimits
 from trajkit.errors import InfeasibleError, InvalidInputError
-from trajkit.profiles._state_sync import plan_ptp_states
+from trajkit.sync_states import plan_ptp_states
 from trajkit.profiles.state import plan_state_to_state
 
 LIMS = [

@@ -17,14 +17,28 @@ from .errors import (
 from .limits import AxisLimits
 from .profiles import (
     PHASE_NAMES,
+    BlockedDurationError,
     MoveBatch,
     Profile,
     ProfileSample,
+    StateProfile,
     min_duration,
+    min_state_duration,
     plan_move,
     plan_moves,
+    plan_state_to_state,
+    plan_velocity,
 )
+from .sync_states import plan_ptp_states
 from .trajectory import SYNC_MODES, Trajectory, TrajectorySample, plan_ptp
+from .verify import (
+    TrajectoryReport,
+    VerificationError,
+    VerificationReport,
+    Violation,
+    verify_profile,
+    verify_trajectory,
+)
 
 __version__ = "0.1.0"
 
@@ -49,4 +63,16 @@ __all__ = [
     "TrajectorySample",
     "plan_ptp",
     "SYNC_MODES",
+    "StateProfile",
+    "BlockedDurationError",
+    "plan_state_to_state",
+    "plan_velocity",
+    "min_state_duration",
+    "plan_ptp_states",
+    "verify_profile",
+    "verify_trajectory",
+    "VerificationReport",
+    "TrajectoryReport",
+    "VerificationError",
+    "Violation",
 ]

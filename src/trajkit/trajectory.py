@@ -199,12 +199,36 @@ def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[Ax
     return lims
 
 
+def _boundary_states(start, goal, v0, a0, v1, a1):
+    """(n, 3) start and goal states, or None when every given rate is zero."""
+    s = check_array(start, "start", ndim=1, finite=False)
+    g = check_array(goal, "goal", ndim=1, finite=False)
+    n = s.size
+    rates = []
+    for value, field in ((v0, "start_velocity"), (a0, "start_acceleration"),
+                         (v1, "goal_velocity"), (a1, "goal_acceleration")):
+        if value is None:
+            rates.append(np.zeros(n))
+        else:
+            rates.append(check_array(value, field, ndim=1, size=n))
+    if not any(np.any(r != 0.0) for r in rates):
+        return None
+    if g.size != n:
+        raise InvalidInputError(f"start has {n} axes but goal has {g.size}")
+    return (np.column_stack([s, rates[0], rates[1]]), np.column_stack([g, rates[2], rates[3]]))
+
+
 def plan_ptp(
     start: Any,
     goal: Any,
     limits: AxisLimits | Sequence[AxisLimits],
     sync: str = "time",
     duration: float | None = None,
+    *,
+    start_velocity: Any = None,
+    start_acceleration: Any = None,
+    goal_velocity: Any = None,
+    goal_acceleration: Any = None,
 ) -> Trajectory:
     """Plan a synchronised, jerk-limited point-to-point move of several axes.
 
@@ -224,6 +248,10 @@ def plan_ptp(
     duration : float, optional
         With ``"time"`` or ``"phase"``: stretch the motion to exactly this
         duration [s] (must be >= the synchronised minimum).
+    start_velocity, start_acceleration, goal_velocity, goal_acceleration : array_like, shape (n_axes,), optional
+        Moving boundary states [unit/s, unit/s^2]; when any is non-zero the
+        move is planned between states by :func:`trajkit.sync_states.plan_ptp_states`
+        (axes are then :class:`~trajkit.profiles.state.StateProfile` objects).
 
     Returns
     -------
@@ -239,6 +267,13 @@ def plan_ptp(
     """
     if sync not in SYNC_MODES:
         raise InvalidInputError(f"sync must be one of {SYNC_MODES}, got {sync!r}")
+    moving = (start_velocity, start_acceleration, goal_velocity, goal_acceleration)
+    if any(x is not None for x in moving):
+        states = _boundary_states(start, goal, *moving)
+        if states is not None:
+            from .sync_states import plan_ptp_states
+
+            return plan_ptp_states(states[0], states[1], limits, sync=sync, duration=duration)
     # entries are checked per axis below (the messages name the axis)
     s = check_array(start, "start", ndim=1, finite=False)
     g = check_array(goal, "goal", ndim=1, finite=False)

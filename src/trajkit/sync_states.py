@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from .._constants import DURATION_RTOL
-from .._validate import check_array
-from ..errors import InfeasibleError, InvalidInputError
-from ..limits import AxisLimits
-from .state import (
+from ._constants import DURATION_RTOL
+from ._validate import check_array
+from .errors import InfeasibleError, InvalidInputError
+from .limits import AxisLimits
+from .profiles.state import (
     BlockedDurationError,
     StateProfile,
     plan_state_to_state,
@@ -115,7 +115,7 @@ def plan_ptp_states(
         ``duration`` below the synchronised minimum, or inside a blocked
         interval of some axis (the message names the axis).
     """
-    from ..trajectory import Trajectory  # sync layer; imported lazily
+    from .trajectory import Trajectory
 
     if sync not in STATE_SYNC_MODES:
         raise InvalidInputError(f"sync must be one of {STATE_SYNC_MODES}, got {sync!r}")
