@@ -11,13 +11,15 @@ The streamer advances ``tau`` at a *rate* ``s = dtau/dt`` in ``[0, 1]``
 
 The rate follows a jerk-limited law towards its target (override, or 0 when
 paused / stopping on the path): ``|s'| <= sigma1``, ``|s''| <= sigma2``
-(:attr:`Streamer.rate_limits`, by default ``min_i a_i / v_i`` and
+(:attr:`Streamer.rate_limits`, by default half of ``min_i a_i / v_i`` and
 ``min_i j_i / v_i`` over the axes). On top of that, each cycle ``s'`` is
 clipped to the *admissible interval* in which every axis keeps its
 acceleration limit with the leg semantics of
-:class:`~trajkit.limits.AxisLimits`, ``-a_max_decel <= sign(Q') q'' <= a_max``.
-That interval always contains 0 (the program itself is within its limits
-and ``s^2 <= 1``), so the clip is always possible, and it proves, cycle by
+:class:`~trajkit.limits.AxisLimits`,
+``-a_max_decel <= sign(Q') q'' <= min(a_max, sqrt(2 j_max (v_max - |q'|)))``
+(the upper bound keeps the monitor's velocity look-ahead satisfied). That
+interval always contains 0 (the program itself is within its limits and
+``s^2 <= s <= 1``), so the clip is always possible, and it proves, cycle by
 cycle, that a feed override change or a pause never exceeds a velocity or
 acceleration limit: ``|q'| = |Q'| s <= v_max`` and ``q''`` inside its
 bounds by construction. The jerk of the stream is smoothed by ``sigma2``
