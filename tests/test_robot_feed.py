@@ -7,7 +7,11 @@ import os
 import numpy as np
 import pytest
 
+import pathlib
+
 from trajkit.robot._feed import Run, plan_feed, speed_change
+
+EXAMPLES_DATA = pathlib.Path(__file__).resolve().parents[1] / "examples" / "data"
 
 N = 2000 if os.environ.get("TRAJKIT_SWEEP") else 150
 
@@ -65,3 +69,25 @@ def test_long_run_reaches_its_cap_and_short_run_is_lowered():
     feed = plan_feed(runs)
     assert runs[0].speed < 0.5
     assert feed.end_error == pytest.approx(0.0, abs=1e-15)
+
+
+def test_ptp_tool_speed_is_defined_for_repeated_and_single_times():
+    """Tool speed of PTP samples comes from FK along qd, not from the sample spacing
+    (repeated times used to give NaN through np.gradient)."""
+    import warnings
+
+    from trajkit.io.program import load_program
+
+    run = load_program(EXAMPLES_DATA / "arm6_weld.yaml").run()
+    ptp = next(sg for sg in run.segments if sg.kind == "PTP" and sg.duration > 0)
+    t_mid = ptp.t0 + 0.5 * ptp.duration
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rep = run.sample([t_mid, t_mid, t_mid])
+        one = run.sample(t_mid)
+        dense = run.sample(np.linspace(t_mid - 1e-4, t_mid + 1e-4, 3))
+    assert np.all(np.isfinite(rep.tool_speed)) and rep.tool_speed[0] > 0
+    assert rep.tool_speed[0] == one.tool_speed[0]
+    # the central difference of the FK positions over +-0.1 ms agrees
+    fd = np.linalg.norm(dense.xyz[2] - dense.xyz[0]) / 2e-4
+    assert rep.tool_speed[0] == pytest.approx(fd, rel=1e-5)

@@ -23,6 +23,10 @@ from .motion import Circ, JointTarget, Lin, Ptp, Wait
 
 __all__ = ["RobotRun", "RobotSamples", "Segment", "run_motions", "SAMPLE_ENDPOINT_RTOL"]
 
+#: Joint-space step [rad or m] of the central difference that gives the
+#: tool speed of a PTP motion from FK (truncation error ~ step^2).
+TOOL_SPEED_STEP = 1e-6
+
 #: Fraction of the joint velocity and acceleration limits a PTP blend may use
 #: (checked on samples; the margin covers the values between them).
 PTP_BLEND_USE = 0.99
@@ -138,6 +142,17 @@ class RobotRun:
             t = np.append(t, self.duration)
         return t
 
+    def _tool_speed(self, q: np.ndarray, qd: np.ndarray) -> float:
+        """|d FK(q)/dt| [m/s] for joint velocity ``qd``: central difference of FK
+        along ``qd`` (a directional derivative, independent of the sample spacing)."""
+        nrm = float(np.max(np.abs(qd)))
+        if nrm == 0.0:
+            return 0.0
+        h = TOOL_SPEED_STEP / nrm
+        p1 = self.robot.fk(q + h * qd).position
+        p0 = self.robot.fk(q - h * qd).position
+        return float(np.linalg.norm(p1 - p0) / (2.0 * h))
+
     def sample(self, t: Any) -> RobotSamples:
         """Sample at times ``t`` (n,) [s]: IK at every Cartesian sample."""
         tt = np.atleast_1d(np.asarray(t, dtype=np.float64))
@@ -172,8 +187,8 @@ class RobotRun:
                 pose = self.robot.fk(q[r])
                 xyz[r] = pose.position
                 quat[r] = quat_from_matrix(pose.rotation)
-            if sg.kind == "PTP" and rows.size > 1:
-                speed[rows] = np.linalg.norm(np.gradient(xyz[rows], tt[rows], axis=0), axis=1)
+                if sg.kind == "PTP":
+                    speed[r] = self._tool_speed(q[r], qd[r])
         return RobotSamples(tt, q, qd, qdd, xyz, quat, speed, mot)
 
     def summary(self, samples: RobotSamples | None = None) -> dict:
