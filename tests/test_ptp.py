@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from trajkit import AxisLimits, InfeasibleError, min_duration, plan_move, plan_ptp
+from trajkit import AxisLimits, InfeasibleError, InvalidInputError, min_duration, plan_move, plan_ptp
 from trajkit.verify import verify_profile, verify_trajectory
 
 EXACT = 1e-12
@@ -137,10 +137,14 @@ def test_all_axes_still():
     verify_trajectory(tr).raise_if_failed()
 
 
-def test_single_limits_object_is_shared_and_named_by_index():
-    tr = plan_ptp([0.0, 0.0], [1.0, 2.0], AxisLimits(1.0, 2.0, 10.0))
-    assert tr.names == ("0", "1")
-    assert [p.limits.name for p in tr.axes] == [0, 1]
+def test_single_limits_object_is_shared_and_axes_named_by_index():
+    lim = AxisLimits(1.0, 2.0, 10.0)
+    tr = plan_ptp([0.0, 0.0], [1.0, 2.0], lim)
+    assert tr.names == ("q0", "q1")
+    assert all(p.limits is lim for p in tr.axes)
+    # messages still name the axis by its index
+    with pytest.raises(InvalidInputError, match="of axis 1"):
+        plan_ptp([0.0, 0.0], [1.0, float("nan")], lim)
 
 
 # ------------------------------------------------------------ sampling, export

@@ -11,6 +11,15 @@ from .errors import InvalidInputError
 __all__ = ["AxisLimits"]
 
 
+def _leg_threshold(a: float, j: float) -> float:
+    """Velocity ``a^2/j`` above which a velocity ramp reaches ``a`` (cached per limits)."""
+    if a == math.inf:
+        return math.inf
+    if j == math.inf:
+        return 0.0
+    return a * a / j
+
+
 @dataclass(frozen=True)
 class AxisLimits:
     """Kinematic limits of one axis, validated at construction.
@@ -102,6 +111,7 @@ class AxisLimits:
         object.__setattr__(self, "j_max_decel", jd)
         object.__setattr__(self, "position_min", pmin)
         object.__setattr__(self, "position_max", pmax)
+        object.__setattr__(self, "_thresholds", (_leg_threshold(a, j), _leg_threshold(ad, jd)))
 
     @property
     def symmetric(self) -> bool:
@@ -115,6 +125,7 @@ class AxisLimits:
                   "position_min", "position_max"):
             object.__setattr__(new, f, getattr(self, f))
         object.__setattr__(new, "name", name)
+        object.__setattr__(new, "_thresholds", self._thresholds)
         return new
 
     def scaled(self, factor: float) -> "AxisLimits":

@@ -174,11 +174,9 @@ def _atomic_write(path: str | os.PathLike, text: str) -> None:
 
 
 def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[AxisLimits]:
-    """One AxisLimits per axis; unnamed ones are named by their index (for messages)."""
+    """One AxisLimits per axis (the same objects; no copies)."""
     if isinstance(limits, AxisLimits):
-        if limits.name is not None:
-            return [limits] * n
-        return [limits.with_name(i) for i in range(n)]
+        return [limits] * n
     try:
         lims = list(limits)
     except TypeError:
@@ -194,9 +192,25 @@ def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[Ax
             raise InvalidInputError(
                 f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}"
             )
-        if lim.name is None:
-            lims[i] = lim.with_name(i)
     return lims
+
+
+def _float_list(value: Any, field: str) -> list[float]:
+    """A 1-D sequence of numbers as a list of floats (fast path for lists and
+    1-D arrays; everything else goes through :func:`check_array`)."""
+    if isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "fiu":
+        return value.astype(np.float64, copy=False).tolist()
+    if isinstance(value, (list, tuple)) and all(type(x) in (float, int) for x in value):
+        return [float(x) for x in value]
+    return check_array(value, field, ndim=1, finite=False).tolist()
+
+
+def _check_positions(values: list[float], lims: list[AxisLimits], field: str) -> list[float]:
+    """Finite and inside each axis' range; messages name the axis (its name or index)."""
+    for i, (x, lim) in enumerate(zip(values, lims)):
+        if not (lim.position_min <= x <= lim.position_max) or not math.isfinite(x):
+            (lim if lim.name is not None else lim.with_name(i)).check_position(x, field)
+    return values
 
 
 def _boundary_states(start, goal, v0, a0, v1, a1):
@@ -275,18 +289,18 @@ def plan_ptp(
 
             return plan_ptp_states(states[0], states[1], limits, sync=sync, duration=duration)
     # entries are checked per axis below (the messages name the axis)
-    s = check_array(start, "start", ndim=1, finite=False)
-    g = check_array(goal, "goal", ndim=1, finite=False)
-    if s.shape != g.shape:
+    sl = _float_list(start, "start")
+    gl = _float_list(goal, "goal")
+    if len(sl) != len(gl):
         raise InvalidInputError(
-            f"start has {s.size} axes but goal has {g.size}"
+            f"start has {len(sl)} axes but goal has {len(gl)}"
         )
-    n = s.size
+    n = len(sl)
     if n == 0:
         raise InvalidInputError("start and goal must have at least one axis")
     lims = _coerce_limits(limits, n)
-    sl = [lim.check_position(x, "start") for lim, x in zip(lims, s.tolist())]
-    gl = [lim.check_position(x, "goal") for lim, x in zip(lims, g.tolist())]
+    _check_positions(sl, lims, "start")
+    _check_positions(gl, lims, "goal")
     if duration is not None:
         try:
             duration = float(duration)

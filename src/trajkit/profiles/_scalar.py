@@ -53,11 +53,16 @@ def _lt(v: float, a: float, j: float, thr: float) -> float:
     return 2.0 * _sqrt(v / j)
 
 
-def leg_phases(v: float, a: float, j: float) -> tuple[float, float, float]:
-    """Return ``(t_jerk, t_const, a_peak)`` of the ramp between rest and ``v``."""
+def leg_phases(
+    v: float, a: float, j: float, thr: float | None = None
+) -> tuple[float, float, float]:
+    """Return ``(t_jerk, t_const, a_peak)`` of the ramp between rest and ``v``.
+
+    ``thr`` is the leg's :func:`leg_threshold` when already known.
+    """
     if v <= 0.0:
         return 0.0, 0.0, 0.0
-    if v >= leg_threshold(a, j):
+    if v >= (leg_threshold(a, j) if thr is None else thr):
         tj = a / j
         ta = v / a - tj
         if ta < 0.0:
@@ -105,10 +110,18 @@ def _newton_decreasing(p: float, q: float, c: float, d: float, t: float, u: floa
     return u
 
 
-def peak_velocity(d: float, v_max: float, a1: float, j1: float, a2: float, j2: float) -> float:
-    """Peak velocity of the minimum-time rest-to-rest move over distance ``d > 0``."""
-    t1 = leg_threshold(a1, j1)
-    t2 = leg_threshold(a2, j2)
+def peak_velocity(
+    d: float, v_max: float, a1: float, j1: float, a2: float, j2: float,
+    t1: float | None = None, t2: float | None = None,
+) -> float:
+    """Peak velocity of the minimum-time rest-to-rest move over distance ``d > 0``.
+
+    ``t1``, ``t2``: the legs' :func:`leg_threshold` values when already known.
+    """
+    if t1 is None:
+        t1 = leg_threshold(a1, j1)
+    if t2 is None:
+        t2 = leg_threshold(a2, j2)
     if v_max != _inf:
         dist_v = 0.5 * v_max * (_lt(v_max, a1, j1, t1) + _lt(v_max, a2, j2, t2))
         if dist_v <= d:
@@ -140,7 +153,8 @@ def peak_velocity(d: float, v_max: float, a1: float, j1: float, a2: float, j2: f
 
 
 def cruise_velocity(
-    d: float, t: float, v_peak: float, a1: float, j1: float, a2: float, j2: float
+    d: float, t: float, v_peak: float, a1: float, j1: float, a2: float, j2: float,
+    t1: float | None = None, t2: float | None = None,
 ) -> float:
     """Cruise velocity ``Vc <= v_peak`` for which the move lasts exactly ``t``.
 

@@ -288,8 +288,9 @@ class Profile:
 def _build(start, goal, limits, d, vc, duration, min_duration, sign):
     a1, j1 = limits.a_max, limits.j_max
     a2, j2 = limits.a_max_decel, limits.j_max_decel
-    tj1, ta1, ap1 = K.leg_phases(vc, a1, j1)
-    tj2, ta2, ap2 = K.leg_phases(vc, a2, j2)
+    thr1, thr2 = limits._thresholds
+    tj1, ta1, ap1 = K.leg_phases(vc, a1, j1, thr1)
+    tj2, ta2, ap2 = K.leg_phases(vc, a2, j2, thr2)
     ramps = 2.0 * tj1 + ta1 + 2.0 * tj2 + ta2
     if duration is None:
         tv = (d - 0.5 * vc * (2.0 * tj1 + ta1 + 2.0 * tj2 + ta2)) / vc if vc > 0.0 else 0.0
@@ -382,8 +383,9 @@ def plan_move(
 def _min_solution(d: float, limits: AxisLimits) -> tuple[float, float]:
     """Step 1 for a distance ``d > 0``: ``(peak velocity, minimum duration)``."""
     a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
-    vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2)
-    tmin = K.leg_time(vp, a1, j1) + K.leg_time(vp, a2, j2)
+    thr1, thr2 = limits._thresholds
+    vp = K.peak_velocity(d, limits.v_max, a1, j1, a2, j2, thr1, thr2)
+    tmin = K._lt(vp, a1, j1, thr1) + K._lt(vp, a2, j2, thr2)
     if vp == limits.v_max:
         tmin += max(d - 0.5 * vp * tmin, 0.0) / vp
     return vp, tmin
@@ -406,7 +408,8 @@ def _plan_solved(
             )
         return _build(s, g, limits, d, vp, tmin, tmin, sign)
     a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
-    vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2)
+    thr1, thr2 = limits._thresholds
+    vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2, thr1, thr2)
     return _build(s, g, limits, d, vc, T, tmin, sign)
 
 
