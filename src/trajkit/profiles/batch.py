@@ -363,11 +363,21 @@ def plan_moves(
     tj2, ta2, ap2 = _leg_phases(vc, a2, j2, thr2)
     ramps = 2.0 * tj1 + ta1 + 2.0 * tj2 + ta2
     tv = np.maximum(dur - ramps, 0.0)
-    phases = np.stack([tj1, ta1, tj1, tv, tj2, ta2, tj2], axis=1)
-    jj1 = np.where(tj1 > 0.0, sign * j1, 0.0)
-    jj2 = np.where(tj2 > 0.0, sign * j2, 0.0)
-    zero = np.zeros(n)
-    jerks = np.stack([jj1, zero, -jj1, zero, -jj2, zero, jj2], axis=1)
+    # built phase-major (7, N) with contiguous row writes; exposed as (N, 7) views
+    phases_t = np.empty((7, n))
+    phases_t[0] = tj1
+    phases_t[1] = ta1
+    phases_t[2] = tj1
+    phases_t[3] = tv
+    phases_t[4] = tj2
+    phases_t[5] = ta2
+    phases_t[6] = tj2
+    jerks_t = np.zeros((7, n))
+    np.multiply(sign, j1, out=jerks_t[0], where=tj1 > 0.0)
+    np.negative(jerks_t[0], out=jerks_t[2])
+    np.multiply(sign, j2, out=jerks_t[6], where=tj2 > 0.0)
+    np.negative(jerks_t[6], out=jerks_t[4])
+    phases, jerks = phases_t.T, jerks_t.T
     return MoveBatch(
         start=s, goal=g, duration=dur, min_duration=tmin, phase_durations=phases,
         jerks=jerks, peak_velocity=np.where(moving, sign * vc, 0.0),
