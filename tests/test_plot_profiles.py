@@ -163,7 +163,7 @@ def test_plot_trajectory_units():
     traj = plan_ptp([0.0, 0.0], [1.0, 2.0], AxisLimits(1.0, 2.0, 10.0))
     fig = plot_trajectory(traj, units=["rad", "m"])
     assert "[unit]" in fig.axes[0].get_ylabel()
-    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["0 [rad]", "1 [m]"]
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["q0 [rad]", "q1 [m]"]
     fig = plot_trajectory(traj, units="mm")
     assert "[mm/s]" in fig.axes[1].get_ylabel()
     with pytest.raises(InvalidInputError,
