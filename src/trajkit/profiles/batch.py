@@ -7,6 +7,7 @@ whole arrays, so N moves cost a few numpy passes and no Python loop per move.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,9 +16,16 @@ import numpy as np
 from .._constants import DURATION_RTOL, ROOT_MAX_ITER, ROOT_RTOL
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
+from . import _jit
 from .profile import Profile
 
 __all__ = ["MoveBatch", "plan_moves"]
+
+#: Batches at least this large use the compiled kernel (:mod:`._jit`) when numba
+#: is installed (``pip install trajkit[fast]``) and ``TRAJKIT_NO_JIT`` is unset;
+#: smaller ones (and installs without numba) use the numpy formulation below.
+#: Both give the same bits as :func:`plan_move`.
+JIT_MIN_MOVES = 4096
 
 _inf = np.inf
 
@@ -324,12 +332,27 @@ def plan_moves(
             i = int(np.flatnonzero(bad)[0])
             raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s, got {float(T[i])!r}")
 
+    thr1 = _threshold(a1, j1)
+    thr2 = _threshold(a2, j2)
+    if n >= JIT_MIN_MOVES and _jit.AVAILABLE and not os.environ.get("TRAJKIT_NO_JIT"):
+        bad, dur, tmin, phases, jerks, vpk, ap1, ap2 = _jit.plan_batch(
+            s, g, vm, a1, j1, a2, j2, thr1, thr2, T)
+        if bad >= 0:
+            raise InfeasibleError(
+                f"durations[{bad}] = {float(T[bad])!r} s is below the minimum duration "
+                f"{tmin[bad]:.15g} s",
+                minimum=float(tmin[bad]),
+            )
+        return MoveBatch(
+            start=s, goal=g, duration=dur, min_duration=tmin, phase_durations=phases,
+            jerks=jerks, peak_velocity=vpk, peak_acceleration=ap1, peak_deceleration=ap2,
+            v_max=vm, a_max=a1, j_max=j1, a_max_decel=a2, j_max_decel=j2,
+        )
+
     diff = g - s
     sign = np.where(diff > 0, 1.0, -1.0)
     dist = np.abs(diff)
     moving = dist > 0.0
-    thr1 = _threshold(a1, j1)
-    thr2 = _threshold(a2, j2)
 
     vp = np.zeros(n)
     tmin = np.zeros(n)
