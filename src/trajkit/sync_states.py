@@ -21,6 +21,7 @@ from ._constants import DURATION_RTOL
 from ._validate import check_array
 from .errors import InfeasibleError, InvalidInputError
 from .limits import AxisLimits
+from .trajectory import Trajectory, _coerce_limits
 from .profiles.state import (
     BlockedDurationError,
     StateProfile,
@@ -52,25 +53,6 @@ def _coerce_states(x: Any, field: str) -> np.ndarray:
             f"per axis) or (n_axes,), got shape {arr.shape}"
         )
     return arr
-
-
-def _coerce_limits(limits, n):
-    if isinstance(limits, AxisLimits):
-        return [limits.with_name(i) if limits.name is None else limits for i in range(n)]
-    try:
-        lims = list(limits)
-    except TypeError:
-        raise InvalidInputError(
-            f"limits must be an AxisLimits or a sequence of them, got {type(limits).__name__}"
-        ) from None
-    if len(lims) != n:
-        raise InvalidInputError(f"limits has {len(lims)} entries but start/goal have {n} axes")
-    out = []
-    for i, lim in enumerate(lims):
-        if not isinstance(lim, AxisLimits):
-            raise InvalidInputError(f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}")
-        out.append(lim.with_name(i) if lim.name is None else lim)
-    return out
 
 
 def plan_ptp_states(
@@ -115,8 +97,6 @@ def plan_ptp_states(
         ``duration`` below the synchronised minimum, or inside a blocked
         interval of some axis (the message names the axis).
     """
-    from .trajectory import Trajectory
-
     if sync not in STATE_SYNC_MODES:
         raise InvalidInputError(f"sync must be one of {STATE_SYNC_MODES}, got {sync!r}")
     s = _coerce_states(start, "start")
@@ -126,7 +106,7 @@ def plan_ptp_states(
     n = s.shape[0]
     if n == 0:
         raise InvalidInputError("start and goal must have at least one axis")
-    lims = _coerce_limits(limits, n)
+    lims = _coerce_limits(limits, n, named=True)
     if duration is not None:
         try:
             duration = float(duration)

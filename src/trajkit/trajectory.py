@@ -173,9 +173,14 @@ def _atomic_write(path: str | os.PathLike, text: str) -> None:
     atomic_write(path, text)
 
 
-def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[AxisLimits]:
-    """One AxisLimits per axis (the same objects; no copies)."""
+def _coerce_limits(
+    limits: AxisLimits | Sequence[AxisLimits], n: int, named: bool = False
+) -> list[AxisLimits]:
+    """One AxisLimits per axis: the same objects, or with ``named=True`` copies of
+    the unnamed ones carrying their axis index (for messages)."""
     if isinstance(limits, AxisLimits):
+        if named and limits.name is None:
+            return [limits.with_name(i) for i in range(n)]
         return [limits] * n
     try:
         lims = list(limits)
@@ -192,6 +197,8 @@ def _coerce_limits(limits: AxisLimits | Sequence[AxisLimits], n: int) -> list[Ax
             raise InvalidInputError(
                 f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}"
             )
+        if named and lim.name is None:
+            lims[i] = lim.with_name(i)
     return lims
 
 
