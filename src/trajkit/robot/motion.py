@@ -93,6 +93,14 @@ class Ptp:
             raise InvalidInputError(f"{self.label}: zone must be >= 0 m, got {z!r}")
 
 
+def _check_speed_zone(label: str, speed: float, zone: float) -> None:
+    """Programmed speed > 0 and blend zone >= 0, named by the instruction label."""
+    check_positive(speed, f"{label}: speed")
+    z = check_finite(zone, f"{label}: zone")
+    if z < 0:
+        raise InvalidInputError(f"{label}: zone must be >= 0 m, got {z!r}")
+
+
 @dataclass(frozen=True)
 class Lin:
     """Straight tool path at a programmed speed (orientation by slerp).
@@ -114,10 +122,7 @@ class Lin:
 
     def __post_init__(self) -> None:
         _check_target(self.target, f"{self.label}: target")
-        check_positive(self.speed, f"{self.label}: speed")
-        z = check_finite(self.zone, f"{self.label}: zone")
-        if z < 0:
-            raise InvalidInputError(f"{self.label}: zone must be >= 0 m, got {z!r}")
+        _check_speed_zone(self.label, self.speed, self.zone)
 
 
 @dataclass(frozen=True)
@@ -145,10 +150,7 @@ class Circ:
     def __post_init__(self) -> None:
         _check_target(self.via, f"{self.label}: via")
         _check_target(self.target, f"{self.label}: target")
-        check_positive(self.speed, f"{self.label}: speed")
-        z = check_finite(self.zone, f"{self.label}: zone")
-        if z < 0:
-            raise InvalidInputError(f"{self.label}: zone must be >= 0 m, got {z!r}")
+        _check_speed_zone(self.label, self.speed, self.zone)
 
 
 @dataclass(frozen=True)
