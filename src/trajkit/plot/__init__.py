@@ -22,3 +22,29 @@ def require_matplotlib():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+#: Resolution of written raster figures [dots per inch].
+FIGURE_DPI = 110
+
+
+def save_figure(fig, path, dpi: int = FIGURE_DPI) -> None:
+    """Write ``fig`` to ``path`` atomically (temporary file, then rename).
+
+    The format follows the extension (``.png`` when there is none); a failed
+    write leaves neither a half-written image nor the temporary file behind.
+    ``path=None`` writes nothing.
+    """
+    import os
+
+    if path is None:
+        return
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower().lstrip(".") or "png"
+    tmp = f"{path}.tmp-{os.getpid()}"
+    try:
+        fig.savefig(tmp, format=ext, dpi=dpi)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)

@@ -6,13 +6,12 @@ it (atomically) when given ``path``. Units on the axes: mm, mm/s, s.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
 
-from . import require_matplotlib
+from . import require_matplotlib, save_figure
 
 __all__ = [
     "plot_b_velocity",
@@ -36,17 +35,7 @@ _DPI = 110
 
 
 def _save(fig, path):
-    if path is None:
-        return
-    path = os.fspath(path)
-    root, ext = os.path.splitext(path)
-    tmp = f"{root}.tmp-{os.getpid()}{ext or '.png'}"
-    try:
-        fig.savefig(tmp, dpi=_DPI)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    save_figure(fig, path, dpi=_DPI)
 
 
 def _cycle_window(plan, box: int):

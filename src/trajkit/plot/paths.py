@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from . import require_matplotlib
+from . import require_matplotlib, save_figure
 
 __all__ = ["plot_chords_3d", "plot_saddle_plan", "plot_path_plan"]
 
@@ -106,8 +106,7 @@ def plot_saddle_plan(plan, chords, path: str | os.PathLike | None = None) -> Any
     a3.set_title("tool speed along the seam" + (f" (shaded: slowed by {', '.join(reasons)})" if reasons else ""),
                  fontsize=9)
     a3.legend(loc="lower center", fontsize=8)
-    if path is not None:
-        fig.savefig(os.fspath(path), dpi=110)
+    save_figure(fig, path)
     return fig
 
 
@@ -152,6 +151,5 @@ def plot_path_plan(plan, chords, path: str | os.PathLike | None = None) -> Any:
     a3.set_xlabel("t [s]")
     a3.set_ylabel("tool speed [mm/s]")
     a3.legend(fontsize=8, loc="lower center")
-    if path is not None:
-        fig.savefig(os.fspath(path), dpi=110)
+    save_figure(fig, path)
     return fig

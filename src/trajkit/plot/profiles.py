@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..profiles.profile import Profile
 from ..trajectory import Trajectory
-from . import require_matplotlib
+from . import require_matplotlib, save_figure
 
 __all__ = ["plot_profile", "plot_trajectory", "QUANTITIES"]
 
@@ -87,17 +87,8 @@ def _check_path(path: str | os.PathLike | None) -> str | None:
 
 
 def _save(fig: Any, path: str | None) -> None:
-    """Write the figure via a temporary file so no half-written image remains."""
-    if path is None:
-        return
-    ext = os.path.splitext(path)[1].lower().lstrip(".")
-    tmp = f"{path}.tmp-{os.getpid()}"
-    try:
-        fig.savefig(tmp, format=ext, dpi=_DPI)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    """Write the figure atomically (see :func:`trajkit.plot.save_figure`)."""
+    save_figure(fig, path, dpi=_DPI)
 
 
 def _new_figure(title: str) -> tuple[Any, Any]:

@@ -6,7 +6,7 @@ import math
 import os
 from typing import Any
 
-from . import require_matplotlib
+from . import require_matplotlib, save_figure
 
 __all__ = ["plot_robot_run"]
 
@@ -57,14 +57,5 @@ def plot_robot_run(run: Any, samples: Any, path: str | os.PathLike | None = None
     ax_p.set_title("tool path")
     fig.suptitle(f"{robot.name}: program of {run.duration:.3f} s")
     fig.tight_layout()
-    if path is not None:
-        path = os.fspath(path)
-        root, ext = os.path.splitext(path)
-        tmp = f"{root}.tmp-{os.getpid()}{ext}"
-        try:
-            fig.savefig(tmp, dpi=110)
-            os.replace(tmp, path)
-        finally:
-            if os.path.exists(tmp):
-                os.remove(tmp)
+    save_figure(fig, path)
     return fig

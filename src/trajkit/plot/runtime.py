@@ -8,21 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from . import require_matplotlib
+from . import require_matplotlib, save_figure
 
 __all__ = ["plot_following_error", "plot_stream"]
 
 
 def _save(fig, path) -> None:
-    path = os.fspath(path)
-    root, ext = os.path.splitext(path)
-    tmp = f"{root}.tmp-{os.getpid()}{ext}"
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    save_figure(fig, path)
 
 
 def plot_following_error(report: Any, path: str | os.PathLike | None = None,
