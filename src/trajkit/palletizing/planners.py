@@ -9,7 +9,6 @@ per-joint rest-to-rest profiles (which can be sampled and verified), plus a
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -17,7 +16,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import InvalidInputError
-from ..profiles import Profile, min_duration, plan_move
+from ..profiles import min_duration, plan_move
 from ..trajectory import plan_ptp
 from ._crossing import time_at_position
 from .scenario import PalletScenario, TripSpec
