@@ -7,6 +7,8 @@ from typing import Sequence
 
 import numpy as np
 
+from ..profiles._pieces import eval_pieces
+
 __all__ = ["JerkPieces", "velocity_change"]
 
 
@@ -104,14 +106,9 @@ class JerkPieces:
             out[1:] = 0.0
             return out
         tc = np.clip(tt, 0.0, self.duration)
-        i = np.clip(np.searchsorted(self.t, tc, side="right") - 1, 0, self.jerk.size - 1)
-        h = tc - self.t[i]
-        p, v, a = self.state[i].T
-        j = self.jerk[i]
-        out[0] = p + h * (v + h * (0.5 * a + h * j / 6.0))
-        out[1] = v + h * (a + 0.5 * h * j)
-        out[2] = a + h * j
-        out[3] = j
+        st = self.state[:-1]
+        out[0], out[1], out[2], out[3] = eval_pieces(
+            tc, self.t, st[:, 0], st[:, 1], st[:, 2], self.jerk)
         after = tt >= self.duration
         before = tt < 0.0
         out[0] = np.clip(out[0], min(self.s0, self.s_end), max(self.s0, self.s_end))

@@ -13,6 +13,7 @@ from .._validate import axis_label
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _scalar as K
+from ._pieces import eval_pieces
 
 __all__ = ["Profile", "ProfileSample", "plan_move", "PHASE_NAMES"]
 
@@ -250,14 +251,8 @@ class Profile:
         if tc.ndim == 1 and tc.size >= SORTED_FAST_PATH_MIN and bool(np.all(tc[1:] >= tc[:-1])):
             pos, vel, acc, j = self._sample_sorted(tc, tb, P, V, A, J)
         else:
-            idx = np.searchsorted(tb[1:7], tc, side="right")
-            dt = tc - tb[idx]
-            a = A[idx]
-            j = J[idx]
-            v = V[idx]
-            pos = self.start + (P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0)))
-            vel = v + dt * (a + 0.5 * dt * j)
-            acc = a + dt * j
+            pos, vel, acc, j = eval_pieces(tc, tb, P, V, A, J)
+            pos = self.start + pos
         after = tt >= self.duration
         before = tt < 0.0
         if np.any(after) or np.any(before):

@@ -27,6 +27,7 @@ from .._validate import axis_label, check_finite
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _state_kernel as K
+from ._pieces import eval_pieces
 from .profile import ProfileSample
 
 __all__ = [
@@ -235,16 +236,8 @@ class StateProfile:
                 np.where(tt < 0, a0, af + 0 * dt),
                 np.zeros_like(dt),
             )
-        tb = self._tb
         tc = np.clip(tt, 0.0, self.duration)
-        idx = np.searchsorted(tb[1:n], tc, side="right")
-        dt = tc - tb[idx]
-        a = self._A[idx]
-        j = self._J[idx]
-        v = self._V[idx]
-        pos = self._P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0))
-        vel = v + dt * (a + 0.5 * dt * j)
-        acc = a + dt * j
+        pos, vel, acc, j = eval_pieces(tc, self._tb, self._P, self._V, self._A, self._J)
         after = tt >= self.duration
         before = tt < 0.0
         if np.any(after) or np.any(before):

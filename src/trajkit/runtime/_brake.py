@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..limits import AxisLimits
+from ..profiles._pieces import eval_pieces
 from ..profiles.profile import ProfileSample
 
 __all__ = ["BrakeProfile", "brake_phases", "brake_profile"]
@@ -163,14 +164,7 @@ class BrakeProfile:
             z = np.zeros_like(tt)
             return ProfileSample(z + p0, z + v0 * (tt < 0), z + a0 * (tt < 0), z)
         tc = np.clip(tt, 0.0, self.duration)
-        idx = np.searchsorted(self._tb[1:n], tc, side="right")
-        dt = tc - self._tb[idx]
-        j = self._J[idx]
-        a = self._A[idx]
-        v = self._V[idx]
-        pos = self._P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0))
-        vel = v + dt * (a + 0.5 * dt * j)
-        acc = a + dt * j
+        pos, vel, acc, j = eval_pieces(tc, self._tb, self._P, self._V, self._A, self._J)
         after = tt >= self.duration
         before = tt < 0.0
         p0, v0, a0 = self.start_state
