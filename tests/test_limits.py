@@ -87,3 +87,23 @@ def test_invalid_limits_messages(kwargs, match):
 def test_invalid_limits_is_a_value_error():
     with pytest.raises(ValueError, match=r"should be larger than zero, got -2\.0"):
         AxisLimits(1.0, -2.0, 1.0)
+
+
+def test_derated_scales_both_legs_and_keeps_range_and_name():
+    lm = AxisLimits(1.0, 4.0, 40.0, a_max_decel=6.0, j_max_decel=60.0,
+                    position_min=-1.0, position_max=2.0, name="B")
+    d = lm.derated(accel=0.5, jerk=0.25)
+    assert (d.v_max, d.a_max, d.a_max_decel, d.j_max, d.j_max_decel) == (1.0, 2.0, 3.0, 10.0, 15.0)
+    assert (d.position_min, d.position_max, d.name) == (-1.0, 2.0, "B")
+    assert lm.derated() == lm and lm.derated(velocity=0.5).v_max == 0.5
+
+
+@pytest.mark.parametrize("kw, pattern", [
+    ({"accel": 0.0}, r"derating factor accel of axis B must be in \(0, 1\], got 0\.0"),
+    ({"jerk": 1.5}, r"derating factor jerk of axis B must be in \(0, 1\], got 1\.5"),
+    ({"velocity": float("nan")}, r"derating factor velocity of axis B .*nan"),
+    ({"accel": "x"}, r"derating factor accel of axis B must be a number"),
+])
+def test_derated_rejects_bad_factors(kw, pattern):
+    with pytest.raises(InvalidInputError, match=pattern):
+        AxisLimits(1.0, 4.0, 40.0, name="B").derated(**kw)

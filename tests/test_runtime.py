@@ -17,6 +17,7 @@ from trajkit.profiles.state import plan_velocity
 from trajkit.runtime import ProgramSource, Streamer, as_source, brake_profile
 from trajkit.runtime._brake import brake_phases
 from trajkit.runtime.safety import MONITOR_RTOL, Monitors
+from trajkit.runtime.streamer import override_limits
 
 DT = 0.001
 TOL = 1e-9
@@ -62,8 +63,9 @@ def test_full_override_stream_is_the_plan_sampled_exactly():
 
 def _override_run(seed, lims=LIMS, pause=True):
     rng = np.random.default_rng(seed)
-    tr = plan_ptp([0.0, 0.0, 0.0], rng.uniform(-2.5, 2.5, 3), lims)
-    st = Streamer(tr, DT)
+    # planned with the override reserve, streamed under the machine's limits
+    tr = plan_ptp([0.0, 0.0, 0.0], rng.uniform(-2.5, 2.5, 3), override_limits(lims))
+    st = Streamer(tr, DT, limits=lims)
     st.start()
     sps = []
     k = 0
@@ -109,13 +111,15 @@ def test_override_changes_never_exceed_velocity_or_acceleration(seed):
 
 
 def test_pause_stops_on_the_path_and_resume_continues():
-    tr = _ptp()
-    st = Streamer(tr, DT)
+    # the reserve makes the stop on the path slower than a per-axis brake (about
+    # 2.5 s from full speed here): a long move, paused early
+    tr = plan_ptp([0.0, 0.0, 0.0], [2.9, -2.9, 0.3], override_limits(LIMS))
+    st = Streamer(tr, DT, limits=LIMS)
     st.start()
-    for _ in range(500):
+    for _ in range(400):
         st.step()
     st.pause()
-    sps = [st.step() for _ in range(800)]
+    sps = [st.step() for _ in range(3000)]
     paused = [s for s in sps if s.state == "running" and np.all(s.velocity == 0) and s.override == 0]
     assert paused, "never came to rest"
     held = paused[0].position
@@ -169,7 +173,10 @@ def _line_source():
         s = sl.sample(tau)
         return (np.outer(s.position, d), np.outer(s.velocity, d), np.outer(s.acceleration, d))
 
-    return ProgramSource(f, sl.duration, lims, path_intervals=[(0.0, sl.duration)]), d
+    # its exact envelope: the feed's limits along d (slack to the machine's limits)
+    env = np.outer([0.5, 2.0, 2.0, 20.0], d)
+    return ProgramSource(f, sl.duration, lims, path_intervals=[(0.0, sl.duration)],
+                         envelope=env), d
 
 
 def test_stop_on_a_continuous_path_stays_on_the_line():
@@ -370,7 +377,7 @@ def test_pallet_plan_source_waits_in_position_at_each_trip_end():
 def test_override_step_sequence_while_accelerating_does_not_trip_the_monitors():
     """Regression: the rate ramping back to 100 % while an axis sits at a_max used to
     leave it at an acceleration from which the jerk-limited ramp-down overspeeds."""
-    st = Streamer(_ptp(), DT)
+    st = Streamer(plan_ptp([0.0, 0.0, 0.0], [2.0, -1.5, 0.3], override_limits(LIMS)), DT, limits=LIMS)
     st.start()
     sps = []
     script = {100: 30.0, 101: 80.0, 102: 50.0, 104: 100.0}

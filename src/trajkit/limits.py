@@ -141,6 +141,50 @@ class AxisLimits:
             self.position_min * f, self.position_max * f, self.name,
         )
 
+    def derated(self, accel: float = 1.0, jerk: float = 1.0, velocity: float = 1.0) -> "AxisLimits":
+        """Return limits reduced by factors in (0, 1] (a planning reserve).
+
+        Both legs are scaled: ``a_max`` and ``a_max_decel`` by ``accel``,
+        ``j_max`` and ``j_max_decel`` by ``jerk``, ``v_max`` by ``velocity``;
+        the position range and the name are kept. Used to plan programs that
+        are streamed with a feed override
+        (:data:`trajkit.runtime.OVERRIDE_RESERVE`): the unused part of the
+        machine's limits is what a change of the rate may use.
+
+        Parameters
+        ----------
+        accel, jerk, velocity : float
+            Factors in (0, 1] (dimensionless).
+
+        Returns
+        -------
+        AxisLimits
+
+        Raises
+        ------
+        InvalidInputError
+            A factor that is not a finite number in (0, 1]; the message names
+            the factor, the axis and the value.
+        """
+        fs = []
+        for nm, f in (("accel", accel), ("jerk", jerk), ("velocity", velocity)):
+            try:
+                x = float(f)
+            except (TypeError, ValueError):
+                raise InvalidInputError(
+                    f"derating factor {nm}{axis_label(self.name)} must be a number in (0, 1], "
+                    f"got {f!r}") from None
+            if not 0.0 < x <= 1.0:  # NaN fails too
+                raise InvalidInputError(
+                    f"derating factor {nm}{axis_label(self.name)} must be in (0, 1], got {x!r}")
+            fs.append(x)
+        fa, fj, fv = fs
+        return AxisLimits(
+            self.v_max * fv, self.a_max * fa, self.j_max * fj,
+            self.a_max_decel * fa, self.j_max_decel * fj,
+            self.position_min, self.position_max, self.name,
+        )
+
     def check_position(self, value: float, field_name: str = "position") -> float:
         """Raise unless ``value`` is finite and inside the position range."""
         x = float(value)

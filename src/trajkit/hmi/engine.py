@@ -73,7 +73,14 @@ class RuntimeDrive:
         from ..runtime import ServoParams, Streamer
 
         self.table = table
-        self.streamer = Streamer(table.source(), table.period, servo=ServoParams())
+        from ..runtime.streamer import reserve_rate
+
+        src = table.source()
+        # the jobs are planned at the machine's full limits: 100 % override is the rate
+        # that leaves them the slack of OVERRIDE_RESERVE, so the slider and pause are
+        # proven (velocity, acceleration and jerk) while moving
+        self.streamer = Streamer(src, table.period, servo=ServoParams(),
+                                 max_rate=reserve_rate(src.envelope, src.limits))
         self._seen = 0
         self.last = None
 

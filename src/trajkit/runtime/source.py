@@ -11,6 +11,7 @@ controlled stop must stay on the path).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -19,7 +20,31 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 
-__all__ = ["ProgramSource", "as_source"]
+__all__ = ["ProgramSource", "as_source", "limits_envelope"]
+
+#: Sampling step of the estimated jerk envelope of LIN/CIRC segments [s].
+ENVELOPE_STEP = 5e-4
+
+#: Margin on a velocity or jerk measured on samples (values between the samples).
+ENVELOPE_MARGIN = 1.1
+
+
+def limits_envelope(limits: Sequence[AxisLimits]) -> np.ndarray:
+    """Envelope ``(V, A_acc, A_dec, J)`` per axis implied by planning limits.
+
+    Parameters
+    ----------
+    limits : sequence of AxisLimits (n_axes)
+
+    Returns
+    -------
+    ndarray, shape (4, n_axes)
+        ``v_max`` [unit/s], ``a_max``, ``a_max_decel`` [unit/s^2],
+        ``max(j_max, j_max_decel)`` [unit/s^3].
+    """
+    return np.array([[lm.v_max for lm in limits], [lm.a_max for lm in limits],
+                     [lm.a_max_decel for lm in limits],
+                     [max(lm.j_max, lm.j_max_decel) for lm in limits]], dtype=float).reshape(4, -1)
 
 
 class ProgramSource:
@@ -46,18 +71,34 @@ class ProgramSource:
         (default: the end of the program).
     path_intervals : sequence of (float, float), optional
         Program-time intervals [s] of continuous-path (LIN/CIRC) motion.
+    envelope : array_like, shape (4, n_axes), optional
+        Per axis upper bounds of the program over its whole duration, rows
+        ``V >= |Q'|`` [unit/s], ``A_acc >= sign(Q') Q''`` (speeding up)
+        [unit/s^2], ``A_dec >= -sign(Q') Q''`` (slowing down) [unit/s^2],
+        ``J >= |Q'''|`` [unit/s^3]. Default: the limits the program was
+        planned with, ``(v_max, a_max, a_max_decel, max(j_max, j_max_decel))``
+        (exact bounds for programs that keep their limits). The streamer
+        derives its override rate limits from it
+        (:func:`~trajkit.runtime.streamer.override_rate_limits`).
+    envelope_kind : str, optional
+        ``"limits"`` (bounds from the planning limits), ``"estimated"``
+        (measured on samples, e.g. the joint jerk of LIN/CIRC segments,
+        which no planner bounds) or ``"given"``.
 
     Attributes
     ----------
     n_axes : int
     start_position : ndarray, shape (n_axes,)
+    envelope : ndarray, shape (4, n_axes)
+    envelope_kind : str
     """
 
     def __init__(self, sampler: Callable[[np.ndarray], tuple], duration: float,
                  limits: Sequence[AxisLimits], names: Sequence[str] | None = None,
                  motion_starts: Any = None, motion_labels: Sequence[str] | None = None,
                  stop_points: Any = None,
-                 path_intervals: Sequence[tuple[float, float]] = ()) -> None:
+                 path_intervals: Sequence[tuple[float, float]] = (),
+                 envelope: Any = None, envelope_kind: str | None = None) -> None:
         self._sampler = sampler
         self.duration = float(duration)
         if not np.isfinite(self.duration) or self.duration < 0:
@@ -75,6 +116,18 @@ class ProgramSource:
         sp = np.array([self.duration] if stop_points is None else stop_points, dtype=float)
         self.stop_points = np.unique(np.clip(sp, 0.0, self.duration))
         self.path_intervals = tuple((float(a), float(b)) for a, b in path_intervals)
+        if envelope is None:
+            env = limits_envelope(self.limits)
+            kind = envelope_kind or "limits"
+        else:
+            env = np.array(envelope, dtype=float)
+            if env.shape != (4, self.n_axes) or np.any(~(env >= 0.0)):
+                raise InvalidInputError(
+                    f"envelope must be an array (4, {self.n_axes}) of bounds >= 0 "
+                    f"(V, A_acc, A_dec, J), got shape {env.shape}")
+            kind = envelope_kind or "given"
+        self.envelope = env
+        self.envelope_kind = kind
         q, _, _ = self.sample(np.array([0.0]))
         self.start_position = q[0].copy()
 
@@ -144,8 +197,22 @@ def _from_robot_run(run) -> ProgramSource:
                                          for i in sg.motions) for sg in run.segments]
     ends = [sg.t0 + sg.duration for sg in run.segments]
     paths = [(sg.t0, sg.t0 + sg.duration) for sg in run.segments if sg.kind == "CP"]
+    env = limits_envelope(run.robot.limits)
+    kind = "limits"
+    # the joint jerk of LIN/CIRC segments (IK of a Cartesian feed) and of blended PTP
+    # moves (superposed S-curves) is not bounded by the joint limits: measure it
+    for sg in run.segments:
+        if not (sg.kind == "CP" or (sg.parts is not None and len(sg.parts) > 1)):
+            continue
+        n = max(math.ceil(sg.duration / ENVELOPE_STEP), 2)
+        tt = sg.t0 + np.linspace(0.0, sg.duration, n + 1)
+        _, qd, qdd = f(tt)
+        jerk = np.max(np.abs(np.diff(qdd, axis=0)), axis=0) / (tt[1] - tt[0])
+        env[3] = np.maximum(env[3], ENVELOPE_MARGIN * jerk)
+        env[0] = np.maximum(env[0], ENVELOPE_MARGIN * np.max(np.abs(qd), axis=0))
+        kind = "estimated"
     return ProgramSource(f, run.duration, run.robot.limits, run.robot.joint_names,
-                         starts, labels or None, ends or None, paths)
+                         starts, labels or None, ends or None, paths, env, kind)
 
 
 def as_source(obj: Any, limits: Sequence[AxisLimits] | None = None) -> ProgramSource:

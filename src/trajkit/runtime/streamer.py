@@ -9,22 +9,46 @@ The streamer advances ``tau`` at a *rate* ``s = dtau/dt`` in ``[0, 1]``
 
     q = Q(tau),   q' = Q'(tau) s,   q'' = Q''(tau) s^2 + Q'(tau) s'
 
-The rate follows a jerk-limited law towards its target (override, or 0 when
-paused / stopping on the path): ``|s'| <= sigma1``, ``|s''| <= sigma2``
-(:attr:`Streamer.rate_limits`, by default half of ``min_i a_i / v_i`` and
-``min_i j_i / v_i`` over the axes). On top of that, each cycle ``s'`` is
-clipped to the *admissible interval* in which every axis keeps its
-acceleration limit with the leg semantics of
-:class:`~trajkit.limits.AxisLimits`,
-``-a_max_decel <= sign(Q') q'' <= min(a_max, sqrt(2 j_max (v_max - |q'|)))``
-(the upper bound keeps the monitor's velocity look-ahead satisfied). That
-interval always contains 0 (the program itself is within its limits and
-``s^2 <= s <= 1``), so the clip is always possible, and it proves, cycle by
-cycle, that a feed override change or a pause never exceeds a velocity or
-acceleration limit: ``|q'| = |Q'| s <= v_max`` and ``q''`` inside its
-bounds by construction. The jerk of the stream is smoothed by ``sigma2``
-but not proven (``q''' = Q''' s^3 + 3 Q'' Q' ... `` can exceed ``j_max``
-when the override changes while an axis uses its full jerk).
+The rate follows a jerk-limited law towards its target (``max_rate`` times
+the override, or 0 when paused / stopping on the path) with ``|s'| <= sigma1``
+and ``|s'(k+1) - s'(k)| <= sigma2 * period`` (:attr:`Streamer.rate_limits`).
+
+Proof that no limit is exceeded (velocity, acceleration *and jerk*): with the
+program's envelope per axis (:attr:`ProgramSource.envelope`: ``V >= |Q'|``,
+``A_acc``/``A_dec`` bounds of ``sign(Q') Q''``, ``J >= |Q'''|``) and the
+machine's limits, ``q''' = Q''' s^3 + 3 Q'' s s' + Q' s''`` gives::
+
+    A_acc s^2 + V sigma1 <= a_max,   A_dec s^2 + V sigma1 <= a_max_decel
+    J s^3 + 3 max(A_acc, A_dec) s sigma1 + V sigma2 <= min(j_max, j_max_decel)
+    sigma2 <= j_max (1 - J s^3 / j_max) / V            (velocity look-ahead)
+
+at the top rate ``s``; :func:`override_rate_limits` picks the pair with the
+shortest stop. The stream is discrete (``s'`` constant in a cycle, ``tau``
+advances by ``period (s_k + s_k+1) / 2``); its jerk ``(a_k+1 - a_k) / period``
+splits exactly into ``Delta Q'' s_k+1^2 + Q'' (s_k+1^2 - s_k^2) +
+Delta Q' s'_k+1 + Q' Delta s'``, each bounded by the same terms
+(``|Delta Q''| <= J period s_mean``, ``|Delta Q'| <= A period s_mean``), so
+the bound holds per cycle with no O(period) remainder (:attr:`jerk_bound`).
+The leg of the stream can differ from the program's (the program speeds
+up while the falling rate makes the axis slow down), hence the ``min`` of
+the two jerk limits; :func:`override_limits` plans with that.
+
+Programs streamed with override are planned with :func:`override_limits`
+(:data:`OVERRIDE_RESERVE` of the acceleration and jerk limits) and streamed
+under the machine's full limits (``limits=``). A program without slack at
+``max_rate`` (planned at full limits) gets the proven *ceiling*
+:func:`reserve_rate` (the rate at which it has the reserve's slack): rate
+changes below it follow the law; above it the rate holds (``s' = 0``, so
+``q''' = Q''' s^3``) and switches to its target at the next stop point (all
+axes at rest), where nothing jumps; a controlled stop there is the
+per-axis brake. Callers that want immediate override on such a program
+(the HMI) pass ``max_rate=reserve_rate(...)``. Each cycle ``s'`` is still
+clipped to the admissible interval of the accelerations and the velocity
+look-ahead (``-a_max_decel <= sign(Q') q'' <= min(a_max,
+sqrt(2 j_max (v_max - |q'|)))``) as a safety net: with rate limits from the
+proof it never acts (:attr:`Streamer.clip_count`, tested), and it is what
+keeps velocity and acceleration for a program whose envelope exceeds the
+limits (no jerk proof then).
 
 Controlled stop: on a continuous-path (LIN/CIRC) segment, and for every
 pause, the target rate becomes 0 and the machine stops on the path; on
@@ -69,12 +93,16 @@ from .source import ProgramSource, as_source
 
 __all__ = [
     "BLOCK_CYCLES",
+    "OVERRIDE_RESERVE",
     "RATE_SNAP",
     "REENTRY_ATOL",
     "STATES",
     "RuntimeEvent",
     "Setpoint",
     "Streamer",
+    "override_limits",
+    "override_rate_limits",
+    "reserve_rate",
 ]
 
 _log = logging.getLogger("trajkit.runtime")
@@ -96,6 +124,162 @@ RATE_LIMIT_FRACTION = 0.5
 
 #: Default following-error limit as a multiple of the servo in-position window.
 FE_WINDOW_FACTOR = 50.0
+
+#: Planning reserve for programs streamed with feed override: they are planned
+#: with ``reserve`` times the machine's acceleration and jerk limits
+#: (:func:`override_limits`); the rest is what a change of the rate may use.
+OVERRIDE_RESERVE = 0.8
+
+#: Safety factor on the rate limits derived from the slack (float round-off).
+RATE_BOUND_SAFETY = 1.0 - 1e-6
+
+#: Candidate values of ``sigma1`` tried between 0 and its largest admissible value.
+RATE_GRID = 200
+
+
+def override_limits(limits: Sequence[AxisLimits], reserve: float = OVERRIDE_RESERVE) -> list[AxisLimits]:
+    """Planning limits for a program that is streamed with feed override.
+
+    Accelerations of both legs times ``reserve`` (:meth:`AxisLimits.derated`),
+    and the jerk of *both* legs ``reserve * min(j_max, j_max_decel)``: the leg
+    of the stream can differ from the leg of the program while the rate
+    changes (the program speeds up, the slowing rate makes the axis slow
+    down), so the proof needs the program's jerk below the smaller machine
+    jerk. The velocity limit is kept.
+
+    Parameters
+    ----------
+    limits : sequence of AxisLimits
+        The machine's limits (what the monitors enforce).
+    reserve : float
+        Factor in (0, 1) [-].
+
+    Returns
+    -------
+    list of AxisLimits
+
+    Raises
+    ------
+    InvalidInputError
+        ``reserve`` not in (0, 1] (named ``accel``/``jerk`` factor).
+    """
+    out = []
+    for lm in limits:
+        d = lm.derated(accel=reserve, jerk=reserve)
+        jm = reserve * min(lm.j_max, lm.j_max_decel)
+        out.append(AxisLimits(d.v_max, d.a_max, jm, d.a_max_decel, jm,
+                              d.position_min, d.position_max, lm.name))
+    return out
+
+
+def _machine(limits: Sequence[AxisLimits]) -> tuple[np.ndarray, ...]:
+    v = np.array([lm.v_max for lm in limits], dtype=float)
+    a = np.array([lm.a_max for lm in limits], dtype=float)
+    ad = np.array([lm.a_max_decel for lm in limits], dtype=float)
+    j = np.array([lm.j_max for lm in limits], dtype=float)
+    jm = np.array([min(lm.j_max, lm.j_max_decel) for lm in limits], dtype=float)
+    return v, a, ad, j, jm
+
+
+def _rate_bounds(envelope: np.ndarray, limits: Sequence[AxisLimits], top: float):
+    """Per-axis bounds: sigma1 <= s1max, 3 A top sigma1 + V sigma2 <= sj, sigma2 <= s2v."""
+    V, Aa, Ad, J = (np.asarray(x, dtype=float) for x in envelope)
+    _, a, ad, j, jm = _machine(limits)
+    mv = V > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s1max = np.where(mv, np.minimum(a - Aa * top ** 2, ad - Ad * top ** 2) / V, np.inf)
+        sj = np.where(mv, jm - J * top ** 3, np.inf)
+        mu = np.where(mv, J * top ** 3 / j, 0.0)
+        s2v = np.where(mv, j * (1.0 - mu) / V, np.inf)
+    A = np.maximum(Aa, Ad)
+    return V, A, s1max, sj, s2v, mv
+
+
+def override_rate_limits(envelope: Any, limits: Sequence[AxisLimits],
+                         max_rate: float = 1.0) -> tuple[float, float] | None:
+    """Largest rate limits ``(sigma1, sigma2)`` that keep every limit, or None.
+
+    With the program's envelope per axis (:attr:`ProgramSource.envelope`:
+    ``V >= |Q'|``, ``A_acc``/``A_dec`` bounds of ``sign(Q') Q''``,
+    ``J >= |Q'''|``) and the machine's limits ``v, a, a_dec, j, j_dec``,
+    a rate ``0 <= s <= max_rate`` with ``|s'| <= sigma1``,
+    ``|s''| <= sigma2`` gives
+
+        sign(q') q''  = sign(Q') Q'' s^2 + |Q'| s'   in [-(A_dec s^2 + V sigma1), A_acc s^2 + V sigma1]
+        |q'''|        <= J s^3 + 3 max(A_acc, A_dec) s sigma1 + V sigma2
+
+    so the conditions (per axis, ``s = max_rate``)
+
+        A_acc s^2 + V sigma1 <= a,    A_dec s^2 + V sigma1 <= a_dec
+        J s^3 + 3 A s sigma1 + V sigma2 <= min(j, j_dec)
+        sigma2 <= j (1 - J s^3 / j) / V          (velocity look-ahead)
+
+    prove the limits for every override sequence. Among the admissible pairs
+    the one with the shortest stop from ``max_rate`` (``s/sigma1 + sigma1/sigma2``)
+    is returned, times :data:`RATE_BOUND_SAFETY`.
+
+    Parameters
+    ----------
+    envelope : array_like, shape (4, n_axes)
+    limits : sequence of AxisLimits (n_axes)
+        Machine limits.
+    max_rate : float
+        Largest rate ``s`` [-] in (0, 1].
+
+    Returns
+    -------
+    (float, float) or None
+        ``(sigma1 [1/s], sigma2 [1/s^2])``; None when the program has no
+        slack at ``max_rate`` (some axis uses its full acceleration or jerk).
+    """
+    V, A, s1max, sj, s2v, mv = _rate_bounds(envelope, limits, max_rate)
+    if not mv.any():
+        return (1.0, 1e3)
+    if np.any(s1max[mv] <= 0.0) or np.any(sj[mv] <= 0.0) or np.any(s2v[mv] <= 0.0) \
+            or np.any(~np.isfinite(sj[mv] * 0.0 + A[mv] + V[mv])):
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s1hi = float(min(np.min(s1max[mv]), np.min(np.where(A[mv] > 0, sj[mv] / (3.0 * A[mv] * max_rate),
+                                                               np.inf))))
+    if not math.isfinite(s1hi):
+        s1hi = 1e3
+    best = None
+    for x in np.linspace(1.0 / RATE_GRID, 1.0, RATE_GRID):
+        s1 = s1hi * x
+        s2 = float(np.min(np.minimum((sj[mv] - 3.0 * A[mv] * max_rate * s1) / V[mv], s2v[mv])))
+        if not s2 > 0.0:
+            continue
+        s2 = min(s2, 1e6)
+        t = max_rate / s1 + s1 / s2
+        if best is None or t < best[0]:
+            best = (t, s1, s2)
+    if best is None:
+        return None
+    return best[1] * RATE_BOUND_SAFETY, best[2] * RATE_BOUND_SAFETY
+
+
+def reserve_rate(envelope: Any, limits: Sequence[AxisLimits], reserve: float = OVERRIDE_RESERVE,
+                 max_rate: float = 1.0) -> float:
+    """Rate at which a program leaves the same slack as one planned with ``reserve``.
+
+    The largest ``s <= max_rate`` with ``J s^3 <= reserve min(j, j_dec)`` and
+    ``A_acc s^2 <= reserve a``, ``A_dec s^2 <= reserve a_dec`` on every axis
+    (running at rate ``s`` is the program time-scaled by ``s``).
+
+    Returns
+    -------
+    float
+        Rate [-] in (0, max_rate].
+    """
+    V, Aa, Ad, J = (np.asarray(x, dtype=float) for x in envelope)
+    _, a, ad, _, jm = _machine(limits)
+    r = float(max_rate)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for num, den, p in ((reserve * jm, J, 1.0 / 3.0), (reserve * a, Aa, 0.5), (reserve * ad, Ad, 0.5)):
+            m = (V > 0.0) & (den > 0.0)
+            if m.any():
+                r = min(r, float(np.min((num[m] / den[m]) ** p)))
+    return max(r, 1e-6)
 
 
 @dataclass
@@ -212,7 +396,33 @@ class Streamer:
         position (needs ``servo``).
     rate_limits : (float, float), optional
         ``(sigma1 [1/s], sigma2 [1/s^2])``: largest rate of change of the
-        override and of that rate.
+        override and of that rate. Default: :func:`override_rate_limits`
+        of the program's envelope and ``limits`` (the proof); given values
+        are checked against the same inequalities.
+    max_rate : float
+        Rate ``s`` [-] in (0, 1] that an override of 100 % gives (the
+        program time-scaled by it). :func:`reserve_rate` gives the rate that
+        leaves a program planned at full limits the slack of
+        :data:`OVERRIDE_RESERVE`.
+
+    Attributes
+    ----------
+    rate_ceiling : float
+        Largest rate at which rate changes are proven (``max_rate`` when
+        the program has slack there, else :func:`reserve_rate`).
+    jerk_bound : ndarray, shape (n_axes,)
+        Proven bound of the stream's jerk ``|q'''|`` (and of ``|Delta a| / period``)
+        per axis [unit/s^3] (``J s^3 + 3 A s sigma1 + V sigma2`` at the ceiling).
+    clip_count : int
+        Cycles on which the admissible-interval clip changed ``s'`` (0 when
+        the rate limits come from the proof).
+
+    Raises
+    ------
+    InvalidInputError
+        Bad period, limits, pulse or servo settings, ``max_rate`` outside
+        (0, 1], or ``rate_limits`` that the program's slack does not allow
+        (the message names the axis, the bound and the value).
 
     Notes
     -----
@@ -226,7 +436,7 @@ class Streamer:
                  servo: ServoParams | Sequence[ServoParams] | None = None,
                  pulse_equivalents: Any = None, max_pulse_rate: Any = math.inf,
                  safety: SafetyConfig | None = None, wait_in_position: bool = False,
-                 rate_limits: tuple[float, float] | None = None) -> None:
+                 rate_limits: tuple[float, float] | None = None, max_rate: float = 1.0) -> None:
         self.source: ProgramSource = as_source(program)
         src = self.source
         self.period = check_positive(period, "period")
@@ -256,16 +466,48 @@ class Streamer:
                                zip(eqs, rates, src.start_position, src.names)]
             self._peq = [pa.pulse_equivalent for pa in self.pulse_axes]
         self.wait_in_position = bool(wait_in_position) and self.servo is not None
+        top = check_finite(max_rate, "max_rate")
+        if not 0.0 < top <= 1.0:
+            raise InvalidInputError(f"max_rate must be in (0, 1], got {max_rate!r}")
+        self.max_rate = top
+        env = src.envelope
+        ceil = top
+        auto = override_rate_limits(env, self.limits, top)
+        if auto is None:
+            ceil = min(top, reserve_rate(env, self.limits))
+            auto = override_rate_limits(env, self.limits, ceil)
+        self.rate_ceiling = ceil
         if rate_limits is None:
-            vm = np.array([lm.v_max for lm in self.limits])
-            am = np.array([min(lm.a_max, lm.a_max_decel) for lm in self.limits])
-            jm = np.array([min(lm.j_max, lm.j_max_decel) for lm in self.limits])
-            s1 = RATE_LIMIT_FRACTION * float(np.min(am / vm))
-            s2 = RATE_LIMIT_FRACTION * float(np.min(jm / vm))
-            rate_limits = (s1 if math.isfinite(s1) and s1 > 0 else 1.0,
-                           s2 if math.isfinite(s2) and s2 > 0 else 1e3)
+            if auto is None:  # the program itself exceeds a limit: legacy law, clip only
+                vm = np.array([lm.v_max for lm in self.limits])
+                am = np.array([min(lm.a_max, lm.a_max_decel) for lm in self.limits])
+                jm = np.array([min(lm.j_max, lm.j_max_decel) for lm in self.limits])
+                s1 = RATE_LIMIT_FRACTION * float(np.min(am / vm))
+                s2 = RATE_LIMIT_FRACTION * float(np.min(jm / vm))
+                auto = (s1 if math.isfinite(s1) and s1 > 0 else 1.0,
+                        s2 if math.isfinite(s2) and s2 > 0 else 1e3)
+                self.rate_ceiling = ceil = 0.0
+            rate_limits = auto
         self.rate_limits = (check_positive(rate_limits[0], "rate_limits[0]"),
                             check_positive(rate_limits[1], "rate_limits[1]"))
+        V, A, s1max, sj, s2v, mv = _rate_bounds(env, self.limits, max(ceil, 1e-300))
+        s1, s2 = self.rate_limits
+        self.jerk_bound = np.where(mv, env[3] * ceil ** 3 + 3.0 * A * ceil * s1 + V * s2, 0.0)
+        if ceil > 0.0:
+            for k in np.nonzero(mv)[0]:
+                nm = self.limits[k].name
+                if s1 > s1max[k] * (1.0 + 1e-9):
+                    raise InvalidInputError(
+                        f"rate_limits[0] {s1!r} of axis {nm} exceeds {float(s1max[k])!r} 1/s: "
+                        f"the program's acceleration envelope plus V sigma1 would exceed the "
+                        f"acceleration limit")
+                if 3.0 * A[k] * ceil * s1 + V[k] * s2 > sj[k] * (1.0 + 1e-9) or s2 > s2v[k] * (1.0 + 1e-9):
+                    raise InvalidInputError(
+                        f"rate_limits {self.rate_limits!r} of axis {nm}: the stream's jerk bound "
+                        f"{float(self.jerk_bound[k])!r} exceeds the jerk limit "
+                        f"{float(min(self.limits[k].j_max, self.limits[k].j_max_decel))!r} "
+                        f"(or sigma2 exceeds the velocity look-ahead bound {float(s2v[k])!r})")
+        self.clip_count = 0
         self._am = np.array([lm.a_max for lm in self.limits])
         self._vm = np.array([lm.v_max for lm in self.limits])
         self._jm2 = 2.0 * np.array([lm.j_max for lm in self.limits])
@@ -299,6 +541,11 @@ class Streamer:
         self._wait_since = None
         self._last = None
         self._mcache = None
+        if self.rate_ceiling < self.max_rate:
+            _log.info(
+                f"override changes are proven up to rate {self.rate_ceiling:.4g} only (the program "
+                "leaves no slack at full rate: plan it with override_limits); above it the rate "
+                "changes at the program's stop points", )
 
     # ================================================================ commands
     def _push(self, *cmd) -> None:
@@ -381,6 +628,8 @@ class Streamer:
 
     def _apply(self, cmd) -> None:
         kind = cmd[0]
+        if kind in ("override", "pause", "resume"):
+            self._blk = None  # the rate target changes: drop the block sampled ahead
         if kind == "override":
             self.override = cmd[1]
             self._event("override", f"override {100 * cmd[1]:g} %")
@@ -447,13 +696,13 @@ class Streamer:
         self._mode = "path"
         self._blk = None
         # at rest on the path (start, stop point): full rate at once; else ramp from 0
-        self.s = self.override if not np.any(qdp[0]) else 0.0
+        self.s = self._target() if not np.any(qdp[0]) else 0.0
         self.sd = 0.0
 
     def _begin_stop(self, why: str) -> None:
         self.state = "stopping"
         self._stop_kind = why
-        if self._mode == "path" and self.source.on_path(self.tau):
+        if self._mode == "path" and self.source.on_path(self.tau) and self._can_change_rate():
             self._path_stop = True
             self._blk = None
             return
@@ -496,10 +745,19 @@ class Streamer:
                     f"{fault} -> emergency stop (output cleared, brakes engaged)")
 
     # ================================================================ one cycle
+    def _target(self) -> float:
+        """Target rate: the override times ``max_rate``, 0 when paused or stopping on the path."""
+        return 0.0 if (self.paused or self._path_stop) else self.override * self.max_rate
+
+    def _can_change_rate(self) -> bool:
+        """True when the rate may change now (at or below the proven ceiling, or no proof at all)."""
+        return self.rate_ceiling <= 0.0 or self.s <= self.rate_ceiling
+
     def _rate_step(self, Qd: np.ndarray, Qdd: np.ndarray) -> float:
-        """Choose ``s'`` for this cycle (jerk-limited law, admissible interval)."""
+        """Choose ``s'`` for this cycle (jerk-limited law; ``|Delta s'| <= sigma2 dt`` always)."""
         s, sd, dt = self.s, self.sd, self.period
-        target = 0.0 if (self.paused or self._path_stop) else self.override
+        ceil = self.rate_ceiling if self.rate_ceiling > 0.0 else self.max_rate
+        target = min(self._target(), ceil)
         s1, s2 = self.rate_limits
         e = target - s
         if abs(e) <= RATE_SNAP and abs(sd) <= s2 * dt:
@@ -508,15 +766,16 @@ class Streamer:
         # braking curve with half the s'' budget, so the rate-limited s' can
         # follow it without lagging (no jump in s' when the target is reached)
         des = math.copysign(min(s1, math.sqrt(s2 * abs(e))), e)
-        # the same braking curve towards the bounds 0 and 1 of the rate
-        des = min(max(des, -math.sqrt(s2 * s)), math.sqrt(s2 * max(1.0 - s, 0.0)))
+        # the same braking curve towards the bounds 0 and the ceiling of the rate
+        des = min(max(des, -math.sqrt(s2 * s)), math.sqrt(s2 * max(ceil - s, 0.0)))
         new = sd + min(max(des - sd, -s2 * dt), s2 * dt)
-        if abs(e) <= s2 * dt * dt and abs(new) <= 2.0 * s2 * dt:
+        if abs(e) <= s2 * dt * dt and abs(e / dt - sd) <= s2 * dt and abs(e / dt) <= s1:
             new = e / dt  # last step: land on the target
-        new = min(max(new, -s / dt), (1.0 - s) / dt)
-        # admissible interval: -a_dec <= sign(Q') (Q'' s^2 + Q' s') <= a_cap, with
-        # a_cap = min(a_max, sqrt(2 j_max (v_max - |v|))): the acceleration from which
-        # a ramp-down at j_max still ends at or below v_max (the velocity look-ahead)
+        new = min(max(new, -s / dt), (ceil - s) / dt)
+        # safety net (never active with rate limits from the proof, see the tests):
+        # -a_dec <= sign(Q') (Q'' s^2 + Q' s') <= a_cap, a_cap = min(a_max,
+        # sqrt(2 j_max (v_max - |v|))): the acceleration from which a ramp-down at
+        # j_max still ends at or below v_max (the velocity look-ahead)
         g = np.abs(Qd)
         m = g > 0.0
         if m.any():
@@ -526,19 +785,30 @@ class Streamer:
             cap = np.sqrt(np.maximum(self._jm2[m] * (self._vm[m] - gm * s), 0.0))
             lo = float(np.max((-self._ad[m] - h) / gm))
             hi = float(np.min((np.minimum(self._am[m], cap) - h) / gm))
-            new = min(max(new, min(lo, 0.0)), max(hi, 0.0))
+            clipped = min(max(new, min(lo, 0.0)), max(hi, 0.0))
+            if clipped != new:
+                self.clip_count += 1
+                new = clipped
         return new
 
     def _path_candidate(self):
         src = self.source
         dt = self.period
-        steady = (self.sd == 0.0 and not self.paused and not self._path_stop
-                  and self.s == self.override and not self._waiting)
+        target = self._target()
+        steady = (self.sd == 0.0 and not self._waiting
+                  and (self.s == target or not self._can_change_rate()))
+        stops = self._stops
+        if steady and self.s != target:
+            # above the proven ceiling: the rate holds until the next stop point
+            # (rest), where it switches to the target at once
+            stops = [x for x in src.stop_points if x > self.tau][:1] or [src.duration]
+            if self._stops:
+                stops = [min(stops[0], self._stops[0])]
         if steady and self.s > 0.0:
             blk = self._blk
             if blk is None or blk[4] >= blk[0].size or blk[0][blk[4]] != self.tau:
                 taus = self.tau + self.s * dt * np.arange(BLOCK_CYCLES + 1)
-                nxt = self._stops[0] if self._stops else src.duration
+                nxt = stops[0] if stops else src.duration
                 taus = np.minimum(taus, nxt)
                 Q, Qd, Qdd = src.sample(taus)
                 blk = [taus, Q, Qd, Qdd, 0]
@@ -548,11 +818,21 @@ class Streamer:
             q, qd, qdd = blk[1][i], blk[2][i], blk[3][i]
             sd = 0.0
             tau_next = blk[0][i + 1] if i + 1 < blk[0].size else None
+            if self.s != target and not np.any(qd) and not np.any(qdd):
+                self.s = target  # at rest on the path: the rate switches at once
+                self._blk = None
+                tau_next = None
         else:
             self._blk = None
             Q, Qd, Qdd = src.sample(self.tau)
             q, qd, qdd = Q[0], Qd[0], Qdd[0]
-            sd = 0.0 if self._waiting else self._rate_step(qd, qdd)
+            if self._waiting:
+                sd = 0.0
+            elif self.s != target and not np.any(qd) and not np.any(qdd) and self.sd == 0.0:
+                self.s = target  # at rest on the path (start, stop point): no ramp needed
+                sd = 0.0
+            else:
+                sd = self._rate_step(qd, qdd)
             tau_next = None
         s = self.s
         v = qd * s
