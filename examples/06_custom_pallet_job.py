@@ -5,8 +5,9 @@ Run::
     python examples/06_custom_pallet_job.py --out /tmp/trajkit-examples
 
 Writes the job as ``custom_pallet_job.yaml`` into ``--out`` (run it again
-with ``trajkit pallet OUT/custom_pallet_job.yaml``), plans it with both
-planners, verifies them, and writes the B-velocity figure of box 0.
+with ``trajkit pallet OUT/custom_pallet_job.yaml``), plans it with the three
+planners (ptp, merged, optimal), verifies them, and writes the B-velocity figure
+of box 0.
 Lengths in the job are in mm, angles in deg, times in s.
 """
 
@@ -18,6 +19,7 @@ from pathlib import Path
 
 from trajkit.io import load_job
 from trajkit.palletizing import plan_cycle, summarize, verify_plan
+from trajkit.palletizing.report import bound_lines
 
 JOB = """
 name: pinwheel, 4 layers
@@ -47,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     job_path.write_text(JOB.lstrip(), encoding="utf-8")
 
     sc = load_job(job_path)
-    plans = {n: plan_cycle(sc, n) for n in ("ptp", "merged")}
+    plans = {n: plan_cycle(sc, n) for n in ("ptp", "merged", "optimal")}
     for p in plans.values():
         verify_plan(p).raise_if_failed()
     s = summarize(plans)
@@ -55,6 +57,8 @@ def main(argv: list[str] | None = None) -> int:
     for n, d in s["plans"].items():
         print(f"  {n:7s} {d['total_s']:8.3f} s  {d['per_box_s']:.3f} s/box  "
               f"reduction {d['reduction_pct']:.1f} %")
+    for line in bound_lines(s):
+        print(" ", line)
 
     from trajkit.plot import require_matplotlib
     from trajkit.plot.pallet import plot_b_velocity

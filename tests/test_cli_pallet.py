@@ -15,7 +15,7 @@ from trajkit.palletizing import plan_cycle, seed_scenario
 @pytest.fixture(scope="module")
 def seed_totals():
     sc = seed_scenario()
-    return {n: plan_cycle(sc, n).total_s for n in ("ptp", "merged")}
+    return {n: plan_cycle(sc, n).total_s for n in ("ptp", "merged", "optimal")}
 
 
 def test_json_shape_and_values(capsys, seed_totals):
@@ -23,21 +23,28 @@ def test_json_shape_and_values(capsys, seed_totals):
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"boxes", "plans"}
     assert out["boxes"] == 25
-    assert list(out["plans"]) == ["ptp", "merged"]
+    assert list(out["plans"]) == ["ptp", "merged", "optimal"]
     for n, d in out["plans"].items():
         assert d["total_s"] == pytest.approx(seed_totals[n], rel=1e-15)
         assert d["per_box_s"] == pytest.approx(seed_totals[n] / 25, rel=1e-15)
         assert d["verified"] is True
     assert out["plans"]["merged"]["reduction_pct"] == pytest.approx(
         100 * (1 - seed_totals["merged"] / seed_totals["ptp"]), rel=1e-12)
+    opt = out["plans"]["optimal"]
+    assert opt["total_s"] < out["plans"]["merged"]["total_s"]
+    assert opt["window_floor_s"] <= opt["lower_bound_s"] <= opt["total_s"]
+    assert opt["vs_lower_bound_pct"] == pytest.approx(
+        100 * (opt["total_s"] / opt["lower_bound_s"] - 1), rel=1e-12)
+    assert "paper_planned_s" not in opt  # the paper has no such plan
 
 
-def test_table_beside_paper(capsys):
+def test_table_beside_paper(capsys, seed_totals):
     assert main(["pallet", str(seed_job_path())]) == 0
     out = capsys.readouterr().out
     assert "107.854" in out and "91.850" in out
     assert "107.753" in out and "89.422" in out
-    assert "verified: ptp ok" in out
+    assert f"{seed_totals['optimal']:.3f}" in out and "above its lower bound" in out
+    assert "verified: ptp ok" in out and "optimal ok" in out
 
 
 def test_plots_written(tmp_path, capsys):
@@ -59,7 +66,7 @@ def test_plots_written(tmp_path, capsys):
 
 @pytest.mark.parametrize("args,match", [
     (["pallet", "/nonexistent/job.yaml"], "No such file"),
-    (["pallet", "--planner", "fastest"], r"--planner must be one of \['merged', 'ptp'\], got 'fastest'"),
+    (["pallet", "--planner", "fastest"], r"--planner must be one of \['merged', 'optimal', 'ptp'\], got 'fastest'"),
     (["pallet", "--box", "25"], r"--box must be in \[0, 24\] for this job, got 25"),
 ])
 def test_errors_one_line_exit_2(capsys, args, match):

@@ -13,7 +13,8 @@ def test_demo_writes_figures(tmp_path, capsys, monkeypatch):
     out = capsys.readouterr().out
     folder = tmp_path / "trajkit-demo"
     assert f"figures in {folder.resolve()}" in out
-    assert "107.854" in out and "verified: ptp ok, merged ok" in out
+    assert "107.854" in out and "verified: ptp ok, merged ok, optimal ok" in out
+    assert "optimal: " in out and "above its lower bound" in out
     names = sorted(os.listdir(folder))
     for n in ("pallet_b_velocity.png", "pallet_cycle_vs_zmax.png", "pallet_gripper_path_3d.png"):
         assert n in names and (folder / n).stat().st_size > 10_000

@@ -27,7 +27,7 @@ from trajkit.palletizing import (
     time_at_position,
     verify_plan,
 )
-from trajkit.palletizing.planners import HORIZONTAL_JOINTS, _assemble, plan_trip_ptp
+from trajkit.palletizing.planners import HORIZONTAL_JOINTS, _assemble
 from trajkit.palletizing.report import PAPER_TABLE1, summarize
 from trajkit.palletizing.scenario import PalletScenario
 
@@ -266,7 +266,7 @@ def test_planner_registry_accepts_a_third_planner(seed):
         assert "paper_planned_s" not in s["plans"]["test-slow"]
     finally:
         PLANNERS.pop("test-slow")
-    with pytest.raises(InvalidInputError, match=r"planner must be one of \['merged', 'ptp'\], got 'x'"):
+    with pytest.raises(InvalidInputError, match=r"planner must be one of \['merged', 'optimal', 'ptp'\], got 'x'"):
         plan_cycle(seed, "x")
 
 

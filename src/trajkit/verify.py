@@ -45,6 +45,7 @@ __all__ = [
     "VerificationReport",
     "TrajectoryReport",
     "verify_profile",
+    "verify_state_profile",
     "verify_trajectory",
 ]
 
@@ -465,11 +466,97 @@ def verify_profile(
     dsign = goal - start
     ulp_p = math.ulp(max(abs(start), abs(goal)))
     pos_tol = goal_rtol * dist + POSITION_ULPS * ulp_p
-    p, v, a_prev_end = 0.0, 0.0, 0.0
+    w.position(start, lim.position_min, lim.position_max, p_scale, 0.0)
+    p, v, a_prev_end, t0, cont = _exact_phases(w, lim, start, 0.0, 0.0, durs, jerks, a_enter,
+                                               v_scale, a_scale, p_scale, rtol)
+    # final acceleration must return to zero (or jump there on a trapezoid leg)
+    if a_prev_end != 0.0:
+        leg = _leg_limits(lim, v, a_prev_end, True)
+        rel = abs(a_prev_end) / a_scale if a_scale > 0.0 else math.inf
+        if leg is not None and math.isfinite(leg[3]):
+            cont = max(cont, rel)
+            w.check("continuity_acceleration", rel, rtol, a_prev_end, 0.0, t0)
+        end_a = rel if leg is not None and math.isfinite(leg[3]) else 0.0
+    else:
+        end_a = 0.0
+    goal_err = abs(p - dsign) / dist if dist > 0.0 else abs(p - dsign)
+    w.check("goal", goal_err, goal_rtol, start + p, goal, t0)
+    end_v = abs(v) / v_scale if v_scale > 0.0 else abs(v)
+    w.check("end_velocity", end_v, rtol, v, 0.0, t0)
+
+    # agreement with the planner's own boundary table (what sample() uses)
+    if hasattr(profile, "boundary_states"):
+        bs = np.asarray(profile.boundary_states(), dtype=float)
+        pp, vv = 0.0, 0.0
+        for k in range(7):
+            e_abs = abs(bs[k, 0] - (start + pp))
+            ep = e_abs / p_scale
+            ev = abs(bs[k, 1] - vv) / v_scale if v_scale > 0.0 else abs(bs[k, 1] - vv)
+            cont = max(cont, ep, ev)
+            w.check("continuity_position", e_abs, pos_tol, bs[k, 0], start + pp)
+            w.check("continuity_velocity", ev, rtol, bs[k, 1], vv)
+            pp, vv, _ = _poly_state(pp, vv, a_enter[k], jerks[k], durs[k])
+
+    # dense samples
+    if n_samples and T > 0.0:
+        ts = np.linspace(0.0, T, n_samples)
+        smp = profile.sample(ts)
+        P = np.asarray(smp.position)
+        V = np.asarray(smp.velocity)
+        A = np.asarray(smp.acceleration)
+        J = np.asarray(smp.jerk)
+        _check_samples(w, lim, ts, P, V, A, J, p_scale)
+        # samples against the independent integration (continuity seen from
+        # sample(): a wrong boundary table would show here)
+        # samples against the independent integration (a wrong boundary
+        # table would show here). Both place a sample time among phase
+        # boundaries that are sums of rounded durations, so they may differ
+        # by a few ulp of T in time: allow the matching p and v change.
+        ref = _integrate_at(start, durs, jerks, a_enter, ts)
+        dtq = TIME_ULPS * math.ulp(T)
+        ip = int(np.argmax(np.abs(P - ref[0])))
+        iv = int(np.argmax(np.abs(V - ref[1])))
+        e_p = abs(float(P[ip] - ref[0][ip]))
+        e_v = abs(float(V[iv] - ref[1][iv]))
+        cont = max(cont, e_p / p_scale, e_v / v_scale if v_scale > 0.0 else e_v)
+        w.check("sample_position", e_p, pos_tol + v_scale * dtq, float(P[ip]),
+                float(ref[0][ip]), float(ts[ip]))
+        w.check("sample_velocity", e_v, rtol * v_scale + a_scale * dtq, float(V[iv]),
+                float(ref[1][iv]), float(ts[iv]))
+
+    return VerificationReport(
+        axis=axis,
+        ok=not w.violations,
+        ratios=dict(w.ratios),
+        goal_error=goal_err,
+        end_velocity_error=end_v,
+        end_acceleration_error=end_a,
+        continuity_error=cont,
+        duration_error=dur_err,
+        n_samples=n_samples if T > 0.0 else 0,
+        violations=tuple(w.violations),
+    )
+
+
+def _exact_phases(w, lim, start, v_start, a_start, durs, jerks, a_enter,
+                  v_scale, a_scale, p_scale, rtol):
+    """Exact limit pass over constant-jerk phases (cut at the roots of a and v).
+
+    Integrates the displacement from ``(0, v_start, a_start)`` phase by phase;
+    every limit is checked at piece ends (the extrema of v lie at a = 0 and of
+    p at v = 0, both cut points) with the leg of each piece. An acceleration
+    jump between phases is allowed only on a leg whose jerk limit is infinite.
+
+    Returns
+    -------
+    (p, v, a_end, t_end, continuity_error)
+        Displacement, velocity and acceleration after the last phase, its
+        time, and the largest relative acceleration jump found.
+    """
+    p, v, a_prev_end = 0.0, float(v_start), float(a_start)
     t0 = 0.0
     cont = 0.0
-    w.position(start, lim.position_min, lim.position_max, p_scale, 0.0)
-    for k in range(7):
+    for k in range(len(durs)):
         dt, j, a0 = durs[k], jerks[k], a_enter[k]
         if dt <= 0.0 or not math.isfinite(dt):
             continue
@@ -538,63 +625,96 @@ def verify_profile(
                 w.ratio("jerk", j, max(lim.j_max, lim.j_max_decel), t0 + tm)
         p, v, a_prev_end = _poly_state(p, v, a0, j, dt)
         t0 += dt
-    # final acceleration must return to zero (or jump there on a trapezoid leg)
-    if a_prev_end != 0.0:
-        leg = _leg_limits(lim, v, a_prev_end, True)
-        rel = abs(a_prev_end) / a_scale if a_scale > 0.0 else math.inf
-        if leg is not None and math.isfinite(leg[3]):
-            cont = max(cont, rel)
-            w.check("continuity_acceleration", rel, rtol, a_prev_end, 0.0, t0)
-        end_a = rel if leg is not None and math.isfinite(leg[3]) else 0.0
-    else:
-        end_a = 0.0
-    goal_err = abs(p - dsign) / dist if dist > 0.0 else abs(p - dsign)
-    w.check("goal", goal_err, goal_rtol, start + p, goal, t0)
-    end_v = abs(v) / v_scale if v_scale > 0.0 else abs(v)
-    w.check("end_velocity", end_v, rtol, v, 0.0, t0)
+    return p, v, a_prev_end, t0, cont
 
-    # agreement with the planner's own boundary table (what sample() uses)
-    if hasattr(profile, "boundary_states"):
-        bs = np.asarray(profile.boundary_states(), dtype=float)
-        pp, vv = 0.0, 0.0
-        for k in range(7):
-            e_abs = abs(bs[k, 0] - (start + pp))
-            ep = e_abs / p_scale
-            ev = abs(bs[k, 1] - vv) / v_scale if v_scale > 0.0 else abs(bs[k, 1] - vv)
-            cont = max(cont, ep, ev)
-            w.check("continuity_position", e_abs, pos_tol, bs[k, 0], start + pp)
-            w.check("continuity_velocity", ev, rtol, bs[k, 1], vv)
-            pp, vv, _ = _poly_state(pp, vv, a_enter[k], jerks[k], durs[k])
 
-    # dense samples
+def verify_state_profile(
+    profile: Any,
+    rtol: float = LIMIT_RTOL,
+    n_samples: int = DEFAULT_SAMPLES,
+    goal_rtol: float = GOAL_RTOL,
+) -> VerificationReport:
+    """Check a profile between moving states against its limits, exactly and on samples.
+
+    The phases are re-integrated from the start state (the planner's
+    boundary table is not trusted) and cut at the roots of ``a`` and ``v``;
+    every limit is checked at the piece ends with the leg in force (accel
+    limits while |v| grows, decel limits while it shrinks), exactly as in
+    :func:`verify_profile`. Any number of phases; the start and goal may be
+    moving states.
+
+    Parameters
+    ----------
+    profile : StateProfile
+        From :func:`~trajkit.profiles.state.plan_state_to_state` or
+        :func:`~trajkit.profiles.state.plan_velocity` (or any object with
+        ``start_state``, ``goal_state``, ``phase_durations``, ``jerks``,
+        ``phase_accelerations``, ``duration``, ``limits`` and ``sample(t)``).
+        A brake pre-phase (``n_brake_phases``) is exempt from the limits: it
+        exists because the start state breaks them.
+    rtol, n_samples, goal_rtol
+        As in :func:`verify_profile`; ``goal_rtol`` is relative to the
+        distance travelled (or to ``max(1, |goal|)`` for a zero distance).
+
+    Returns
+    -------
+    VerificationReport
+    """
+    if not (rtol >= 0.0 and math.isfinite(rtol)):
+        raise InvalidInputError(f"rtol must be finite and >= 0, got {rtol!r}")
+    n_samples = int(n_samples)
+    if n_samples < 0 or n_samples == 1:
+        raise InvalidInputError(f"n_samples must be 0 or >= 2, got {n_samples!r}")
+    lim = profile.limits
+    w = _Worst(lim.name, rtol)
+    p0, v0, a0 = (float(x) for x in profile.start_state)
+    pg, vg, ag = (float(x) for x in profile.goal_state)
+    durs = [float(x) for x in profile.phase_durations]
+    jerks = [float(x) for x in profile.jerks]
+    a_enter = [float(x) for x in profile.phase_accelerations]
+    nb = int(getattr(profile, "n_brake_phases", 0))
+    T = float(profile.duration)
+    # the brake pre-phase: integrate without checks
+    p, v, a = 0.0, v0, a0
+    for k in range(nb):
+        p, v, a = _poly_state(p, v, a_enter[k], jerks[k], durs[k])
+    tb = math.fsum(durs[:nb])
+    # scales: the largest |v| and |a| at phase boundaries
+    vs, as_ = [abs(v), abs(vg)], [abs(a), abs(ag)]
+    pp, vv = p, v
+    for k in range(nb, len(durs)):
+        as_.append(abs(a_enter[k]))
+        pp, vv, aa = _poly_state(pp, vv, a_enter[k], jerks[k], durs[k])
+        vs.append(abs(vv))
+        as_.append(abs(aa))
+    v_scale, a_scale = max(vs), max(as_)
+    dist = abs(pg - p0)
+    p_scale = dist if dist > 0.0 else max(abs(p0), 1.0)
+    bad = [k for k, d in enumerate(durs) if not (d >= 0.0 and math.isfinite(d))]
+    for k in bad:
+        w._fail(f"phase_duration[{k}]", durs[k], 0.0, math.nan)
+    total = math.fsum(durs)
+    dur_err = abs(total - T) / T if T > 0 else abs(total)
+    w.check("duration", dur_err, DURATION_SUM_RTOL, total, T)
+    start_main = p0 + p
+    w.position(start_main, lim.position_min, lim.position_max, p_scale, tb)
+    dp, v, a, t_main, cont = _exact_phases(w, lim, start_main, v, a, durs[nb:], jerks[nb:],
+                                           a_enter[nb:], v_scale, a_scale, p_scale, rtol)
+    ulp_p = math.ulp(max(abs(p0), abs(pg)))
+    pos_tol = goal_rtol * p_scale + POSITION_ULPS * ulp_p
+    goal_err = abs(start_main + dp - pg) / p_scale
+    w.check("goal", abs(start_main + dp - pg), pos_tol, start_main + dp, pg, T)
+    end_v = abs(v - vg) / v_scale if v_scale > 0.0 else abs(v - vg)
+    w.check("end_velocity", end_v, rtol, v, vg, T)
+    end_a = abs(a - ag) / a_scale if a_scale > 0.0 else abs(a - ag)
+    w.check("end_acceleration", end_a, rtol, a, ag, T)
     if n_samples and T > 0.0:
-        ts = np.linspace(0.0, T, n_samples)
+        ts = np.linspace(tb, T, n_samples)
         smp = profile.sample(ts)
-        P = np.asarray(smp.position)
-        V = np.asarray(smp.velocity)
-        A = np.asarray(smp.acceleration)
-        J = np.asarray(smp.jerk)
-        _check_samples(w, lim, ts, P, V, A, J, p_scale)
-        # samples against the independent integration (continuity seen from
-        # sample(): a wrong boundary table would show here)
-        # samples against the independent integration (a wrong boundary
-        # table would show here). Both place a sample time among phase
-        # boundaries that are sums of rounded durations, so they may differ
-        # by a few ulp of T in time: allow the matching p and v change.
-        ref = _integrate_at(start, durs, jerks, a_enter, ts)
-        dtq = TIME_ULPS * math.ulp(T)
-        ip = int(np.argmax(np.abs(P - ref[0])))
-        iv = int(np.argmax(np.abs(V - ref[1])))
-        e_p = abs(float(P[ip] - ref[0][ip]))
-        e_v = abs(float(V[iv] - ref[1][iv]))
-        cont = max(cont, e_p / p_scale, e_v / v_scale if v_scale > 0.0 else e_v)
-        w.check("sample_position", e_p, pos_tol + v_scale * dtq, float(P[ip]),
-                float(ref[0][ip]), float(ts[ip]))
-        w.check("sample_velocity", e_v, rtol * v_scale + a_scale * dtq, float(V[iv]),
-                float(ref[1][iv]), float(ts[iv]))
-
+        _check_samples(w, lim, ts, np.asarray(smp.position), np.asarray(smp.velocity),
+                       np.asarray(smp.acceleration), np.asarray(smp.jerk), p_scale)
     return VerificationReport(
-        axis=axis,
+        axis=lim.name,
         ok=not w.violations,
         ratios=dict(w.ratios),
         goal_error=goal_err,

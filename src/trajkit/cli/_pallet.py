@@ -20,13 +20,13 @@ from ._console import print_json, print_table
 __all__ = ["register", "run_pallet", "DEFAULT_PLANNERS"]
 
 #: Planners run by default, in table order.
-DEFAULT_PLANNERS = ("ptp", "merged")
+DEFAULT_PLANNERS = ("ptp", "merged", "optimal")
 
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "pallet",
-        help="plan a palletizing job (classic PTP vs merged), table like seed 000's table 1",
+        help="plan a palletizing job (classic PTP, merged, optimal), table like seed 000's table 1",
         description="Plan a palletizing job with each planner, verify the plans, and print the "
                     "total planned time, time per box and reduction beside seed 000's table 1. "
                     "Without JOB the shipped seed scenario (25 boxes) is used.",
@@ -37,7 +37,7 @@ def register(subparsers: Any) -> None:
                    help='print {"boxes": N, "plans": {name: {"total_s", "per_box_s", ...}}}')
     p.add_argument("--plot", metavar="DIR", help="write the figures (PNG) into DIR")
     p.add_argument("--planner", action="append", metavar="NAME",
-                   help="planner to run (repeatable; default: ptp and merged)")
+                   help="planner to run (repeatable; default: ptp, merged and optimal)")
     p.add_argument("--box", type=int, default=0,
                    help="box whose cycle the velocity and Zmax figures show (default 0)")
     p.add_argument("--no-verify", action="store_true", help="skip the plan verification")
@@ -106,7 +106,7 @@ def run_pallet(job: str | None, planners=DEFAULT_PLANNERS, verify: bool = True,
 
 
 def _cmd_pallet(args: argparse.Namespace) -> int:
-    from ..palletizing.report import TABLE_COLUMNS, summarize, table_rows
+    from ..palletizing.report import TABLE_COLUMNS, bound_lines, summarize, table_rows
 
     planners = args.planner or DEFAULT_PLANNERS
     scenario, plans, reports = run_pallet(
@@ -132,6 +132,8 @@ def _cmd_pallet(args: argparse.Namespace) -> int:
         "(paper: seed 000 table 1, 25 boxes)",
         TABLE_COLUMNS, table_rows(summary),
     )
+    for line in bound_lines(summary):
+        print(line)
     if reports:
         print("verified: " + ", ".join(
             f"{n} ok ({r.checks['samples']} samples, {r.checks['phase_boundaries']} phase "

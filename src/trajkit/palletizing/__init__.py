@@ -4,7 +4,7 @@ Quick start::
 
     from trajkit.palletizing import seed_scenario, plan_cycle, verify_plan
     sc = seed_scenario()
-    plan = plan_cycle(sc, "merged")      # or "ptp"
+    plan = plan_cycle(sc, "optimal")     # or "merged", "ptp"
     verify_plan(plan).raise_if_failed()
     print(plan.total_s, plan.per_box_s)
 """
@@ -33,6 +33,13 @@ from .planners import (
     plan_trip_ptp,
     register_planner,
 )
+from .optimal import (
+    OptimalTrip,
+    clearance_window,
+    plan_cycle_optimal,
+    plan_trip_optimal,
+    trip_lower_bound,
+)
 from .report import PAPER_TABLE1, summarize, table_rows
 from .scenario import PalletScenario, TripSpec, seed_scenario
 from .timeline import Piece, Timeline, TimelineSample
@@ -45,6 +52,8 @@ __all__ = [
     "seed_layer",
     "PLANNERS", "CyclePlan", "TripPlan", "merged_trip_times", "optimal_zmax", "plan_cycle",
     "plan_trip_merged", "plan_trip_ptp", "register_planner",
+    "OptimalTrip", "clearance_window", "plan_cycle_optimal", "plan_trip_optimal",
+    "trip_lower_bound",
     "PAPER_TABLE1", "summarize", "table_rows",
     "PalletScenario", "TripSpec", "seed_scenario",
     "Piece", "Timeline", "TimelineSample",

@@ -6,7 +6,7 @@ from typing import Mapping
 
 from .planners import CyclePlan
 
-__all__ = ["PAPER_TABLE1", "PAPER_BOXES", "summarize", "table_rows", "TABLE_COLUMNS"]
+__all__ = ["PAPER_TABLE1", "PAPER_BOXES", "summarize", "table_rows", "bound_lines", "TABLE_COLUMNS"]
 
 #: Seed 000, table 1 (25 boxes): planned and measured times [s]; per box is
 #: the measured time / 25 as printed in the paper.
@@ -52,7 +52,30 @@ def summarize(plans: Mapping[str, CyclePlan], baseline: str = "ptp") -> dict:
                 d["paper_reduction_pct"] = 100.0 * (1.0 - paper["planned_s"] / paper_base)
             if n == PAPER_BOXES:
                 d["vs_paper_pct"] = 100.0 * (p.total_s / paper["planned_s"] - 1.0)
+        if "lower_bound_s" in p.info:
+            d["lower_bound_s"] = float(p.info["lower_bound_s"])
+            d["window_floor_s"] = float(p.info["window_floor_s"])
+            d["vs_lower_bound_pct"] = 100.0 * (p.total_s / d["lower_bound_s"] - 1.0)
+            d["vs_window_floor_pct"] = 100.0 * (p.total_s / d["window_floor_s"] - 1.0)
+            cands: dict = {}
+            for t in p.info.get("trips", ()):
+                cands[t.candidate] = cands.get(t.candidate, 0) + 1
+            d["trip_candidates"] = cands
         out["plans"][name] = d
+    return out
+
+
+def bound_lines(summary: dict) -> list[str]:
+    """One line per plan that knows its lower bound (the ``optimal`` plan)."""
+    out = []
+    for name, d in summary["plans"].items():
+        if "lower_bound_s" in d:
+            out.append(
+                f"{name}: {d['total_s']:.3f} s, {d['vs_lower_bound_pct']:.2f} % above its lower "
+                f"bound {d['lower_bound_s']:.3f} s (max of B alone and t_up + tH + t_down per "
+                f"trip); {d['vs_window_floor_pct']:.2f} % above the window floor "
+                f"{d['window_floor_s']:.3f} s (sum of t_up + tH + t_down)"
+            )
     return out
 
 

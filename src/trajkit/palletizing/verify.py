@@ -13,7 +13,9 @@ import numpy as np
 
 from .._constants import GOAL_RTOL, LIMIT_RTOL
 from ..errors import TrajkitError
-from ._crossing import time_at_position
+from ..profiles import Profile
+from ..verify import verify_state_profile
+from ._crossing import clearance_crossings
 from .planners import HORIZONTAL_JOINTS, CyclePlan
 
 __all__ = ["VerificationReport", "verify_plan", "PlanVerificationError"]
@@ -24,6 +26,15 @@ POSITION_ATOL = 1e-9
 #: Velocity [m/s or rad/s] and acceleration below which a joint counts as at
 #: rest (absorbs the round-off of absolute piece start times, ~1e-16 s).
 REST_ATOL = 1e-9
+
+#: Tolerance [s] on "a horizontal piece lies inside the clearance window".
+#: Where B reaches a clearance height at rest (the ``ptp`` plan) the time of
+#: that position is ill-conditioned (p - z ~ t^3, so a 1e-18 m change moves
+#: it by microseconds): a piece end outside the window by more than this
+#: fails only where B is also below its clearance height there
+#: (``POSITION_ATOL``), and B's position at both ends of every horizontal
+#: piece is checked exactly in any case.
+WINDOW_ATOL = 1e-9
 
 #: Default number of dense samples per second of plan.
 SAMPLES_PER_S = 500
@@ -100,6 +111,18 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
         jn = rob.joint_names[k]
         for i, pc in enumerate(tl.pieces[k]):
             p = pc.profile
+            if not isinstance(p, Profile):
+                # a state profile (B turning at the top without stopping):
+                # the exact phase-by-phase check of trajkit.verify
+                n_bound += len(p.phase_durations) + 1
+                rp = verify_state_profile(p, n_samples=0)
+                for vio in rp.violations:
+                    v.append(f"joint {jn} piece {i} at t={pc.t0:.4f} s: {vio.message()}")
+                for q, key in (("velocity", "velocity"), ("acceleration", "acceleration"),
+                               ("deceleration", "acceleration"), ("jerk", "jerk"),
+                               ("jerk_decel", "jerk")):
+                    worst[jn][key] = max(worst[jn][key], rp.ratios.get(q, 0.0))
+                continue
             bs = p.boundary_states()
             n_bound += bs.shape[0]
             tol = 1.0 + LIMIT_RTOL
@@ -206,30 +229,34 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
                 v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: horizontal joints not at "
                          f"rest at their {'start' if ref is qa else 'goal'} when B passes {label} "
                          f"(t={tc:.6f} s)")
+        # exact: every horizontal piece of this trip lies inside [t_up, t_dn]
+        if t_up is not None and t_dn is not None:
+            for k in h:
+                for pc in tl.pieces[k]:
+                    if pc.t1 <= ts + WINDOW_ATOL or pc.t0 >= te - WINDOW_ATOL:
+                        continue
+                    zb0, zb1 = tl.sample(np.array([pc.t0, pc.t1])).position[:, _B]
+                    # a piece ending outside [t_up, t_dn] by more than the
+                    # time resolution of the crossings (and with B below its
+                    # clearance height there) breaks the rule
+                    early = pc.t0 < t_up - WINDOW_ATOL and zb0 < z1 - POSITION_ATOL
+                    late = pc.t1 > t_dn + WINDOW_ATOL and zb1 < z2 - POSITION_ATOL
+                    if early or late or zb0 < z1 - POSITION_ATOL or zb1 < z2 - POSITION_ATOL:
+                        v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: joint "
+                                 f"{rob.joint_names[k]} moves over [{pc.t0:.6f}, {pc.t1:.6f}] s, "
+                                 f"outside the clearance window [{t_up:.6f}, {t_dn:.6f}] s")
     rep.checks = {"samples": int(t.size), "phase_boundaries": n_bound, "places": n_places,
                   "crossings": n_cross, "worst_ratio": worst}
     return rep
 
 
 def _crossings(tl, ts: float, te: float, z1: float, z2: float):
-    """First time B reaches ``z1`` and last time B leaves ``z2`` within [ts, te]."""
-    pcs = [pc for pc in tl.pieces[_B] if pc.t0 >= ts - POSITION_ATOL and pc.t1 <= te + POSITION_ATOL]
-    if not pcs:
+    """Last time B rises through ``z1`` before its peak and first time it falls
+    through ``z2`` after it, within ``[ts, te]`` (exact inversion of B's pieces)."""
+    pcs = [(pc.t0, pc.profile) for pc in tl.pieces[_B]
+           if pc.t0 >= ts - POSITION_ATOL and pc.t1 <= te + POSITION_ATOL]
+    z_start = float(tl.sample(np.array([ts])).position[0, _B])
+    r = clearance_crossings(pcs, z1, z2, ts, te, z_start)
+    if r is None:
         return None, None
-    t_up = t_dn = None
-    zpos = pcs[0].profile.start
-    if zpos >= z1:
-        t_up = ts
-    for pc in pcs:
-        p = pc.profile
-        if t_up is None and p.goal >= z1 > p.start:
-            t_up = pc.t0 + time_at_position(p, z1)
-    for pc in reversed(pcs):
-        p = pc.profile
-        if p.start >= z2 > p.goal:
-            t_dn = pc.t0 + time_at_position(p, z2)
-            break
-    else:
-        if pcs[-1].profile.goal >= z2:
-            t_dn = te
-    return t_up, t_dn
+    return r[0], r[1]
