@@ -125,6 +125,7 @@ def test_json_summary_and_bound_line(plans):
     assert "lower_bound_s" not in s["plans"]["merged"]
     (line,) = bound_lines(s)
     assert line.startswith("optimal: ") and "% above its lower bound" in line
+    assert "window floor" in line
 
 
 # ----------------------------------------------------------- oracles
