@@ -29,7 +29,7 @@ from ..profiles import PHASE_NAMES, Profile, plan_move
 from ..trajectory import SYNC_MODES, Trajectory, plan_ptp
 from ._console import _fmt, print_json, print_table
 
-__all__ = ["register", "load_job", "PtpJob", "JobLimits"]
+__all__ = ["register", "load_ptp_job", "PtpJob", "JobLimits"]
 
 #: Largest number of CSV rows a ``--csv`` export may write (guards against a
 #: typo in ``--period`` filling the disk).
@@ -142,7 +142,7 @@ def _first_error(exc: Any) -> str:
     return f"field {loc}: {e.get('msg', 'invalid')}{shown}{more}"
 
 
-def load_job(path: str | os.PathLike) -> "PtpJob":
+def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
     """Read and validate a ``ptp`` job file.
 
     Parameters
@@ -425,7 +425,7 @@ def _ptp_inputs(args: argparse.Namespace):
             raise InvalidInputError(
                 f"--file cannot be combined with {', '.join(given)} (put them in the file)"
             )
-        job = load_job(args.file)
+        job = load_ptp_job(args.file)
         n = len(job.start)
         if len(job.goal) != n:
             raise InvalidInputError(
