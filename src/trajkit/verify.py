@@ -340,6 +340,15 @@ class _Worst:
         if not (error <= tol):
             self._fail(quantity, value, limit, t)
 
+    def report(self, goal_err, end_v, end_a, cont, dur_err, n_samples) -> "VerificationReport":
+        """The :class:`VerificationReport` of everything checked so far."""
+        return VerificationReport(
+            axis=self.axis, ok=not self.violations, ratios=dict(self.ratios),
+            goal_error=goal_err, end_velocity_error=end_v, end_acceleration_error=end_a,
+            continuity_error=cont, duration_error=dur_err, n_samples=n_samples,
+            violations=tuple(self.violations),
+        )
+
     def _fail(self, quantity, value, limit, t):
         # keep the first violation of each quantity (the report stays small)
         if quantity in self._seen:
@@ -524,18 +533,7 @@ def verify_profile(
         w.check("sample_velocity", e_v, rtol * v_scale + a_scale * dtq, float(V[iv]),
                 float(ref[1][iv]), float(ts[iv]))
 
-    return VerificationReport(
-        axis=axis,
-        ok=not w.violations,
-        ratios=dict(w.ratios),
-        goal_error=goal_err,
-        end_velocity_error=end_v,
-        end_acceleration_error=end_a,
-        continuity_error=cont,
-        duration_error=dur_err,
-        n_samples=n_samples if T > 0.0 else 0,
-        violations=tuple(w.violations),
-    )
+    return w.report(goal_err, end_v, end_a, cont, dur_err, n_samples if T > 0.0 else 0)
 
 
 def _exact_phases(w, lim, start, v_start, a_start, durs, jerks, a_enter,
@@ -713,18 +711,7 @@ def verify_state_profile(
         smp = profile.sample(ts)
         _check_samples(w, lim, ts, np.asarray(smp.position), np.asarray(smp.velocity),
                        np.asarray(smp.acceleration), np.asarray(smp.jerk), p_scale)
-    return VerificationReport(
-        axis=lim.name,
-        ok=not w.violations,
-        ratios=dict(w.ratios),
-        goal_error=goal_err,
-        end_velocity_error=end_v,
-        end_acceleration_error=end_a,
-        continuity_error=cont,
-        duration_error=dur_err,
-        n_samples=n_samples if T > 0.0 else 0,
-        violations=tuple(w.violations),
-    )
+    return w.report(goal_err, end_v, end_a, cont, dur_err, n_samples if T > 0.0 else 0)
 
 
 def _integrate_at(start, durs, jerks, a_enter, ts):
