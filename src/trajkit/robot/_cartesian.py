@@ -2,11 +2,12 @@
 
 Steps: build the pieces (lines, arcs, Bezier corner blends, orientation by
 slerp); solve IK on a dense grid of the path parameter, each seeded by the
-previous one (the configuration stays pinned); get dq/ds and d2q/ds2; cap the
-feed speed so that every joint stays within its velocity limit and, together
-with the path acceleration, within its acceleration limit; plan the
-jerk-limited feed (:mod:`trajkit.robot._feed`). Sampling then solves IK at
-every sample.
+previous one (the configuration stays pinned); get dq/ds, d2q/ds2 and
+d3q/ds3; cap the feed speed and choose each run's path acceleration and jerk
+so that every joint stays within its velocity, acceleration and jerk limits;
+plan the jerk-limited feed (:mod:`trajkit.robot._feed`). Corners are blended
+by curvature-continuous curves, so the joint accelerations never step.
+Sampling then solves IK at every sample.
 """
 
 from __future__ import annotations
@@ -47,6 +48,26 @@ ACC_CURVE_USE = 0.5
 #: Fraction of each joint's acceleration limit used by (dq/ds) s''.
 ACC_PATH_USE = 0.45
 
+#: Joint jerk along the path: ``d3q/ds3 v^3 + 3 d2q/ds2 v a + dq/ds j`` (v, a, j:
+#: path speed, acceleration, jerk). Fraction of each joint's jerk limit
+#: (``min(j_max, j_max_decel)``) the three terms may use together; the rest
+#: covers the finite differences (the derivatives between grid points).
+JERK_USE = 0.9
+
+#: Fraction of each joint's jerk limit used by the first term, ``|d3q/ds3| v^3``:
+#: a speed cap at every grid point, like the velocity and acceleration caps.
+JERK_CURVE_USE = 0.5
+
+#: Share of what the first term leaves of JERK_USE (at the run's speed level)
+#: that ``3 |d2q/ds2| v |a|`` may use at most; it bounds the run's path
+#: acceleration. ``|dq/ds| |j|`` gets the rest, which bounds the run's path jerk.
+JERK_ACC_SHARE = 0.5
+
+#: The path derivatives used for the jerk bound at a grid point are the
+#: largest over this many grid points on either side, so that the bound
+#: holds between the grid points too.
+DERIV_WINDOW = 1
+
 #: Fraction of the tool acceleration limit used by the path curvature (v^2 kappa).
 CART_CURVE_USE = 0.5
 
@@ -79,6 +100,11 @@ JUMP_DS = 1e-9
 
 #: Tangent turn below which two pieces meet smoothly (no blend needed) [rad].
 SMOOTH_TURN = 1e-6
+
+#: Change of the curvature vector [1/m] at a tangent-continuous join above
+#: which the join is blended (G2) like a corner: a curvature step would step
+#: the joint accelerations (unbounded joint jerk).
+SMOOTH_CURVATURE = 1e-9
 
 #: Tangent turn above which a corner cannot be blended (reversal) [rad].
 MAX_BLEND_TURN = math.pi - 1e-3
@@ -227,6 +253,19 @@ def _base_pieces(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labe
     return out
 
 
+def curvature_vector(path: Any, s: float) -> np.ndarray:
+    """Curvature vector (kappa times the principal normal) [1/m], shape (3,), of ``path`` at ``s``.
+
+    Exact for :class:`~trajkit.paths.Line` (zero) and :class:`~trajkit.paths.arc.Arc3`
+    (towards the centre, magnitude 1 / radius).
+    """
+    if isinstance(path, Arc3):
+        return (path.centre - path.point(s)) / path.radius**2
+    if isinstance(path, Line):
+        return np.zeros(3)
+    raise InvalidInputError(f"no curvature vector for a path of type {type(path).__name__}")
+
+
 def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
     w_max = robot.orientation_speed
     n = len(specs)
@@ -241,8 +280,12 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
         ta = a["path"].tangent(a["path"].length)
         tb = b["path"].tangent(0.0)
         turn = angle_between_tangents(ta, tb)
-        if turn < SMOOTH_TURN or turn > MAX_BLEND_TURN:
+        if turn > MAX_BLEND_TURN:
             continue
+        if turn < SMOOTH_TURN and np.linalg.norm(
+                curvature_vector(a["path"], a["path"].length)
+                - curvature_vector(b["path"], 0.0)) <= SMOOTH_CURVATURE:
+            continue  # tangent and curvature continuous: no blend needed
         r = min(a["zone"], 0.5 * a["path"].length, 0.5 * b["path"].length)
         trim1[i] = r
         trim0[i + 1] = r
@@ -274,7 +317,8 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
             pb = nxt["path"].point(r)
             tang_b = nxt["path"].tangent(r)
             qn = slerp(nxt["quat0"], nxt["quat1"], r / nxt["path"].length)
-            bz = BezierBlend(pa, tang_a, pb, tang_b, r)
+            bz = BezierBlend(pa, tang_a, pb, tang_b, r, ka=curvature_vector(path, b),
+                             kb=curvature_vector(nxt["path"], r), corner=sp["p1"])
             cap_b = min(v, nxt["speed"])
             ori = blended_orientation(sp["quat0"], sp["quat1"], path.length, b,
                                       nxt["quat0"], nxt["quat1"], nxt["path"].length, r, bz.length)
@@ -327,6 +371,49 @@ def _check_continuous(robot: RobotModel, pieces: list[Piece], offsets: np.ndarra
             f"cannot be passed in this configuration: joint {robot.joint_names[j]} would jump by "
             f"{math.degrees(float(jump[j])):.1f} deg"
         )
+
+
+def _window_max(x: np.ndarray, w: int) -> np.ndarray:
+    """Largest value of ``x`` (n, m) over rows i - w .. i + w, per row and column."""
+    out = x.copy()
+    for k in range(1, w + 1):
+        out[k:] = np.maximum(out[k:], x[:-k])
+        out[:-k] = np.maximum(out[:-k], x[k:])
+    return out
+
+
+def _run_accel_jerk(robot: RobotModel, d1: np.ndarray, d2: np.ndarray, d3: np.ndarray,
+                    speed: float, amax: np.ndarray, jmax: np.ndarray) -> tuple[float, float]:
+    """Path acceleration [m/s^2] and path jerk [m/s^3] of a run.
+
+    Parameters
+    ----------
+    d1, d2, d3 : ndarray, shape (n_joints,)
+        Largest |dq/ds| [/m], |d2q/ds2| [/m^2] and |d3q/ds3| [/m^3] of each
+        joint over the run.
+    speed : float
+        The run's speed level [m/s] (the largest path speed inside the run).
+    amax, jmax : ndarray, shape (n_joints,)
+        Joint acceleration [/s^2] and jerk [/s^3] limits.
+
+    Notes
+    -----
+    With ``rest = JERK_USE j_max - |d3q/ds3| v^3`` (>= (JERK_USE -
+    JERK_CURVE_USE) j_max, as the speed caps keep the first term within
+    JERK_CURVE_USE j_max), the acceleration ``a`` obeys ``|dq/ds| a <=
+    ACC_PATH_USE a_max``, ``3 |d2q/ds2| v a <= JERK_ACC_SHARE rest`` and the
+    tool's ``cartesian_accel``; the jerk ``j`` is the tool's ``cartesian_jerk``
+    scaled like ``a``, and at most ``(rest - 3 |d2q/ds2| v a) / |dq/ds|``. So
+    every joint's jerk stays within JERK_USE j_max wherever the speed is at
+    most ``v`` (the feed's speed changes happen inside the faster run).
+    """
+    rest = np.maximum(JERK_USE * jmax - d3 * speed**3, (JERK_USE - JERK_CURVE_USE) * jmax)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        acc = min(robot.cartesian_accel, float(np.min(ACC_PATH_USE * amax / d1)),
+                  float(np.min(JERK_ACC_SHARE * rest / (3.0 * d2 * speed))))
+        jerk = min(robot.cartesian_jerk * acc / robot.cartesian_accel,
+                   float(np.min((rest - 3.0 * d2 * speed * acc) / d1)))
+    return acc, jerk
 
 
 def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str],
@@ -404,17 +491,22 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
     # ---- derivatives along the path
     dq = np.gradient(q, s, axis=0)
     ddq = np.gradient(dq, s, axis=0)
+    dddq = np.gradient(ddq, s, axis=0)
+    d1, d2, d3 = (_window_max(np.abs(x), DERIV_WINDOW) for x in (dq, ddq, dddq))
     vmax = np.array([lim.v_max for lim in robot.limits])
     amax = np.array([min(lim.a_max, lim.a_max_decel) for lim in robot.limits])
+    jmax = np.array([min(lim.j_max, lim.j_max_decel) for lim in robot.limits])
     with np.errstate(divide="ignore"):
         vel_cap = VEL_USE * vmax[None, :] / np.abs(dq)
         acc_cap = np.sqrt(ACC_CURVE_USE * amax[None, :] / np.abs(ddq))
+        jerk_cap = np.cbrt(JERK_CURVE_USE * jmax[None, :] / d3)
         dpos = np.gradient(pos, s, axis=0)
         ddpos = np.gradient(dpos, s, axis=0)
         curv = np.linalg.norm(ddpos, axis=1)
         cart_cap = np.sqrt(CART_CURVE_USE * robot.cartesian_accel / curv)
     prog = np.array([pieces[i].cap for i in k])
-    cand = np.column_stack([prog, vel_cap.min(axis=1), acc_cap.min(axis=1), cart_cap])
+    cand = np.column_stack([prog, vel_cap.min(axis=1), acc_cap.min(axis=1), cart_cap,
+                            jerk_cap.min(axis=1)])
     node_cap = cand.min(axis=1)
     programmed = np.array([pieces[i].programmed for i in k])
     worst = int(np.argmin(node_cap / programmed))
@@ -437,16 +529,15 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
     with np.errstate(divide="ignore"):
         steps = np.ceil(np.log(cell_cap / cell_prog) / math.log(LEVEL_RATIO))
     level_speed = np.where(cell_cap >= cell_prog, cell_prog, cell_prog * LEVEL_RATIO**steps)
-    with np.errstate(divide="ignore"):
-        path_acc = np.min(ACC_PATH_USE * amax[None, :] / np.abs(dq), axis=1)
     runs: list[Run] = []
     run_cells: list[tuple[int, int]] = []
     i0 = 0
     ncell = s.size - 1
     for c in range(1, ncell + 1):
         if c == ncell or level_speed[c] != level_speed[i0]:
-            acc = min(robot.cartesian_accel, float(np.min(path_acc[i0:c + 1])))
-            jerk = robot.cartesian_jerk * acc / robot.cartesian_accel
+            acc, jerk = _run_accel_jerk(robot, d1[i0:c + 1].max(axis=0), d2[i0:c + 1].max(axis=0),
+                                        d3[i0:c + 1].max(axis=0), float(level_speed[i0]),
+                                        amax, jmax)
             runs.append(Run(float(s[i0]), float(s[c]), float(level_speed[i0]), acc, jerk))
             run_cells.append((i0, c))
             i0 = c
@@ -468,8 +559,10 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
             reason = f"velocity of joint {robot.joint_names[int(np.argmin(vel_cap[j]))]}"
         elif col == 2:
             reason = f"acceleration of joint {robot.joint_names[int(np.argmin(acc_cap[j]))]}"
-        else:
+        elif col == 3:
             reason = "path curvature (tool acceleration)"
+        else:
+            reason = f"jerk of joint {robot.joint_names[int(np.argmin(jerk_cap[j]))]}"
         mi = int(mot[j])
         if (chain.slowdowns and chain.slowdowns[-1].motion == mi and last_cell == c0
                 and chain.slowdowns[-1].reason == reason):

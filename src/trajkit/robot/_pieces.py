@@ -2,7 +2,8 @@
 
 A piece maps its parameter ``s`` in ``[0, length]`` to tool positions (n, 3)
 [m] and orientations (n, 4) (unit quaternions). Lines and arcs come from
-:mod:`trajkit.paths`; the corner blend (a cubic Bezier curve) and the
+:mod:`trajkit.paths`; the corner blend (a quintic, curvature-continuous Bezier
+curve) and the
 orientation-only piece are defined here.
 """
 
@@ -18,51 +19,135 @@ from ._rotations import SLERP_SMALL_ANGLE, rotation_angle, slerp
 
 __all__ = ["Piece", "BezierBlend", "BLEND_TABLE"]
 
-#: Points of the arc-length table of a blend curve.
-BLEND_TABLE = 2049
+#: Intervals of the arc-length table of a blend curve (each integrated by
+#: Gauss-Legendre quadrature, then inverted by Newton steps: the arc-length
+#: parameterisation is exact to rounding, so finite differences of the joints
+#: along the blend see the curve, not the table).
+BLEND_TABLE = 256
 
-#: Handle length of the corner blend, as a fraction of the zone radius
-#: (2/3: the degree-elevated quadratic Bezier through the corner point).
-BLEND_HANDLE = 2.0 / 3.0
+#: Gauss-Legendre points per table interval.
+BLEND_GAUSS = 8
+
+#: Newton steps of the arc-length inversion u(s).
+BLEND_NEWTON = 4
+
+#: Candidate handle lengths of the corner blend, as fractions of the zone
+#: radius; the one with the smallest peak curvature rate |d kappa / ds| (the
+#: term that sets the joint jerk along the blend) is used, among those whose
+#: control points stay inside the zone.
+BLEND_HANDLES = (0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45)
+
+#: Points on which the candidate handles are compared.
+BLEND_PROBE = 257
+
+#: Curvature-vector factor of the second/fourth control point: with handles
+#: ``h``, ``B'(0) = 5 h t`` and ``B''(0) = 20 c h^2 k``, so ``c = 25/20`` gives
+#: the curvature vector ``k`` at the ends.
+_G2_FACTOR = 25.0 / 20.0
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(BLEND_GAUSS)
 
 
 class BezierBlend:
-    """Cubic Bezier corner blend from ``pa`` (tangent ``ta``) to ``pb`` (tangent ``tb``).
+    """Quintic Bezier corner blend, curvature-continuous (G2) with the pieces it joins.
 
-    Parameterised by arc length through a dense table (``point``, ``tangent``
-    and ``length``); the curve lies in the convex hull of its control points.
+    From ``pa`` (unit tangent ``ta``, curvature vector ``ka`` of the incoming
+    piece there) to ``pb`` (``tb``, ``kb``). Control points
+    ``pa, pa + h ta, pa + 2 h ta + 1.25 h^2 ka`` and symmetrically at ``pb``:
+    the blend leaves each piece with the same tangent and curvature vector, so
+    the tool (and the joints) keep a continuous acceleration and a bounded
+    jerk through it. The curve lies in the convex hull of its control points;
+    the handle ``h`` is chosen from :data:`BLEND_HANDLES` so that every control
+    point is within ``radius`` of ``corner``. Parameterised by arc length
+    (``point``, ``length``).
+
+    Parameters
+    ----------
+    pa, pb : ndarray, shape (3,) [m]
+    ta, tb : ndarray, shape (3,)
+        Unit tangents.
+    ka, kb : ndarray, shape (3,) [1/m]
+        Curvature vectors (kappa times the principal normal); zero on lines.
+    radius : float [m]
+        Distance of ``pa`` and ``pb`` from the corner along the pieces.
+    corner : ndarray, shape (3,), optional
+        The corner point (default: the intersection of the two tangent lines,
+        approximated by ``pa + radius ta``).
     """
 
     def __init__(self, pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarray,
-                 radius: float) -> None:
-        h = BLEND_HANDLE * radius
-        self.ctrl = np.array([pa, pa + h * ta, pb - h * tb, pb])
-        u = np.linspace(0.0, 1.0, BLEND_TABLE)
-        d = self._deriv(u)
-        speed = np.linalg.norm(d, axis=1)
-        # trapezoid cumulative arc length (the table is dense; error ~ 1e-8 relative)
-        cum = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(u))])
-        self._u = u
-        self._cum = cum
-        self.length = float(cum[-1])
+                 radius: float, ka: np.ndarray | None = None, kb: np.ndarray | None = None,
+                 corner: np.ndarray | None = None) -> None:
+        pa, pb = np.asarray(pa, dtype=np.float64), np.asarray(pb, dtype=np.float64)
+        ta, tb = np.asarray(ta, dtype=np.float64), np.asarray(tb, dtype=np.float64)
+        ka = np.zeros(3) if ka is None else np.asarray(ka, dtype=np.float64)
+        kb = np.zeros(3) if kb is None else np.asarray(kb, dtype=np.float64)
+        corner = pa + radius * ta if corner is None else np.asarray(corner, dtype=np.float64)
+        best = None
+        for beta in BLEND_HANDLES:
+            h = beta * radius
+            ctrl = np.array([pa, pa + h * ta, pa + 2.0 * h * ta + _G2_FACTOR * h * h * ka,
+                             pb - 2.0 * h * tb + _G2_FACTOR * h * h * kb, pb - h * tb, pb])
+            inside = np.linalg.norm(ctrl - corner, axis=1).max() <= radius * (1.0 + 1e-12)
+            rate = self._curvature_rate(ctrl)
+            key = (not inside, rate)
+            if best is None or key < best[0]:
+                best = (key, ctrl, beta)
+        self.ctrl = best[1]
+        self.handle = best[2] * radius
+        edges = np.linspace(0.0, 1.0, BLEND_TABLE + 1)
+        seg = self._integral(edges[:-1], edges[1:])
+        self._u = edges
+        self._cum = np.concatenate([[0.0], np.cumsum(seg)])
+        self.length = float(self._cum[-1])
 
-    def _bez(self, u: np.ndarray) -> np.ndarray:
-        c = self.ctrl
+    # ---- Bezier evaluation (Bernstein form) and derivatives in u
+    @staticmethod
+    def _eval(ctrl: np.ndarray, u: np.ndarray, order: int = 0) -> np.ndarray:
+        c = ctrl
+        for _ in range(order):
+            c = (c.shape[0] - 1) * np.diff(c, axis=0)
+        n = c.shape[0] - 1
+        u = np.asarray(u, dtype=np.float64)[:, None]
         m = 1.0 - u
-        return ((m**3)[:, None] * c[0] + (3 * m * m * u)[:, None] * c[1]
-                + (3 * m * u * u)[:, None] * c[2] + (u**3)[:, None] * c[3])
+        out = np.zeros((u.shape[0], 3))
+        for i in range(n + 1):
+            out += math.comb(n, i) * m ** (n - i) * u**i * c[i]
+        return out
 
-    def _deriv(self, u: np.ndarray) -> np.ndarray:
-        c = self.ctrl
-        m = 1.0 - u
-        return ((3 * m * m)[:, None] * (c[1] - c[0]) + (6 * m * u)[:, None] * (c[2] - c[1])
-                + (3 * u * u)[:, None] * (c[3] - c[2]))
+    @classmethod
+    def _curvature_rate(cls, ctrl: np.ndarray) -> float:
+        """Largest |d kappa / ds| [1/m^2] on BLEND_PROBE points."""
+        u = np.linspace(0.0, 1.0, BLEND_PROBE)
+        d1 = cls._eval(ctrl, u, 1)
+        d2 = cls._eval(ctrl, u, 2)
+        sp = np.linalg.norm(d1, axis=1)
+        kap = np.linalg.norm(np.cross(d1, d2), axis=1) / sp**3
+        s = np.concatenate([[0.0], np.cumsum(0.5 * (sp[1:] + sp[:-1]) * np.diff(u))])
+        return float(np.abs(np.diff(kap) / np.diff(s)).max())
+
+    def _speed(self, u: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(self._eval(self.ctrl, u.ravel(), 1), axis=1).reshape(u.shape)
+
+    def _integral(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Arc length from ``a`` to ``b`` (n,) by Gauss-Legendre quadrature."""
+        half = 0.5 * (b - a)
+        x = (0.5 * (a + b))[:, None] + half[:, None] * _GL_X[None, :]
+        return half * (self._speed(x) @ _GL_W)
 
     def u_of_s(self, s: np.ndarray) -> np.ndarray:
-        return np.interp(s, self._cum, self._u)
+        """Bezier parameter at arc lengths ``s`` (n,) [m]: table, then Newton steps."""
+        s = np.clip(np.asarray(s, dtype=np.float64), 0.0, self.length)
+        u = np.interp(s, self._cum, self._u)
+        for _ in range(BLEND_NEWTON):
+            k = np.clip(np.searchsorted(self._u, u, side="right") - 1, 0, BLEND_TABLE - 1)
+            err = self._cum[k] + self._integral(self._u[k], u) - s
+            u = np.clip(u - err / self._speed(u), 0.0, 1.0)
+        return u
 
     def point(self, s: Any) -> np.ndarray:
-        return self._bez(self.u_of_s(np.atleast_1d(np.asarray(s, dtype=np.float64))))
+        """Positions (n, 3) [m] at arc lengths ``s`` (n,) [m]."""
+        return self._eval(self.ctrl, self.u_of_s(np.atleast_1d(np.asarray(s, dtype=np.float64))))
 
 
 class Piece:

@@ -31,6 +31,11 @@ TOOL_SPEED_STEP = 1e-6
 #: (checked on samples; the margin covers the values between them).
 PTP_BLEND_USE = 0.99
 
+#: Fraction of the jerk limit ``min(j_max, j_max_decel)`` each of two
+#: blended PTP moves uses in its overlapping leg (the decel leg of the first,
+#: the accel leg of the second): their sum stays within the limit.
+PTP_BLEND_JERK_SHARE = 0.5
+
 #: Samples on which a PTP blend overlap is checked.
 PTP_BLEND_CHECKS = 200
 
@@ -242,10 +247,19 @@ class RobotRun:
         return text
 
 
-def _scaled_limits(robot: RobotModel, pct: float) -> list[AxisLimits]:
+def _scaled_limits(robot: RobotModel, pct: float, blend_in: bool = False,
+                   blend_out: bool = False) -> list[AxisLimits]:
+    """Joint limits of a PTP: ``v_max`` times ``pct`` / 100; the jerk of a leg
+    that overlaps a blended neighbour (accel leg: ``blend_in``, decel leg:
+    ``blend_out``) is PTP_BLEND_JERK_SHARE of ``min(j_max, j_max_decel)``."""
     f = pct / 100.0
-    return [AxisLimits(lim.v_max * f, lim.a_max, lim.j_max, lim.a_max_decel, lim.j_max_decel,
-                       lim.position_min, lim.position_max, lim.name) for lim in robot.limits]
+    out = []
+    for lim in robot.limits:
+        jb = PTP_BLEND_JERK_SHARE * min(lim.j_max, lim.j_max_decel)
+        out.append(AxisLimits(lim.v_max * f, lim.a_max, jb if blend_in else lim.j_max,
+                              lim.a_max_decel, jb if blend_out else lim.j_max_decel,
+                              lim.position_min, lim.position_max, lim.name))
+    return out
 
 
 def _joint_goal(robot: RobotModel, target: Any, q_cur: np.ndarray, label: str) -> np.ndarray:
@@ -272,6 +286,27 @@ def _leg_times(traj: Trajectory) -> tuple[float, float]:
     return acc, dec
 
 
+def _phase_bounds(traj: Trajectory) -> np.ndarray:
+    """Times [s] of every phase boundary of every axis of ``traj`` (sorted, unique)."""
+    out = [0.0, traj.duration]
+    for p in traj.axes:
+        out += np.cumsum(p.phase_durations).tolist()
+    return np.unique(np.array(out))
+
+
+def _blend_saves_time(robot: RobotModel, q0: np.ndarray, q1: np.ndarray, q2: np.ndarray,
+                      ma: Ptp, mb: Ptp) -> bool:
+    """Whether blending PTP ``ma`` (q0 -> q1) into ``mb`` (q1 -> q2), with half
+    the jerk in the overlapping legs, ends sooner than stopping at q1 (the pair
+    on its own)."""
+    a = plan_ptp(q0, q1, _scaled_limits(robot, ma.speed_pct, blend_out=True), sync="phase")
+    b = plan_ptp(q1, q2, _scaled_limits(robot, mb.speed_pct, blend_in=True), sync="phase")
+    blended = a.duration + b.duration - _ptp_overlap(robot, a, b, ma, mb)
+    a0 = plan_ptp(q0, q1, _scaled_limits(robot, ma.speed_pct), sync="phase")
+    b0 = plan_ptp(q1, q2, _scaled_limits(robot, mb.speed_pct), sync="phase")
+    return blended < a0.duration + b0.duration
+
+
 def _ptp_overlap(robot: RobotModel, a: Trajectory, b: Trajectory, ma: Ptp, mb: Ptp) -> float:
     """Largest overlap [s] of PTP ``b`` over the end of ``a`` that keeps the limits and the zone.
 
@@ -279,7 +314,10 @@ def _ptp_overlap(robot: RobotModel, a: Trajectory, b: Trajectory, ma: Ptp, mb: P
     it is shrunk (bisection) until, on PTP_BLEND_CHECKS samples of the
     overlap, every joint stays within PTP_BLEND_USE of its velocity (with the
     lower of both overrides) and acceleration limits, and the tool within
-    ``ma.zone`` of ``a``'s target.
+    ``ma.zone`` of ``a``'s target; and the summed jerk (piecewise constant:
+    checked exactly, once between every two phase boundaries of either move)
+    within ``min(j_max, j_max_decel)``. Both legs are planned with
+    PTP_BLEND_JERK_SHARE of that jerk, so the jerk check holds by construction.
     """
     _, dec = _leg_times(a)
     acc, _ = _leg_times(b)
@@ -289,17 +327,28 @@ def _ptp_overlap(robot: RobotModel, a: Trajectory, b: Trajectory, ma: Ptp, mb: P
     f = min(ma.speed_pct, mb.speed_pct) / 100.0
     vmax = np.array([lim.v_max for lim in robot.limits]) * f * PTP_BLEND_USE
     amax = np.array([min(lim.a_max, lim.a_max_decel) for lim in robot.limits]) * PTP_BLEND_USE
+    jmax = np.array([min(lim.j_max, lim.j_max_decel) for lim in robot.limits])
     corner = robot.fk(a.goal).position
     zone = float(ma.zone)
+    bounds_a = _phase_bounds(a)
+    bounds_b = _phase_bounds(b)
 
     def ok(d: float) -> bool:
-        t = np.linspace(a.duration - d, a.duration, PTP_BLEND_CHECKS)
+        t0 = a.duration - d
+        t = np.linspace(t0, a.duration, PTP_BLEND_CHECKS)
         sa = a.sample(t)
-        sb = b.sample(t - (a.duration - d))
+        sb = b.sample(t - t0)
         v = sa.velocity + sb.velocity
         acc_ = sa.acceleration + sb.acceleration
         if (np.abs(v) > vmax).any() or (np.abs(acc_) > amax).any():
             return False
+        edges = np.union1d(np.clip(bounds_a, t0, a.duration),
+                           np.clip(bounds_b + t0, t0, a.duration))
+        mid = 0.5 * (edges[1:] + edges[:-1])[np.diff(edges) > 0]
+        if mid.size:
+            jk = a.sample(mid).jerk + b.sample(mid - t0).jerk
+            if (np.abs(jk) > jmax * (1.0 + 1e-12)).any():
+                return False
         q = sa.position + sb.position - b.start
         return all(np.linalg.norm(robot.fk(qq).position - corner) <= zone for qq in q)
 
@@ -323,7 +372,9 @@ def run_motions(robot: RobotModel, motions: Sequence[Any], start: Any) -> RobotR
     does not stop; a zone of 0 stops at the point (exact stop). A PTP with a
     zone > 0 followed by a PTP blends in joint space (the next move starts
     during this one's deceleration, the tool within the zone of the target,
-    limits kept); between PTP and LIN/CIRC the robot always stops.
+    limits kept, the overlapping legs at half the jerk; where that would not
+    save time over an exact stop, it stops); between PTP and LIN/CIRC the
+    robot always stops.
 
     Parameters
     ----------
@@ -360,23 +411,36 @@ def run_motions(robot: RobotModel, motions: Sequence[Any], start: Any) -> RobotR
             j = i
             while j + 1 < len(motions) and isinstance(motions[j + 1], Ptp) and motions[j].zone > 0:
                 j += 1
-            parts: list[tuple[float, Trajectory]] = []
-            q_start = q
-            off = 0.0
+            goals = []
+            starts = []
             for k in range(i, j + 1):
-                mk = motions[k]
-                goal = _joint_goal(robot, mk.target, q, mk.label)
-                traj = plan_ptp(q, goal, _scaled_limits(robot, mk.speed_pct), sync="phase")
-                if parts:
-                    prev_off, prev = parts[-1]
-                    off = prev_off + prev.duration - _ptp_overlap(
-                        robot, prev, traj, motions[k - 1], mk)
-                parts.append((off, traj))
-                q = goal
-            duration = max(o + tr.duration for o, tr in parts)
-            segments.append(Segment("PTP", t, duration, list(range(i, j + 1)), q_start, q,
-                                    ptp=parts[0][1], parts=parts))
-            t += duration
+                starts.append(q)
+                goals.append(_joint_goal(robot, motions[k].target, q, motions[k].label))
+                q = goals[-1]
+            # blend a junction only where it saves time over an exact stop
+            # (the overlapping legs run at half the jerk)
+            blend = [_blend_saves_time(robot, starts[k], goals[k], goals[k + 1], motions[i + k],
+                                       motions[i + k + 1]) for k in range(j - i)]
+            g0 = 0
+            for g1 in range(j - i + 1):
+                if g1 < j - i and blend[g1]:
+                    continue
+                parts: list[tuple[float, Trajectory]] = []
+                off = 0.0
+                for k in range(g0, g1 + 1):
+                    mk = motions[i + k]
+                    traj = plan_ptp(starts[k], goals[k], _scaled_limits(
+                        robot, mk.speed_pct, blend_in=k > g0, blend_out=k < g1), sync="phase")
+                    if parts:
+                        prev_off, prev = parts[-1]
+                        off = prev_off + prev.duration - _ptp_overlap(
+                            robot, prev, traj, motions[i + k - 1], mk)
+                    parts.append((off, traj))
+                duration = max(o + tr.duration for o, tr in parts)
+                segments.append(Segment("PTP", t, duration, list(range(i + g0, i + g1 + 1)),
+                                        starts[g0], goals[g1], ptp=parts[0][1], parts=parts))
+                t += duration
+                g0 = g1 + 1
             i = j + 1
         elif isinstance(m, (Lin, Circ)):
             j = i
