@@ -17,6 +17,7 @@ from trajkit.runtime.streamer import (
     override_limits,
     override_rate_limits,
     reserve_rate,
+    slowdown_rate_table,
 )
 
 DT = 0.01
@@ -189,12 +190,13 @@ def test_lin_circ_robot_program_keeps_every_limit_under_random_override():
     machine, run = _scara_run(derated=True)
     src = as_source(run)
     assert src.path_intervals  # LIN/CIRC segments
-    # the joint jerk of the LIN/CIRC segments is not bounded by the planner (IK): it
-    # exceeds j_max of joint J1 even at 100 %, so the envelope is measured and the
-    # stream runs at the rate that leaves the reserve's slack (as the HMI does)
+    # the joint jerk of LIN/CIRC segments comes from IK of a Cartesian feed: the
+    # planner bounds it through finite differences on its grid, so the envelope is
+    # measured on samples and the stream runs at the rate that leaves the reserve's
+    # slack (as the HMI does); the planner keeps the jerk, so that rate is 100 %
     assert src.envelope_kind == "estimated"
     top = reserve_rate(src.envelope, machine.limits)
-    assert top < 1.0
+    assert 0.0 < top <= 1.0
     st0 = Streamer(src, DT, limits=machine.limits, max_rate=top)
     assert st0.rate_ceiling == top
     worst = []
@@ -219,3 +221,34 @@ def test_derated_limits_cost_little_time():
     lm = override_limits(ASYM)[0]
     assert lm.a_max == pytest.approx(0.8 * 3.0) and lm.a_max_decel == pytest.approx(0.8 * 5.0)
     assert lm.j_max == lm.j_max_decel == pytest.approx(0.8 * 20.0) and lm.v_max == 0.8
+
+
+def test_stop_on_the_path_uses_larger_rate_limits_as_the_rate_falls():
+    """Pause from full speed: the per-level rate limits (slowdown_rate_table) stop sooner.
+
+    Each level's pair is admissible at that level and the pairs never shrink
+    as the rate falls, so the stream keeps every limit (checked per cycle)
+    while stopping in about half the time of the single top-level pair.
+    """
+    tr = plan_ptp([0.0, 0.0, 0.0], [2.0, -1.5, 0.3], override_limits(SYM))
+    us, arr = slowdown_rate_table(as_source(tr).envelope, SYM, 1.0)
+    assert us.shape == (arr.shape[0],) and arr.shape[1] == 2
+    assert np.all(arr[1:] <= arr[:-1]) and arr[0, 0] > 2.0 * arr[-1, 0]
+    times = {}
+    for use_table in (False, True):
+        st = Streamer(tr, DT, limits=SYM)
+        if not use_table:
+            st._slow_table = None  # the single pair of the top level
+        st.start()
+        sps = [st.step() for _ in range(90)]
+        st.pause()
+        k = 0
+        while True:
+            sps.append(st.step())
+            k += 1
+            if np.all(sps[-1].velocity == 0.0):
+                break
+        times[use_table] = k * DT
+        assert st.clip_count == 0
+        _assert_stream_within(*_arrays(sps)[1:], SYM, st.jerk_bound)
+    assert times[True] < 0.6 * times[False]

@@ -199,8 +199,9 @@ def _from_robot_run(run) -> ProgramSource:
     paths = [(sg.t0, sg.t0 + sg.duration) for sg in run.segments if sg.kind == "CP"]
     env = limits_envelope(run.robot.limits)
     kind = "limits"
-    # the joint jerk of LIN/CIRC segments (IK of a Cartesian feed) and of blended PTP
-    # moves (superposed S-curves) is not bounded by the joint limits: measure it
+    # the joint jerk of LIN/CIRC segments (IK of a Cartesian feed, bounded by the
+    # planner through finite differences) and of blended PTP moves (superposed
+    # S-curves) is not given by the joint limits alone: measure it
     for sg in run.segments:
         if not (sg.kind == "CP" or (sg.parts is not None and len(sg.parts) > 1)):
             continue

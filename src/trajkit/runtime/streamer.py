@@ -102,6 +102,7 @@ __all__ = [
     "Streamer",
     "override_limits",
     "override_rate_limits",
+    "slowdown_rate_table",
     "reserve_rate",
 ]
 
@@ -135,6 +136,10 @@ RATE_BOUND_SAFETY = 1.0 - 1e-6
 
 #: Candidate values of ``sigma1`` tried between 0 and its largest admissible value.
 RATE_GRID = 200
+
+#: Levels of the rate at which the slowing-down rate limits are tabulated
+#: (:func:`slowdown_rate_table`).
+SLOWDOWN_LEVELS = 16
 
 
 def override_limits(limits: Sequence[AxisLimits], reserve: float = OVERRIDE_RESERVE) -> list[AxisLimits]:
@@ -280,6 +285,46 @@ def reserve_rate(envelope: Any, limits: Sequence[AxisLimits], reserve: float = O
             if m.any():
                 r = min(r, float(np.min((num[m] / den[m]) ** p)))
     return max(r, 1e-6)
+
+
+def slowdown_rate_table(envelope: Any, limits: Sequence[AxisLimits], top: float,
+                        levels: int = SLOWDOWN_LEVELS) -> tuple[np.ndarray, np.ndarray] | None:
+    """Rate limits for a rate that only decreases, by level of the rate.
+
+    The conditions of :func:`override_rate_limits` get weaker as the rate
+    ``s`` falls (``A s^2``, ``J s^3`` and ``3 A s sigma1`` shrink), so a
+    stop or slow-down may use larger ``(sigma1, sigma2)`` the lower the rate
+    already is. Level ``i`` holds the componentwise minimum of the pairs
+    admissible at levels ``<= u_i``: admissible at ``u_i`` (every condition
+    grows with sigma1 and sigma2) and non-increasing in the level, so while
+    ``s`` falls the pair in use never has to shrink. The streamer uses the
+    pair of the lowest level ``>=`` the cycle's rates while ``s' <= 0``.
+
+    Parameters
+    ----------
+    envelope : array_like, shape (4, n_axes)
+    limits : sequence of AxisLimits
+        Machine limits.
+    top : float
+        Highest rate [-] (the streamer's ceiling).
+    levels : int
+        Number of levels ``u_i = top * i / levels``.
+
+    Returns
+    -------
+    (ndarray, ndarray) or None
+        Levels, shape (levels,), and pairs, shape (levels, 2); None when
+        some level has no admissible pair.
+    """
+    us = top * np.arange(1, levels + 1) / levels
+    pairs = []
+    for u in us:
+        p = override_rate_limits(envelope, limits, float(u))
+        if p is None:
+            return None
+        pairs.append(p)
+    arr = np.minimum.accumulate(np.array(pairs, dtype=float), axis=0)
+    return us, arr
 
 
 @dataclass
@@ -488,11 +533,21 @@ class Streamer:
                         s2 if math.isfinite(s2) and s2 > 0 else 1e3)
                 self.rate_ceiling = ceil = 0.0
             rate_limits = auto
+        auto_pair = rate_limits is auto and ceil > 0.0
         self.rate_limits = (check_positive(rate_limits[0], "rate_limits[0]"),
                             check_positive(rate_limits[1], "rate_limits[1]"))
         V, A, s1max, sj, s2v, mv = _rate_bounds(env, self.limits, max(ceil, 1e-300))
         s1, s2 = self.rate_limits
         self.jerk_bound = np.where(mv, env[3] * ceil ** 3 + 3.0 * A * ceil * s1 + V * s2, 0.0)
+        # stops and slow-downs: larger rate limits the lower the rate (proven per level)
+        self._slow_table = slowdown_rate_table(env, self.limits, ceil) if auto_pair else None
+        self._slow_s2max = 0.0
+        if self._slow_table is not None:
+            us, arr = self._slow_table
+            self._slow_s2max = float(arr[:, 1].max())
+            Vl, Al = V[:, None], A[:, None]
+            per_level = env[3][:, None] * us ** 3 + 3.0 * Al * us * arr[:, 0] + Vl * arr[:, 1]
+            self.jerk_bound = np.where(mv, np.maximum(self.jerk_bound, per_level.max(axis=1)), 0.0)
         if ceil > 0.0:
             for k in np.nonzero(mv)[0]:
                 nm = self.limits[k].name
@@ -759,6 +814,17 @@ class Streamer:
         ceil = self.rate_ceiling if self.rate_ceiling > 0.0 else self.max_rate
         target = min(self._target(), ceil)
         s1, s2 = self.rate_limits
+        tab = self._slow_table
+        if tab is not None and sd <= 0.0:
+            # the rate is not rising: the pair of the lowest level >= every rate of
+            # this cycle (s' <= 0 now; a new s' > 0 is at most sigma2 dt); that pair
+            # grows while s falls, so a falling rate never has to shrink s'. Once
+            # s' > 0 the global pair applies (s' then starts from <= sigma2 dt).
+            us, arr = tab
+            s_hi = s + self._slow_s2max * dt * dt
+            i = min(int(np.searchsorted(us, s_hi, side="left")), us.size - 1)
+            if -sd <= arr[i, 0] and us[i] >= s_hi:
+                s1, s2 = float(arr[i, 0]), float(arr[i, 1])
         e = target - s
         if abs(e) <= RATE_SNAP and abs(sd) <= s2 * dt:
             self.s = target
