@@ -466,8 +466,8 @@ def plan_cycle_optimal(scenario: PalletScenario):
     plan = _assemble("optimal", scenario, trips)
     dwell = plan.total_s - sum(t.duration for t in trips)
     plan.info["trips"] = infos
-    plan.info["lower_bound_s"] = dwell + sum(i.lower_bound for i in infos)
-    plan.info["window_floor_s"] = dwell + sum(i.window_floor for i in infos)
+    plan.info["lower_bound_s"] = float(dwell + sum(i.lower_bound for i in infos))
+    plan.info["window_floor_s"] = float(dwell + sum(i.window_floor for i in infos))
     return plan
 
 
