@@ -249,9 +249,12 @@ def ruckig_fixed(start, goal, V, A, J, T):
     """Duration ruckig gives when asked for at least ``T`` s (symmetric limits).
 
     Equal to ``T`` when ``T`` is feasible; larger when ``T`` lies in a
-    blocked interval (ruckig then returns the next feasible duration).
+    blocked interval (ruckig then returns the next feasible duration);
+    ``None`` when ruckig finds nothing or raises (it does, rarely, on
+    reversals between states at the limits with durations far above the
+    minimum).
     """
-    from ruckig import InputParameter, Result, Ruckig, Trajectory
+    from ruckig import InputParameter, Result, Ruckig, RuckigError, Trajectory
 
     inp = InputParameter(1)
     inp.current_position = [start[0]]
@@ -265,7 +268,10 @@ def ruckig_fixed(start, goal, V, A, J, T):
     inp.max_jerk = [J]
     inp.minimum_duration = T
     traj = Trajectory(1)
-    res = Ruckig(1).calculate(inp, traj)
+    try:
+        res = Ruckig(1).calculate(inp, traj)
+    except RuckigError:  # ruckig's own numerical failure
+        return None
     if res not in (Result.Working, Result.Finished):
         return None
     return traj.duration

@@ -459,24 +459,31 @@ def _pre_ramp(v, a, L):
 
 
 def _min_time(start, goal, L, name):
-    """Fastest verified candidate; (phases, family, all candidates' phases)."""
+    """Fastest verified candidate; (phases, family, seeds).
+
+    ``seeds`` iterates the phases of every verified candidate (checked
+    lazily, see :class:`~trajkit.profiles._state_kernel.VerifiedSeeds`):
+    the minimum time only needs the candidates up to the fastest one that
+    verifies, the fixed-duration search the others only when it gets there.
+    """
     if start == goal and start[2] == 0.0:
         return [], "none", [[]]
-    cands = K.candidates_min_time(start, goal, L)
-    if not cands:
+    seeds = K.VerifiedSeeds(K.candidates_min_time(start, goal, L, verified=False), start, goal, L)
+    best = seeds.fastest()
+    if best is None:
         pre = _pre_ramp(start[1], start[2], L)
         if pre:
             mid = K.integrate(pre, *start)
             cands = [(t + K.total_time(pre), fam + "+pre", pre + ph)
                      for t, fam, ph in K.candidates_min_time(mid, goal, L)]
-            cands = [c for c in cands if K.verify(c[2], *start, L, goal) is None]
-    if not cands:
+            seeds = K.VerifiedSeeds(cands, start, goal, L)
+            best = seeds.fastest()
+    if best is None:
         raise InfeasibleError(
             f"no profile found from state {start!r} to {goal!r}{axis_label(name)} "
             "within the limits (please report this input)"
         )
-    best = min(cands, key=lambda c: c[0])
-    return best[2], best[1], [c[2] for c in cands]
+    return best[2], best[1], seeds
 
 
 def _prepare(start, goal, limits):
@@ -496,8 +503,20 @@ def _prepare(start, goal, limits):
 
 
 def min_state_duration(start: Sequence[float], goal: Sequence[float], limits: AxisLimits) -> float:
-    """Minimum duration [s] of :func:`plan_state_to_state` (brake included)."""
-    return plan_state_to_state(start, goal, limits).duration
+    """Minimum duration [s] of :func:`plan_state_to_state` (brake included).
+
+    The same plan, value and errors as ``plan_state_to_state(start, goal,
+    limits).duration``, without building the :class:`StateProfile`.
+    """
+    limits = _check_limits(limits)
+    s = _check_state(start, "start", limits)
+    g = _check_state(goal, "goal", limits)
+    L, brake, s1 = _prepare(s, g, limits)
+    main, _, _ = _min_time(s1, g, L, limits.name)
+    _final_check(s, g, brake, main, limits)
+    phases = list(brake) + list(main)
+    _check_range_phases(s, g, phases, limits)
+    return float(sum(ph[0] for ph in phases))
 
 
 def plan_state_to_state(
@@ -627,12 +646,18 @@ def _blocked_interval(s1, g, L, T, tmin, seeds):
     return lo_ok, hi
 
 
-def _finish(s, g, brake, main, tmin, fam, limits):
+def _final_check(s, g, brake, main, limits):
+    """Exact check of the planned motion after the brake (every candidate is
+    verified before it is used; this guards the assembly)."""
     L = _limits_tuple(limits)
     start_main = K.integrate(brake, *s) if brake else s
     why = K.verify(main, *start_main, L, g)
     if why is not None:  # pragma: no cover - every candidate is verified before
         raise InfeasibleError(f"internal: profile{axis_label(limits.name)} failed verification: {why}")
+
+
+def _finish(s, g, brake, main, tmin, fam, limits):
+    _final_check(s, g, brake, main, limits)
     phases = list(brake) + list(main)
     prof = StateProfile(s, g, phases, tmin, len(brake), fam, limits)
     _check_range(prof, limits)
@@ -640,9 +665,14 @@ def _finish(s, g, brake, main, tmin, fam, limits):
 
 
 def _check_range(prof: StateProfile, limits: AxisLimits) -> None:
+    _check_range_phases(prof.start_state, prof.goal_state, list(zip(
+        prof.phase_durations, prof.jerks, prof.phase_accelerations)), limits)
+
+
+def _check_range_phases(start, goal, phases, limits: AxisLimits) -> None:
     if limits.position_min == -math.inf and limits.position_max == math.inf:
         return
-    lo, hi = position_extremes(prof)
+    lo, hi = _phase_extremes(start, goal, phases)
     if lo < limits.position_min or hi > limits.position_max:
         raise InfeasibleError(
             f"the profile{axis_label(limits.name)} would leave the position range "
@@ -652,13 +682,24 @@ def _check_range(prof: StateProfile, limits: AxisLimits) -> None:
 
 def position_extremes(prof: StateProfile) -> tuple[float, float]:
     """Exact smallest and largest position of a profile over ``[0, duration]``."""
-    b = prof.boundary_states()
-    lo = hi = float(b[0, 0])
-    for k, (dt, j) in enumerate(zip(prof.phase_durations, prof.jerks)):
-        p, v, a = b[k]
+    return _phase_extremes(prof.start_state, prof.goal_state, list(zip(
+        prof.phase_durations, prof.jerks, prof.phase_accelerations)))
+
+
+def _phase_extremes(start, goal, phases) -> tuple[float, float]:
+    """Smallest and largest position along ``phases`` (``(dt, j, a)``) from
+    ``start``: at every phase end and every in-phase ``v = 0`` (the phase
+    boundary states integrated as :class:`StateProfile` does)."""
+    if not phases:
+        return float(goal[0]), float(goal[0])
+    p, v = float(start[0]), float(start[1])
+    lo = hi = p
+    for dt, j, a in phases:
         for t in (dt,) + tuple(x for x in K._quad_roots(0.5 * j, a, v) if 0.0 < x < dt):
             x = p + t * (v + t * (0.5 * a + t * j / 6.0))
             lo, hi = min(lo, x), max(hi, x)
+        p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
+        v = v + dt * (a + 0.5 * dt * j)
     return lo, hi
 
 
