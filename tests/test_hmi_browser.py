@@ -218,8 +218,11 @@ def test_jog_teach_build_save_load(hmi_server, page):
 
     page.fill("#jog-step", "50")
     page.click("#jog-plus")
+    # the jog's reply ("jogging J3") may arrive after the run: wait for both, so the
+    # page does not re-render under the next click
     page.wait_for_function("document.getElementById('state').textContent === 'idle'"
-                           " && document.querySelector('#joints').textContent.includes('50.000 mm')")
+                           " && document.querySelector('#joints').textContent.includes('50.000 mm')"
+                           " && document.getElementById('msg').textContent === 'jogging J3'")
     assert sess.q[2] == pytest.approx(0.05, abs=1e-12)
     page.click("#btn-teach")  # p1
     page.wait_for_function("document.querySelectorAll('#step-point option').length === 1")
@@ -227,13 +230,10 @@ def test_jog_teach_build_save_load(hmi_server, page):
     page.fill("#jog-step", "20")
     page.click("#jog-plus")
     page.wait_for_function("document.getElementById('state').textContent === 'idle'"
-                           " && document.querySelector('#joints').textContent.includes('20.000 deg')")
+                           " && document.querySelector('#joints').textContent.includes('20.000 deg')"
+                           " && document.getElementById('msg').textContent === 'jogging J1'")
     page.click("#btn-teach")  # p2
-    try:
-        page.wait_for_function("document.querySelectorAll('#step-point option').length === 2", timeout=3000)
-    except Exception:
-        print("MSG", page.inner_text("#msg"), "STATE", page.inner_text("#state"), page.inner_text("#events"), page.inner_text("#joints"), page.input_value("#teach-name"))
-        raise
+    page.wait_for_function("document.querySelectorAll('#step-point option').length === 2")
     assert set(sess.points) == {"p1", "p2"}
 
     page.select_option("#step-op", "PTP")

@@ -248,19 +248,16 @@ def override_rate_limits(envelope: Any, limits: Sequence[AxisLimits],
                                                                np.inf))))
     if not math.isfinite(s1hi):
         s1hi = 1e3
-    best = None
-    for x in np.linspace(1.0 / RATE_GRID, 1.0, RATE_GRID):
-        s1 = s1hi * x
-        s2 = float(np.min(np.minimum((sj[mv] - 3.0 * A[mv] * max_rate * s1) / V[mv], s2v[mv])))
-        if not s2 > 0.0:
-            continue
-        s2 = min(s2, 1e6)
-        t = max_rate / s1 + s1 / s2
-        if best is None or t < best[0]:
-            best = (t, s1, s2)
-    if best is None:
+    # every candidate sigma1 at once: sigma2 is the largest the axes allow for it
+    s1 = s1hi * np.linspace(1.0 / RATE_GRID, 1.0, RATE_GRID)
+    s2 = np.min(np.minimum((sj[mv][None, :] - 3.0 * A[mv][None, :] * max_rate * s1[:, None])
+                           / V[mv][None, :], s2v[mv][None, :]), axis=1)
+    ok = s2 > 0.0
+    if not ok.any():
         return None
-    return best[1] * RATE_BOUND_SAFETY, best[2] * RATE_BOUND_SAFETY
+    s1, s2 = s1[ok], np.minimum(s2[ok], 1e6)
+    i = int(np.argmin(max_rate / s1 + s1 / s2))  # the shortest stop from max_rate
+    return float(s1[i]) * RATE_BOUND_SAFETY, float(s2[i]) * RATE_BOUND_SAFETY
 
 
 def reserve_rate(envelope: Any, limits: Sequence[AxisLimits], reserve: float = OVERRIDE_RESERVE,
