@@ -32,8 +32,7 @@ REST_ATOL = 1e-9
 #: that position is ill-conditioned (p - z ~ t^3, so a 1e-18 m change moves
 #: it by microseconds): a piece end outside the window by more than this
 #: fails only where B is also below its clearance height there
-#: (``POSITION_ATOL``), and B's position at both ends of every horizontal
-#: piece is checked exactly in any case.
+#: (``POSITION_ATOL``).
 WINDOW_ATOL = 1e-9
 
 #: Default number of dense samples per second of plan.
@@ -241,7 +240,7 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
                     # clearance height there) breaks the rule
                     early = pc.t0 < t_up - WINDOW_ATOL and zb0 < z1 - POSITION_ATOL
                     late = pc.t1 > t_dn + WINDOW_ATOL and zb1 < z2 - POSITION_ATOL
-                    if early or late or zb0 < z1 - POSITION_ATOL or zb1 < z2 - POSITION_ATOL:
+                    if early or late:
                         v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: joint "
                                  f"{rob.joint_names[k]} moves over [{pc.t0:.6f}, {pc.t1:.6f}] s, "
                                  f"outside the clearance window [{t_up:.6f}, {t_dn:.6f}] s")
