@@ -113,13 +113,20 @@ def test_pallet_job_matches_the_library(client):
     res = client.post("/api/job", json={"kind": "pallet", "planner": "ptp", "layers": 1})
     assert res.status_code == 200, res.text
     job = res.json()
-    ref = plan_cycle(seed_scenario(layers=1), "ptp")
+    from trajkit.kinematics import CylindricalPalletizer
+    from trajkit.runtime.streamer import override_limits
+
+    machine = seed_scenario(layers=1).robot
+    # HMI jobs are planned with the override reserve (the monitors keep the machine's limits)
+    robot = CylindricalPalletizer(tuple(override_limits(machine.limits)), name=machine.name)
+    ref = plan_cycle(seed_scenario(layers=1, robot=robot), "ptp")
+    assert ref.total_s > plan_cycle(seed_scenario(layers=1), "ptp").total_s
     assert job["summary"]["boxes"] == 5
     assert job["summary"]["duration_s"] == pytest.approx(ref.total_s, rel=1e-12)
     assert [a["name"] for a in job["axes"]] == ["A", "B", "C", "D"]
     assert "layers: Input should be less than or equal to 5 (got 6)" in error_of(
         client.post("/api/job", json={"kind": "pallet", "layers": 6}), 422)
-    assert "planner: Input should be 'ptp' or 'merged'" in error_of(
+    assert "planner: Input should be 'ptp', 'merged' or 'optimal'" in error_of(
         client.post("/api/job", json={"kind": "pallet", "planner": "fast"}), 422)
 
 
@@ -339,3 +346,23 @@ def test_cli_serves_on_localhost_and_prints_its_address(tmp_path):
     finally:
         proc.terminate()
         proc.wait(timeout=10)
+
+
+def test_jobs_are_planned_with_the_override_reserve(client):
+    """100 % runs the planned speed; the slider and pause have the reserve's slack."""
+    from trajkit.hmi.engine import RuntimeDrive
+    from trajkit.runtime.streamer import OVERRIDE_RESERVE
+
+    res = client.post("/api/job", json={"kind": "pallet", "planner": "optimal", "layers": 1})
+    assert res.status_code == 200, res.text
+    tb = client.session.job
+    st = RuntimeDrive(tb).streamer
+    machine = tb.machine_limits
+    assert st.limits == tuple(machine)  # the monitors enforce the machine's limits
+    planned = tb.source().limits
+    for p, m in zip(planned, machine):
+        assert p.a_max == pytest.approx(OVERRIDE_RESERVE * m.a_max)
+        assert p.j_max == pytest.approx(OVERRIDE_RESERVE * min(m.j_max, m.j_max_decel))
+        assert p.v_max == m.v_max
+    assert st.rate_ceiling == 1.0 and st.max_rate == 1.0  # the planned speed at 100 %
+    assert res.json()["summary"]["override_reserve"] == OVERRIDE_RESERVE

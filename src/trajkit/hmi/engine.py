@@ -73,14 +73,12 @@ class RuntimeDrive:
         from ..runtime import ServoParams, Streamer
 
         self.table = table
-        from ..runtime.streamer import reserve_rate
-
         src = table.source()
-        # the jobs are planned at the machine's full limits: 100 % override is the rate
-        # that leaves them the slack of OVERRIDE_RESERVE, so the slider and pause are
-        # proven (velocity, acceleration and jerk) while moving
+        # the jobs are planned with the override reserve (hmi.jobs) and the monitors
+        # enforce the machine's full limits: at 100 % a job runs at its planned
+        # speed, and the slider and pause are proven (velocity, acceleration, jerk)
         self.streamer = Streamer(src, table.period, servo=ServoParams(),
-                                 max_rate=reserve_rate(src.envelope, src.limits))
+                                 limits=table.machine_limits)
         self._seen = 0
         self.last = None
 

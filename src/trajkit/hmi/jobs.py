@@ -5,6 +5,12 @@ Python user calls (:func:`trajkit.interpolation.plan_saddle`,
 :func:`trajkit.palletizing.plan_cycle`, :func:`trajkit.io.program.parse_program`,
 :func:`trajkit.plan_ptp`), then sampled once at the control period into a
 :class:`JobTable` (SI units) that the run loop plays back.
+
+Every job is planned with :func:`trajkit.runtime.streamer.override_limits` of
+the machine's limits (the override reserve, :data:`OVERRIDE_RESERVE` of the
+acceleration and jerk) and streamed against the machine's full limits, so
+that the feed-override slider and pause are proven within every limit while
+the job runs at its planned speed at 100 %.
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
+from ..runtime.streamer import OVERRIDE_RESERVE, override_limits
 from .models import PalletJob, ProgramJob, SaddleJob
 
 __all__ = ["JobTable", "plan_job", "plan_jog", "MM", "PATH_PREVIEW_POINTS"]
@@ -66,6 +73,9 @@ class JobTable:
     tool_of : callable, optional
         ``tool_of(q)`` maps axis positions (k,) [SI] to the tool point (3,) [m]
         (used for the actual path from the servo simulation).
+    machine_limits : tuple of AxisLimits, optional
+        The machine's limits, which the runtime's monitors enforce; the job was
+        planned with ``override_limits(machine_limits)``.
     """
 
     kind: str
@@ -83,6 +93,7 @@ class JobTable:
     v_max: np.ndarray | None = None
     source: Callable[[], Any] | None = None
     tool_of: Callable[[np.ndarray], np.ndarray] | None = None
+    machine_limits: tuple | None = None
 
     @property
     def duration(self) -> float:
@@ -153,8 +164,9 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
         AxisLimits(req.z_vmax_mm_s, req.z_amax_mm_s2, req.z_jmax_mm_s3, name="z_axis").scaled(MM),
     )
     _times(curve.length / (req.feed_mm_s * MM), req.period_s)  # size check before planning
+    reserved = SaddleMachine(*override_limits([machine.theta, machine.z]))
     plan = plan_saddle(curve, req.feed_mm_s * MM, req.accel_mm_s2 * MM, req.jerk_mm_s3 * MM,
-                       machine, req.tolerance_mm * MM, req.period_s)
+                       reserved, req.tolerance_mm * MM, req.period_s)
     fs, ax = plan.setpoints(req.period_s)
     units, scale = _scale(("revolute", "prismatic"))
     summary = {
@@ -163,6 +175,7 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
         "feed_mm_s": req.feed_mm_s,
         "max_tool_speed_mm_s": plan.feed_plan.peak_speed / MM,
         "slowdowns": len(plan.slowdowns),
+        "override_reserve": OVERRIDE_RESERVE,
         "axis_limit_use_pct": {
             nm: {q: round(100 * float(plan.check.ratio[i, j]), 2)
                  for j, q in enumerate(("velocity", "acceleration", "jerk"))}
@@ -178,7 +191,7 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
             st = plan.axes(t)  # (2, 4, n): axis, order
             return st[:, 0].T, st[:, 1].T, st[:, 2].T
 
-        return ProgramSource(sampler, plan.duration, [machine.theta, machine.z], ("theta", "Z"),
+        return ProgramSource(sampler, plan.duration, [reserved.theta, reserved.z], ("theta", "Z"),
                              motion_labels=["seam"], path_intervals=[(0.0, plan.duration)])
 
     def tool_of(q):  # the torch on the branch pipe at rotary angle theta and height Z
@@ -187,14 +200,16 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
     return JobTable("saddle", f"saddle R{req.main_radius_mm:g}/r{req.branch_radius_mm:g} mm",
                     ("theta", "Z"), units, scale, fs.t, ax[:, 0].T.copy(), ax[:, 1].T.copy(),
                     fs.points.copy(), req.period_s, summary,
-                    v_max=machine.limits_array()[:, 0].copy(), source=source, tool_of=tool_of)
+                    v_max=machine.limits_array()[:, 0].copy(), source=source, tool_of=tool_of,
+                    machine_limits=(machine.theta, machine.z))
 
 
 def plan_pallet_job(req: PalletJob) -> JobTable:
     """Plan the first ``boxes`` boxes of the seed-000 palletizing job."""
     from ..palletizing import plan_cycle, seed_scenario
 
-    sc = seed_scenario(layers=req.layers)
+    machine = seed_scenario(layers=req.layers).robot
+    sc = seed_scenario(layers=req.layers, robot=_reserved(machine))
     plan = plan_cycle(sc, req.planner)
     tl = plan.timeline
     t = _times(tl.duration, req.period_s)
@@ -203,32 +218,38 @@ def plan_pallet_job(req: PalletJob) -> JobTable:
     pose = robot.pose_from_joints(s.position)
     units, scale = _scale(("revolute", "prismatic", "prismatic", "revolute"))
     summary = {"duration_s": plan.total_s, "boxes": plan.n_boxes,
-               "per_box_s": plan.per_box_s, "planner": req.planner}
+               "per_box_s": plan.per_box_s, "planner": req.planner,
+               "override_reserve": OVERRIDE_RESERVE}
     return JobTable("pallet", f"palletizing ({req.planner}, {plan.n_boxes} boxes)",
                     ("A", "B", "C", "D"), units, scale, t, s.position, s.velocity,
                     np.asarray(pose)[:, :3].copy(), req.period_s, summary, robot="palletizer",
                     v_max=np.array([lim.v_max for lim in robot.limits]),
                     source=lambda: _as_source(plan),
-                    tool_of=lambda q: np.asarray(robot.pose_from_joints(q))[:3])
+                    tool_of=lambda q: np.asarray(robot.pose_from_joints(q))[:3],
+                    machine_limits=tuple(machine.limits))
 
 
 def plan_program_job(req: ProgramJob, source: str = "program") -> JobTable:
     """Plan a PTP/LIN/CIRC program text and tabulate its joints at the period."""
     from ..io.program import parse_program
 
+    from ..robot.execute import run_motions
+
     prog = parse_program(req.text, source=source)
-    run = prog.run()
+    run = run_motions(_reserved(prog.robot), prog.motions, prog.start)
     t = _times(run.duration, req.period_s)
     smp = run.sample(t)
     robot = prog.robot
     units, scale = _scale(robot.joint_kinds)
     summary = {"duration_s": run.duration, "robot": robot.name,
-               "instructions": len(prog.motions), "slowdowns": len(run.slowdowns)}
+               "instructions": len(prog.motions), "slowdowns": len(run.slowdowns),
+               "override_reserve": OVERRIDE_RESERVE}
     return JobTable("program", f"program on {robot.name}", tuple(robot.joint_names), units, scale,
                     smp.t, smp.q, smp.qd, smp.xyz, req.period_s, summary,
                     robot=robot.name if robot.name in ("arm6", "scara", "palletizer") else None,
                     v_max=np.array([lim.v_max for lim in robot.limits]),
-                    source=lambda: _as_source(run), tool_of=lambda q: np.asarray(robot.fk(q).position))
+                    source=lambda: _as_source(run), tool_of=lambda q: np.asarray(robot.fk(q).position),
+                    machine_limits=tuple(robot.limits))
 
 
 def plan_job(req) -> JobTable:
@@ -267,7 +288,7 @@ def plan_jog(robot, q_now: np.ndarray, joint: int, step_si: float, speed_pct: fl
     limits = [lm.scaled(1.0) for lm in robot.limits]
     limits[joint] = AxisLimits(lim.v_max * speed_pct / 100.0, lim.a_max, lim.j_max,
                                lim.a_max_decel, lim.j_max_decel, name=lim.name)
-    traj = plan_ptp(q_now, goal, limits, sync="none")
+    traj = plan_ptp(q_now, goal, override_limits(limits), sync="none")
     t = _times(traj.duration, period)
     smp = traj.sample(t)
     q, qd = smp.position, smp.velocity
@@ -275,7 +296,21 @@ def plan_jog(robot, q_now: np.ndarray, joint: int, step_si: float, speed_pct: fl
     return JobTable("jog", f"jog {robot.joint_names[joint]}", tuple(robot.joint_names), units,
                     scale, t, q, qd, xyz, period, {"duration_s": traj.duration}, robot=robot.name,
                     v_max=np.array([lm.v_max for lm in robot.limits]),
-                    source=lambda: _as_source(traj), tool_of=lambda q: np.asarray(robot.fk(q).position))
+                    source=lambda: _as_source(traj), tool_of=lambda q: np.asarray(robot.fk(q).position),
+                    machine_limits=tuple(robot.limits))
+
+
+def _reserved(robot):
+    """A copy of ``robot`` whose joint limits keep the override reserve."""
+    import copy
+    import dataclasses
+
+    limits = tuple(override_limits(robot.limits))
+    if dataclasses.is_dataclass(robot):  # the palletizing robot (frozen, validated)
+        return dataclasses.replace(robot, limits=limits)
+    rb = copy.copy(robot)
+    rb.limits = limits
+    return rb
 
 
 def _as_source(obj):

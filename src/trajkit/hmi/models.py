@@ -99,14 +99,14 @@ class PalletJob(_Model):
 
     Attributes
     ----------
-    planner : {"ptp", "merged"}
+    planner : {"ptp", "merged", "optimal"}
     layers : int
         Number of layers of the seed stack to place, 1 .. 5 (5 boxes each).
     period_s : float
     """
 
     kind: Literal["pallet"] = "pallet"
-    planner: Literal["ptp", "merged"] = "merged"
+    planner: Literal["ptp", "merged", "optimal"] = "merged"
     layers: int = Field(default=1, ge=1, le=5)
     period_s: float = Field(default=0.004, ge=MIN_PERIOD_S, le=MAX_PERIOD_S, allow_inf_nan=False)
 
