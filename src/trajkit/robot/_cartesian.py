@@ -68,6 +68,14 @@ JERK_ACC_SHARE = 0.5
 #: holds between the grid points too.
 DERIV_WINDOW = 1
 
+#: Grid refinement for the derivatives (:func:`_refine_derivatives`): a cell
+#: whose second derivative changes by more than REFINE_RTOL of its size, where
+#: the jerk cap would bind if the third derivative were REFINE_D3_FACTOR times
+#: the grid's, is re-sampled REFINE_FACTOR times finer.
+REFINE_RTOL = 0.1
+REFINE_D3_FACTOR = 1000.0
+REFINE_FACTOR = 16
+
 #: Fraction of the tool acceleration limit used by the path curvature (v^2 kappa).
 CART_CURVE_USE = 0.5
 
@@ -416,6 +424,67 @@ def _run_accel_jerk(robot: RobotModel, d1: np.ndarray, d2: np.ndarray, d3: np.nd
     return acc, jerk
 
 
+def _refine_derivatives(robot, pieces, offsets, s, q, ddq, a1, a2, a3, jmax, top_speed):
+    """Re-estimate |dq/ds|, |d2q/ds2|, |d3q/ds3| on a finer grid where the grid misses features.
+
+    Near a singularity the joint path can bend within one grid cell: the
+    third derivative from finite differences on the grid is then too small
+    (measured: 15-25x near the palletizer's axis) and so would be its jerk
+    cap. A cell is re-sampled :data:`REFINE_FACTOR` times finer (IK seeded
+    from the cell's start) when the second derivative changes across it by
+    more than :data:`REFINE_RTOL` of its size and the jerk cap could bind
+    there even if the third derivative were :data:`REFINE_D3_FACTOR` times
+    the grid's. The largest derivatives found in the cell raise its two
+    nodes' values (never lower them).
+    """
+    h = np.diff(s)
+    nj = q.shape[1]
+    dd = np.abs(np.diff(ddq, axis=0))  # signed: a sign change of d2q/ds2 counts
+    scale = np.maximum(np.abs(ddq[:-1]), np.abs(ddq[1:]))
+    g3 = np.maximum(a3[:-1], a3[1:])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        could_bind = np.cbrt(JERK_CURVE_USE * jmax[None, :] / (REFINE_D3_FACTOR * g3)) < top_speed
+        sharp = dd > REFINE_RTOL * scale
+    cells = np.nonzero(np.any(could_bind & sharp, axis=1))[0]
+    # not the cells at the chain's ends: one-sided differences there are not
+    # derivatives of the path (the path does not go on beyond its ends)
+    cells = cells[(cells >= 3) & (cells <= h.size - 4)]
+    if cells.size == 0:
+        return a1, a2, a3
+    a1, a2, a3 = a1.copy(), a2.copy(), a3.copy()
+    total = float(offsets[-1])
+    for c in cells:
+        hf = h[c] / REFINE_FACTOR
+        sf = s[c] + hf * np.arange(-3, REFINE_FACTOR + 4)
+        if sf[0] < 0.0 or sf[-1] > total:  # pragma: no cover - cells near the ends are skipped
+            continue
+        kk = np.clip(np.searchsorted(offsets, sf, side="right") - 1, 0, len(pieces) - 1)
+        pos = np.empty((sf.size, 3))
+        quat = np.empty((sf.size, 4))
+        for i in np.unique(kk):
+            m = kk == i
+            pos[m] = pieces[i].point(sf[m] - offsets[i])
+            quat[m] = pieces[i].quat(sf[m] - offsets[i])
+        rots = matrix_from_quat(quat)
+        qf = np.empty((sf.size, nj))
+        seed = q[c]
+        try:
+            for i in range(sf.size):
+                seed = qf[i] = robot.ik_near(Pose.trusted(pos[i], rots[i]), seed)
+        except UnreachableError:  # the grid itself was reachable: keep its estimate
+            continue
+        f1 = np.abs(np.gradient(qf, sf, axis=0))
+        f2 = np.gradient(np.gradient(qf, sf, axis=0), sf, axis=0)
+        f3 = np.abs(np.gradient(f2, sf, axis=0))
+        # nested differences: the one-sided ends spoil 3 points on each side
+        inner = slice(3, -3)
+        for arr, f in ((a1, f1), (a2, np.abs(f2)), (a3, f3)):
+            m = f[inner].max(axis=0)
+            arr[c] = np.maximum(arr[c], m)
+            arr[c + 1] = np.maximum(arr[c + 1], m)
+    return a1, a2, a3
+
+
 def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str],
                motion_ids: Sequence[int]) -> CartesianChain:
     """Plan LIN/CIRC ``motions`` from joints ``q0`` as one chain (rest to rest).
@@ -492,10 +561,12 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
     dq = np.gradient(q, s, axis=0)
     ddq = np.gradient(dq, s, axis=0)
     dddq = np.gradient(ddq, s, axis=0)
-    d1, d2, d3 = (_window_max(np.abs(x), DERIV_WINDOW) for x in (dq, ddq, dddq))
     vmax = np.array([lim.v_max for lim in robot.limits])
     amax = np.array([min(lim.a_max, lim.a_max_decel) for lim in robot.limits])
     jmax = np.array([min(lim.j_max, lim.j_max_decel) for lim in robot.limits])
+    a1, a2, a3 = _refine_derivatives(robot, pieces, offsets, s, q, ddq, np.abs(dq), np.abs(ddq),
+                                     np.abs(dddq), jmax, float(max(p.cap for p in pieces)))
+    d1, d2, d3 = (_window_max(x, DERIV_WINDOW) for x in (a1, a2, a3))
     with np.errstate(divide="ignore"):
         vel_cap = VEL_USE * vmax[None, :] / np.abs(dq)
         acc_cap = np.sqrt(ACC_CURVE_USE * amax[None, :] / np.abs(ddq))
