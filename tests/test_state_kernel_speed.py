@@ -29,7 +29,6 @@ from conftest import sweep_size
 from state_reference import random_case
 
 from trajkit import AxisLimits
-from trajkit.errors import InfeasibleError
 from trajkit.profiles import _state_jit as SJ
 from trajkit.profiles import _state_kernel as K
 from trajkit.profiles.state import (
