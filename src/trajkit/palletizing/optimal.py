@@ -82,6 +82,10 @@ ZPEAK_XTOL = 1e-9
 #: Absolute tolerance [m/s^2] on the turning acceleration at the top.
 TURN_XTOL = 1e-7
 
+#: Points of the grid over the turning acceleration scanned before Brent's
+#: bounded search (the trip time need not be unimodal in it).
+TURN_GRID = 9
+
 #: Relative tolerance on "the window holds tH" (round-off of crossing times).
 WINDOW_RTOL = 1e-12
 
@@ -287,9 +291,14 @@ def _best_turn(z0, zp, z3, lb, cache):
                 return math.inf
 
         if math.isfinite(lo):
-            r = minimize_scalar(f, bounds=(lo, hi), method="bounded",
-                                options={"xatol": TURN_XTOL})
-            cands = [(float(r.fun), float(r.x)), (f(lo), lo), (f(hi), hi)]
+            # a grid first (the trip time need not be unimodal in ap), then
+            # Brent's bounded search between the best grid point's neighbours
+            grid = [lo + (hi - lo) * i / (TURN_GRID - 1) for i in range(TURN_GRID)]
+            cands = [(f(x), x) for x in grid]
+            i = min(range(TURN_GRID), key=lambda k: cands[k][0])
+            a, b = grid[max(i - 1, 0)], grid[min(i + 1, TURN_GRID - 1)]
+            r = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": TURN_XTOL})
+            cands.append((float(r.fun), float(r.x)))
         else:  # pragma: no cover - B always has a finite acceleration limit here
             cands = [(f(hi), hi)]
         cache[key] = min(cands)
