@@ -106,6 +106,11 @@ JUMP_CHECK = 0.05
 #: still above JUMP_CHECK there is a jump.
 JUMP_DS = 1e-9
 
+#: Difference of the tool's turn per metre [rad/m] below which two smooth
+#: pieces need no blend (a collinear LIN into a LIN turning the tool at
+#: another rate does: the joint velocity would step).
+SMOOTH_ORIENTATION_RATE = 1e-9
+
 #: Tangent turn below which two pieces meet smoothly (no blend needed) [rad].
 SMOOTH_TURN = 1e-6
 
@@ -274,6 +279,24 @@ def curvature_vector(path: Any, s: float) -> np.ndarray:
     raise InvalidInputError(f"no curvature vector for a path of type {type(path).__name__}")
 
 
+def _orientation_rate(spec: dict) -> np.ndarray:
+    """World-frame turn of the tool per metre of path [rad/m] (constant along a slerp)."""
+    path = spec["path"]
+    if path is None or spec["angle"] <= 0.0 or path.length <= 0.0:
+        return np.zeros(3)
+    rel = matrix_from_quat(spec["quat1"]) @ matrix_from_quat(spec["quat0"]).T
+    w = np.array([rel[2, 1] - rel[1, 2], rel[0, 2] - rel[2, 0], rel[1, 0] - rel[0, 1]])
+    sn = 0.5 * float(np.linalg.norm(w))
+    cs = 0.5 * (float(np.trace(rel)) - 1.0)
+    th = math.atan2(sn, cs)
+    axis = w / (2.0 * sn) if sn > 0.0 else np.zeros(3)
+    if th > 0.0 and sn <= 1e-12:  # a half turn: the axis from the symmetric part
+        m = 0.5 * (rel + np.eye(3))
+        axis = m[int(np.argmax(np.diag(m)))]
+        axis = axis / np.linalg.norm(axis)
+    return axis * th / path.length
+
+
 def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
     w_max = robot.orientation_speed
     n = len(specs)
@@ -292,8 +315,9 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
             continue
         if turn < SMOOTH_TURN and np.linalg.norm(
                 curvature_vector(a["path"], a["path"].length)
-                - curvature_vector(b["path"], 0.0)) <= SMOOTH_CURVATURE:
-            continue  # tangent and curvature continuous: no blend needed
+                - curvature_vector(b["path"], 0.0)) <= SMOOTH_CURVATURE and np.linalg.norm(
+                _orientation_rate(a) - _orientation_rate(b)) <= SMOOTH_ORIENTATION_RATE:
+            continue  # tangent, curvature and orientation rate continuous: no blend needed
         r = min(a["zone"], 0.5 * a["path"].length, 0.5 * b["path"].length)
         trim1[i] = r
         trim0[i + 1] = r
