@@ -23,25 +23,48 @@ import numpy as np
 REF_RTOL = 1e-14
 
 
-def ruckig_duration(start, goal, V, A, J):
-    """Minimum duration from ruckig's ``Ruckig(1).calculate`` (symmetric limits)."""
-    from ruckig import InputParameter, Result, Ruckig, Trajectory
+def _ruckig_run(start, V, A, J, goal=None, goal_va=None, minimum_duration=None,
+                catch_errors=False):
+    """Duration of one ``Ruckig(1).calculate`` (symmetric limits), ``None`` if it fails.
+
+    ``goal`` (p, v, a) for the position interface, ``goal_va`` (v, a) for the
+    velocity interface; ``minimum_duration`` asks for at least that long;
+    ``catch_errors`` turns ruckig's own ``RuckigError`` into ``None``.
+    """
+    from ruckig import ControlInterface, InputParameter, Result, Ruckig, RuckigError, Trajectory
 
     inp = InputParameter(1)
     inp.current_position = [start[0]]
     inp.current_velocity = [start[1]]
     inp.current_acceleration = [start[2]]
-    inp.target_position = [goal[0]]
-    inp.target_velocity = [goal[1]]
-    inp.target_acceleration = [goal[2]]
+    if goal_va is not None:
+        inp.control_interface = ControlInterface.Velocity
+        inp.target_velocity = [goal_va[0]]
+        inp.target_acceleration = [goal_va[1]]
+    else:
+        inp.target_position = [goal[0]]
+        inp.target_velocity = [goal[1]]
+        inp.target_acceleration = [goal[2]]
     inp.max_velocity = [V]
     inp.max_acceleration = [A]
     inp.max_jerk = [J]
+    if minimum_duration is not None:
+        inp.minimum_duration = minimum_duration
     traj = Trajectory(1)
-    res = Ruckig(1).calculate(inp, traj)
+    try:
+        res = Ruckig(1).calculate(inp, traj)
+    except RuckigError:  # ruckig's own numerical failure
+        if not catch_errors:
+            raise
+        return None
     if res not in (Result.Working, Result.Finished):
         return None
     return traj.duration
+
+
+def ruckig_duration(start, goal, V, A, J):
+    """Minimum duration from ruckig's ``Ruckig(1).calculate`` (symmetric limits)."""
+    return _ruckig_run(start, V, A, J, goal=goal)
 
 
 def _ramp(dv, a, j):
@@ -254,45 +277,9 @@ def ruckig_fixed(start, goal, V, A, J, T):
     reversals between states at the limits with durations far above the
     minimum).
     """
-    from ruckig import InputParameter, Result, Ruckig, RuckigError, Trajectory
-
-    inp = InputParameter(1)
-    inp.current_position = [start[0]]
-    inp.current_velocity = [start[1]]
-    inp.current_acceleration = [start[2]]
-    inp.target_position = [goal[0]]
-    inp.target_velocity = [goal[1]]
-    inp.target_acceleration = [goal[2]]
-    inp.max_velocity = [V]
-    inp.max_acceleration = [A]
-    inp.max_jerk = [J]
-    inp.minimum_duration = T
-    traj = Trajectory(1)
-    try:
-        res = Ruckig(1).calculate(inp, traj)
-    except RuckigError:  # ruckig's own numerical failure
-        return None
-    if res not in (Result.Working, Result.Finished):
-        return None
-    return traj.duration
+    return _ruckig_run(start, V, A, J, goal=goal, minimum_duration=T, catch_errors=True)
 
 
 def ruckig_velocity_duration(start, goal_v, goal_a, V, A, J):
     """Minimum duration of ruckig's velocity interface (position free)."""
-    from ruckig import ControlInterface, InputParameter, Result, Ruckig, Trajectory
-
-    inp = InputParameter(1)
-    inp.control_interface = ControlInterface.Velocity
-    inp.current_position = [start[0]]
-    inp.current_velocity = [start[1]]
-    inp.current_acceleration = [start[2]]
-    inp.target_velocity = [goal_v]
-    inp.target_acceleration = [goal_a]
-    inp.max_velocity = [V]
-    inp.max_acceleration = [A]
-    inp.max_jerk = [J]
-    traj = Trajectory(1)
-    res = Ruckig(1).calculate(inp, traj)
-    if res not in (Result.Working, Result.Finished):
-        return None
-    return traj.duration
+    return _ruckig_run(start, V, A, J, goal_va=(goal_v, goal_a))
