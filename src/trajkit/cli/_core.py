@@ -11,18 +11,19 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import math
 import os
 import sys
 from typing import Any, Literal, Sequence
 
 import numpy as np
-import yaml
+
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._atomicio import atomic_write
 from .._validate import check_finite
+from ..io.document import plain, read_document
+from ..io.schema import Real, RealOrInf, validation_message
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
@@ -90,13 +91,13 @@ class JobLimits(BaseModel):
     """Limits of one axis in a job file (same fields as :class:`AxisLimits`)."""
 
     model_config = ConfigDict(extra="forbid")
-    v_max: float
-    a_max: float
-    j_max: float
-    a_max_decel: float | None = None
-    j_max_decel: float | None = None
-    position_min: float = -math.inf
-    position_max: float = math.inf
+    v_max: RealOrInf
+    a_max: RealOrInf
+    j_max: RealOrInf
+    a_max_decel: RealOrInf | None = None
+    j_max_decel: RealOrInf | None = None
+    position_min: RealOrInf = -math.inf
+    position_max: RealOrInf = math.inf
 
 
 class PtpJob(BaseModel):
@@ -118,28 +119,18 @@ class PtpJob(BaseModel):
     """
 
     model_config = ConfigDict(extra="forbid")
-    start: list[float] = Field(min_length=1)
-    goal: list[float] = Field(min_length=1)
+    start: list[Real] = Field(min_length=1)
+    goal: list[Real] = Field(min_length=1)
     limits: list[JobLimits] = Field(min_length=1)
     names: list[str] | None = None
     sync: Literal["time", "phase", "none"] = "time"
-    duration: float | None = None
+    duration: Real | None = None
     unit: str | list[str] = "m"
 
     @field_validator("limits", mode="before")
     @classmethod
     def _one_or_many(cls, v: Any) -> Any:
         return [v] if isinstance(v, dict) else v
-
-
-def _first_error(exc: Any) -> str:
-    errs = exc.errors()
-    e = errs[0]
-    loc = ".".join(str(p) for p in e.get("loc", ())) or "(top level)"
-    more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
-    got = e.get("input")
-    shown = "" if isinstance(got, dict) else f", got {got!r}"
-    return f"field {loc}: {e.get('msg', 'invalid')}{shown}{more}"
 
 
 def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
@@ -166,25 +157,14 @@ def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
     kind = _JOB_SUFFIXES.get(os.path.splitext(p)[1].lower())
     if kind is None:
         raise InvalidInputError(f"--file must end in .yaml, .yml or .json, got {p!r}")
-    with open(p, encoding="utf-8") as fh:
-        text = fh.read()
-    try:
-        data = json.loads(text) if kind == "json" else yaml.safe_load(text)
-    except (ValueError, yaml.YAMLError) as exc:  # json.JSONDecodeError is a ValueError
-        mark = getattr(exc, "problem_mark", None)
-        if mark is not None:
-            problem = getattr(exc, "problem", None) or "syntax error"
-            first = f"{problem} at line {mark.line + 1}, column {mark.column + 1}"
-        else:
-            first = " ".join(str(exc).split())
-        raise InvalidInputError(f"{p}: not valid {kind.upper()}: {first}") from None
+    data = plain(read_document(p, kind=kind))
     if not isinstance(data, dict):
         raise InvalidInputError(f"{p}: expected a mapping of fields at the top level, "
                                 f"got {type(data).__name__}")
     try:
         return PtpJob.model_validate(data)
     except ValidationError as exc:
-        raise InvalidInputError(f"{p}: {_first_error(exc)}") from None
+        raise InvalidInputError(f"{p}: {validation_message(exc)}") from None
 
 
 # ------------------------------------------------------------------- outputs

@@ -203,14 +203,9 @@ def _run_saddle(args: argparse.Namespace) -> int:
 # -------------------------------------------------------------------- path
 def load_path_file(filename: str) -> dict:
     """Read a path job (YAML) into a dict with ``start`` and ``segments`` (mm)."""
-    import yaml
+    from ..io.document import plain, read_document
 
-    try:
-        with open(filename, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise InvalidInputError(f"{filename}: not valid YAML: {first}") from None
+    data = plain(read_document(filename))
     if not isinstance(data, dict):
         raise InvalidInputError(f"{filename}: expected a mapping with 'start' and 'segments'")
     unknown = set(data) - {"start", "segments", "feed", "tolerance", "period", "accel", "jerk", "units",
