@@ -28,7 +28,7 @@ from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
 from ..trajectory import SYNC_MODES, Trajectory, plan_ptp
-from ._console import _fmt, print_json, print_table
+from ._console import print_json, print_table
 
 __all__ = ["register", "load_ptp_job", "PtpJob", "JobLimits"]
 
@@ -168,31 +168,6 @@ def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
 
 
 # ------------------------------------------------------------------- outputs
-def _print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
-    """Print a table wide enough for every cell, without console markup.
-
-    Like :func:`trajkit.cli._console.print_table`, but the rich console is as
-    wide as the table (no ellipsis in long shape names) and cells are plain
-    text (``[s]`` in a header is a unit, not rich markup).
-    """
-    try:
-        from rich.console import Console
-        from rich.table import Table
-        from rich.text import Text
-    except ImportError:  # pragma: no cover - rich is optional
-        print_table(title, columns, rows)
-        return
-    cells = [[_fmt(c) for c in row] for row in rows]
-    widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(columns)]
-    width = max(sum(widths) + 3 * len(widths) + 1, len(title))
-    table = Table(title=Text(title))
-    for h in columns:
-        table.add_column(Text(h), justify="right", no_wrap=True)
-    for r in cells:
-        table.add_row(*(Text(c) for c in r))
-    Console(width=width).print(table)
-
-
 def _jsonable(obj: Any) -> Any:
     """Replace non-finite floats by the strings "inf"/"-inf"/"nan" (strict JSON)."""
     if isinstance(obj, float):
@@ -259,7 +234,7 @@ def _print_phases(title: str, profile: Profile, unit: str) -> None:
     for k, name in enumerate(PHASE_NAMES):
         rows.append([k + 1, name, profile.phase_durations[k], profile.jerks[k],
                      end[k, 0], end[k, 1], end[k, 2], end[k, 3]])
-    _print_table(
+    print_table(
         title,
         ["#", "phase", "duration [s]", f"jerk [{unit}/s^3]", "t_end [s]",
          f"pos [{unit}]", f"vel [{unit}/s]", f"acc [{unit}/s^2]"],
@@ -373,7 +348,7 @@ def _cmd_move(args: argparse.Namespace) -> int:
     if args.json:
         print_json(_jsonable(_profile_json(profile, None, unit)))
     else:
-        _print_table(
+        print_table(
             f"move {start:g} -> {goal:g} {unit}",
             ["duration [s]", "min duration [s]", "shape", "reached limits",
                    f"peak vel [{unit}/s]", f"peak acc [{unit}/s^2]",
@@ -469,7 +444,7 @@ def _cmd_ptp(args: argparse.Namespace) -> int:
             "axes": [_profile_json(p, nm, u) for p, nm, u in zip(traj.axes, names, units)],
         }))
     else:
-        _print_table(
+        print_table(
             f"ptp, {traj.n_axes} axes, sync={traj.sync}: duration {traj.duration:.6g} s",
             ["axis", "start", "goal", "unit", "duration [s]", "min duration [s]",
                    "shape", "reached limits", "peak vel [unit/s]"],
