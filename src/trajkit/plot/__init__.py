@@ -24,6 +24,40 @@ def require_matplotlib():
     return plt
 
 
+def set_equal_3d(ax, points) -> None:
+    """Equal scales on the x, y and z axes of a 3-D ``ax`` around ``points`` (n, 3).
+
+    A circle looks round and a straight line keeps its true slope: the three
+    axes span the same range about the centre of the points' bounding box.
+    """
+    import numpy as np
+
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    p = p[np.isfinite(p).all(axis=1)]
+    if p.size == 0:
+        return
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    half = 0.5 * float((hi - lo).max()) or 1.0
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_zlim(mid[2] - half, mid[2] + half)
+    ax.set_box_aspect((1.0, 1.0, 1.0))
+
+
+def line_colors(n: int) -> list:
+    """``n`` distinct line colours: matplotlib's cycle up to 10, tab20 up to 20, then a colormap."""
+    if n <= 10:
+        return [f"C{i}" for i in range(n)]
+    import matplotlib
+
+    if n <= 20:
+        cmap = matplotlib.colormaps["tab20"]
+        return [cmap(i) for i in range(n)]
+    cmap = matplotlib.colormaps["turbo"]
+    return [cmap(i / (n - 1)) for i in range(n)]
+
+
 #: Resolution of written raster figures [dots per inch].
 FIGURE_DPI = 110
 
