@@ -14,6 +14,7 @@ pytest.importorskip("fastapi")
 pytest.importorskip("httpx")
 
 from fastapi.testclient import TestClient  # noqa: E402
+from hmi_support import BASE_URL, page_client  # noqa: E402
 
 from trajkit.errors import InvalidInputError  # noqa: E402
 from trajkit.hmi.app import create_app  # noqa: E402
@@ -32,8 +33,7 @@ FAST_SADDLE = {"kind": "saddle", "feed_mm_s": 300, "period_s": 0.01, "z_vmax_mm_
 @pytest.fixture
 def client(tmp_path):
     app = create_app(programs_dir=tmp_path / "programs")
-    with TestClient(app) as c:
-        c.session = app.state.session
+    with page_client(app) as c:
         yield c
 
 
@@ -60,16 +60,20 @@ def error_of(resp, code):
     ("period_s", 0.5, r"period_s: Input should be less than or equal to 0.1 \(got 0.5\)"),
     ("period_s", 1e-6, r"period_s: Input should be greater than or equal to 0.0001"),
     ("angle_deg", 180, r"angle_deg: Input should be less than 180"),
-    ("tolerance_mm", "nan", r"tolerance_mm: .*finite"),
+    ("tolerance_mm", "nan", r"tolerance_mm: Input should be a valid number \(got 'nan'\)"),
+    ("feed_mm_s", "50", r"feed_mm_s: Input should be a valid number \(got '50'\)"),
+    ("feed_mm_s", True, r"feed_mm_s: Input should be a valid number \(got True\)"),
     ("bogus", 1, r"bogus: Extra inputs are not permitted"),
 ])
-def test_bad_saddle_value_is_refused_and_changes_nothing(client, field, value, pattern):
-    events = client.get("/api/events").json()["events"]
+def test_bad_saddle_value_is_refused_and_loads_nothing(client, field, value, pattern):
     msg = error_of(client.post("/api/job", json={"kind": "saddle", field: value}), 422)
     assert re.search(pattern, msg), msg
     assert client.session.job is None
     assert client.get("/api/job").json() == {"job": None}
-    assert client.get("/api/events").json()["events"] == events
+    # the failed plan is logged (a warning) and nothing else happens
+    events = client.get("/api/events").json()["events"]
+    assert [e["level"] for e in events] == ["warning"]
+    assert events[0]["text"] == "plan failed: " + msg
 
 
 def test_library_refusal_names_values_in_mm(client):
@@ -82,7 +86,7 @@ def test_unknown_kind_and_bad_json(client):
     assert "kind must be one of saddle, pallet, program" in error_of(
         client.post("/api/job", json={"kind": "laser"}), 400)
     assert error_of(client.post("/api/job", content=b"{not json",
-                                headers={"content-type": "application/json"}), 422)
+                                headers={"content-type": "application/json"}), 400)
 
 
 def test_saddle_job_preview_starts_on_the_seam(client):
@@ -288,18 +292,55 @@ def test_page_is_self_contained(client):
     assert client.get("/static/vendor/uPlot.LICENSE").status_code == 200
 
 
+TOKEN = "s3cret-token-4567"
+
+
 def test_token_required_everywhere(tmp_path):
-    app = create_app(token="s3cret-token", programs_dir=tmp_path)
-    with TestClient(app) as c:
+    app = create_app(token=TOKEN, programs_dir=tmp_path)
+    with TestClient(app, base_url=BASE_URL) as c:
         assert error_of(c.get("/api/status"), 401) == "missing or wrong token"
         assert c.get("/api/status", headers={"X-Trajkit-Token": "wrong-token"}).status_code == 401
-        assert c.get("/api/status", headers={"X-Trajkit-Token": "s3cret-token"}).status_code == 200
-        assert c.get("/api/status", headers={"Authorization": "Bearer s3cret-token"}).status_code == 200
-        assert c.get("/api/status?token=s3cret-token").status_code == 200
+        assert c.get("/api/status", headers={"X-Trajkit-Token": TOKEN}).status_code == 200
+        assert c.get("/api/status", headers={"Authorization": f"Bearer {TOKEN}"}).status_code == 200
+        assert c.get(f"/api/status?token={TOKEN}").status_code == 200
         assert c.post("/api/run/estop").status_code == 401
         assert app.state.session.state == "idle"
-        assert c.get("/").status_code == 401
-        assert c.get("/?token=s3cret-token").status_code == 200
+        # the page, its files, the schema and the docs are behind the token too
+        for path in ("/", "/static/hmi.js", "/static/vendor/uPlot.iife.min.js", "/openapi.json",
+                     "/docs", "/api/session"):
+            r = c.get(path)
+            assert r.status_code == 401, path
+            assert "uPlot" not in r.text and "paths" not in r.text
+        assert c.get("/openapi.json", headers={"X-Trajkit-Token": TOKEN}).status_code == 200
+        # opening the page with ?token= sets a cookie (HttpOnly, SameSite=Strict) for its files
+        r = c.get(f"/?token={TOKEN}")
+        assert r.status_code == 200
+        cookie = r.headers["set-cookie"]
+        assert cookie.startswith(f"trajkit-token-8765={TOKEN};")
+        assert "HttpOnly" in cookie and "SameSite=Strict" in cookie
+        assert c.get("/static/hmi.js").status_code == 200  # the cookie carries the token
+        c.cookies.clear()
+        assert c.get("/static/hmi.js").status_code == 401
+        # the token alone does not allow a change: the anti-CSRF header is needed as well
+        hdr = {"X-Trajkit-Token": TOKEN}
+        assert "X-Trajkit-CSRF" in error_of(c.post("/api/run/reset", headers=hdr), 403)
+        csrf = c.get("/api/session", headers=hdr).json()["csrf_token"]
+        assert c.post("/api/override", json={"percent": 50},
+                      headers={**hdr, "X-Trajkit-CSRF": csrf}).status_code == 200
+
+
+@pytest.mark.parametrize("token, pattern", [
+    ("abc", r"at least 16 characters, got 3"),
+    ("a" * 40, r"too easy to guess: it needs at least 6 different characters, got 1"),
+    ("abababababababab", r"at least 6 different characters, got 2"),
+    (" " * 20, r"printable ASCII characters without spaces"),
+    ("good-token with space", r"printable ASCII characters without spaces"),
+    ("t\u00f6ken-1234567890", r"printable ASCII"),
+])
+def test_weak_tokens_are_refused(token, pattern):
+    with pytest.raises(InvalidInputError, match=pattern) as exc:
+        check_bind("0.0.0.0", 8765, token)
+    assert token.strip() == "" or token not in str(exc.value)  # the token is never shown
 
 
 def test_check_bind():
@@ -311,12 +352,20 @@ def test_check_bind():
     with pytest.raises(InvalidInputError, match=r"host '192.168.1.5' .* requires --token"):
         check_bind("192.168.1.5", 8765, None)
     check_bind("0.0.0.0", 8765, "long-enough-token")
-    with pytest.raises(InvalidInputError, match=r"token must have at least 8 characters, got 3"):
-        check_bind("0.0.0.0", 8765, "abc")
     with pytest.raises(InvalidInputError, match=r"port must be an integer in 0..65535, got 70000"):
         check_bind("127.0.0.1", 70000, None)
     assert url_of("127.0.0.1", 8765, None) == "http://127.0.0.1:8765/"
     assert url_of("::1", 80, "tok") == "http://[::1]:80/?token=tok"
+
+
+def test_default_allowed_hosts():
+    from trajkit.hmi.server import default_allowed_hosts
+
+    assert default_allowed_hosts("127.0.0.1") == ["127.0.0.1", "localhost", "::1"]
+    hosts = default_allowed_hosts("192.168.1.5", ["hmi.plant.example"])
+    assert hosts[:3] == ["127.0.0.1", "localhost", "::1"]
+    assert "192.168.1.5" in hosts and hosts[-1] == "hmi.plant.example"
+    assert "0.0.0.0" not in default_allowed_hosts("0.0.0.0")
 
 
 def test_cli_refuses_public_bind_without_token(capsys):

@@ -52,7 +52,7 @@ def _pos(**kw):
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # true or "50" is not a number
 
 
 class SaddleJob(_Model):
