@@ -415,3 +415,339 @@ def test_jobs_are_planned_with_the_override_reserve(client):
         assert p.v_max == m.v_max
     assert st.rate_ceiling == 1.0 and st.max_rate == 1.0  # the planned speed at 100 %
     assert res.json()["summary"]["override_reserve"] == OVERRIDE_RESERVE
+
+
+# ----------------------------------------------------------------- who may drive the machine
+def _fault(client):
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    assert client.post("/api/run/estop").json()["state"] == "fault"
+
+
+@pytest.mark.parametrize("headers", [
+    {"Origin": "http://evil.example"},
+    {"Origin": "http://127.0.0.1:9999"},  # another port of this machine is another origin
+    {"Origin": "https://127.0.0.1:8765.evil.example"},
+    {"Origin": "null"},  # sandboxed frames, file:// pages
+    {"Host": "evil.example"},  # DNS rebinding: a foreign name resolving to this machine
+    {"Host": "evil.example:8765", "Origin": "http://evil.example:8765"},
+    {"Host": "127.0.0.1.evil.example"},
+])
+def test_foreign_origin_or_host_cannot_reset_start_or_read(client, headers):
+    """Issue reproduction: reset then start from another origin took fault -> running."""
+    _fault(client)
+    for path in ("/api/run/reset", "/api/run/start", "/api/run/estop"):
+        r = client.post(path, headers=headers)
+        assert r.status_code == 403, (path, r.text)
+        assert "not allowed" in r.json()["error"]
+    assert client.session.state == "fault"
+    for path in ("/api/status", "/api/session", "/api/job", "/api/events", "/", "/static/hmi.js"):
+        assert client.get(path, headers=headers).status_code == 403, path
+
+
+@pytest.mark.parametrize("site, path, code", [
+    ("cross-site", "/api/status", 403),  # <img src>, <script src> from another site
+    ("same-site", "/api/session", 403),  # another port of this machine
+    ("cross-site", "/static/hmi.js", 403),
+    ("same-origin", "/api/status", 200),
+    ("none", "/api/status", 200),  # typed into the address bar
+])
+def test_fetch_metadata_refuses_reads_by_other_sites(client, site, path, code):
+    assert client.get(path, headers={"Sec-Fetch-Site": site, "Sec-Fetch-Mode": "no-cors"}).status_code == code
+
+
+def test_a_link_from_another_site_opens_the_page_only(client):
+    nav = {"Sec-Fetch-Site": "cross-site", "Sec-Fetch-Mode": "navigate", "Sec-Fetch-Dest": "document"}
+    assert client.get("/", headers=nav).status_code == 200
+    assert client.get("/api/status", headers=nav).status_code == 403
+
+
+def test_changing_requests_need_the_csrf_header(client):
+    _fault(client)
+    bare = {"X-Trajkit-CSRF": ""}
+    for path in ("/api/run/reset", "/api/run/start"):
+        # what a no-cors fetch or a form post can send: no custom header
+        r = client.post(path, headers={**bare, "Content-Type": "text/plain"}, content=b"x")
+        assert "X-Trajkit-CSRF" in error_of(r, 403)
+        r = client.post(path, headers={"X-Trajkit-CSRF": "guessed-value"})
+        assert "X-Trajkit-CSRF" in error_of(r, 403)
+    assert client.session.state == "fault"
+    for path, body in (("/api/job", {"kind": "pallet"}), ("/api/override", {"percent": 10}),
+                       ("/api/teach", {"name": "p1"}), ("/api/robot", {"robot": "arm6"})):
+        assert error_of(client.post(path, json=body, headers=bare), 403)
+    assert client.get("/api/status").json()["override_pct"] == 100.0
+    # the page's own requests pass
+    assert client.post("/api/run/reset", headers={"Origin": BASE_URL}).json()["state"] == "idle"
+
+
+def test_estop_needs_no_csrf_header_but_a_local_origin(client):
+    assert client.post("/api/run/estop", headers={"X-Trajkit-CSRF": ""}).json()["state"] == "fault"
+    client.post("/api/run/reset")
+    assert client.post("/api/run/estop", headers={"X-Trajkit-CSRF": "", "Origin": BASE_URL}).status_code == 200
+    client.post("/api/run/reset")
+    assert client.post("/api/run/estop", headers={"Origin": "http://evil.example"}).status_code == 403
+    assert client.session.state == "idle"
+
+
+def test_session_gives_the_csrf_value(client):
+    info = client.get("/api/session").json()
+    assert info["csrf_header"] == "x-trajkit-csrf" and len(info["csrf_token"]) >= 32
+    assert info["token_required"] is False and info["max_body_bytes"] == 1 << 20
+    other = create_app(programs_dir="unused")
+    assert other.state.policy.csrf_token != info["csrf_token"]  # a new value per server
+
+
+def test_allowed_hosts_and_origins_behind_a_proxy(tmp_path):
+    app = create_app(programs_dir=tmp_path, allowed_hosts=["127.0.0.1", "hmi.plant.example"],
+                     allowed_origins=["https://hmi.plant.example"])
+    with page_client(app) as c:
+        hdr = {"Host": "hmi.plant.example", "Origin": "https://hmi.plant.example"}
+        assert c.post("/api/override", json={"percent": 30}, headers=hdr).status_code == 200
+        assert c.post("/api/override", json={"percent": 30},
+                      headers={**hdr, "Origin": "https://evil.example"}).status_code == 403
+        assert c.get("/api/status", headers={"Host": "localhost"}).status_code == 403
+    for bad in (["*"], ["0.0.0.0"], ["a b"]):
+        with pytest.raises(InvalidInputError, match="allowed host must be a host name"):
+            create_app(allowed_hosts=bad)
+    with pytest.raises(InvalidInputError, match="allowed origin must look like"):
+        create_app(allowed_origins=["hmi.plant.example"])
+
+
+def test_security_headers_on_every_answer(client):
+    for r in (client.get("/"), client.get("/api/status"), client.get("/static/hmi.js"),
+              client.get("/nope"), client.post("/api/run/start"),
+              client.get("/api/status", headers={"Host": "evil.example"}),
+              client.post("/api/job", content=b"x" * (2 << 20))):
+        assert r.headers["x-frame-options"] == "DENY"
+        assert r.headers["x-content-type-options"] == "nosniff"
+        csp = r.headers["content-security-policy"]
+        assert "frame-ancestors 'none'" in csp and "script-src 'self'" in csp
+        assert "access-control-allow-origin" not in r.headers
+
+
+# ----------------------------------------------------------------- hostile bodies
+@pytest.mark.parametrize("body, pattern", [
+    (b'{"kind": "pallet", "kind": "saddle"}', r"^request body: duplicate key 'kind'$"),
+    (b'{"kind": "saddle", "feed_mm_s": 40\xff}', r"^request body: not UTF-8 \(byte 34\)$"),
+    (b"[" * 100_000 + b"]" * 100_000, r"^request body: nested deeper than 32 levels$"),
+    (b'{"a":' * 40 + b"1" + b"}" * 40, r"^request body: nested deeper than 32 levels$"),
+    (b'{"kind": "saddle", "feed_mm_s": NaN}', r"^request body: NaN is not a JSON number$"),
+    (b'{"kind": "saddle", "feed_mm_s": 1e999}', r"^request body: number '1e999' is out of range$"),
+    (b"[1, 2]", r"^request body: must be a JSON object, got list$"),
+    (b"", r"^request body: not valid JSON"),
+])
+def test_hostile_job_bodies_answer_one_line(client, body, pattern):
+    msg = error_of(client.post("/api/job", content=body, headers={"Content-Type": "application/json"}), 400)
+    assert re.search(pattern, msg), msg
+    assert "\n" not in msg
+
+
+@pytest.mark.parametrize("path", ["/api/override", "/api/jog", "/api/teach", "/api/robot",
+                                  "/api/program/build", "/api/programs"])
+def test_every_body_goes_through_the_strict_loader(client, path):
+    msg = error_of(client.post(path, content=b'{"a": 1, "a": 2}'), 400)
+    assert msg == "request body: duplicate key 'a'"
+
+
+@pytest.mark.parametrize("value", [True, "50", None, [50], {"v": 50}])
+def test_override_numbers_are_strict(client, value):
+    msg = error_of(client.post("/api/override", json={"percent": value}), 422)
+    assert msg.startswith("percent: Input should be a valid number")
+    assert client.post("/api/override", json={"percent": 50}).status_code == 200  # ints are numbers
+
+
+def test_error_messages_do_not_echo_the_input(client):
+    big = "x" * 150_000
+    for body in ({"kind": "saddle", "feed_mm_s": big}, {"kind": big}, {"kind": "program", "text": big},
+                 {"kind": "program", "text": "robot: arm6\n" + "# " + big + "\npoints: 3\n"},
+                 {"kind": "saddle", big: 1}):
+        r = client.post("/api/job", json=body)
+        assert r.status_code in (400, 422)
+        assert len(r.json()["error"]) <= 300 and "xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx" not in r.text
+
+
+def test_body_limit_413(client):
+    r = client.post("/api/job", content=b"{" + b" " * (1 << 20) + b"}")
+    assert "larger than the 1048576 bytes allowed" in error_of(r, 413)
+    ok = {"kind": "program", "text": "#" * 199_000, "period_s": 0.004}
+    assert client.post("/api/job", json=ok).status_code == 400  # below the limit: read and parsed
+
+
+def test_body_limit_is_checked_while_the_body_streams():
+    """The guard stops reading at the first chunk past the limit (it never reads it all)."""
+    import asyncio
+
+    from trajkit.hmi.security import AccessPolicy, Guard
+
+    async def app(scope, receive, send):  # pragma: no cover - must not be reached
+        raise AssertionError("the app must not see an oversized body")
+
+    policy = AccessPolicy.build(max_body_bytes=4096)
+    chunk = b"x" * 1000
+    served = []
+    sent = []
+
+    async def receive():
+        served.append(len(chunk))
+        return {"type": "http.request", "body": chunk, "more_body": True}  # endless
+
+    async def send(msg):
+        sent.append(msg)
+
+    scope = {"type": "http", "method": "POST", "path": "/api/job", "query_string": b"",
+             "headers": [(b"host", b"127.0.0.1:8765"), (b"x-trajkit-csrf", policy.csrf_token.encode()),
+                         (b"transfer-encoding", b"chunked")]}
+    asyncio.run(Guard(app, policy)(scope, receive, send))
+    assert sent[0]["status"] == 413
+    assert sum(served) == 5000  # stopped at the first chunk past 4096 bytes
+    # a declared length above the limit is refused before reading anything
+    served.clear()
+    sent.clear()
+    scope["headers"] = scope["headers"][:2] + [(b"content-length", b"5000000")]
+    asyncio.run(Guard(app, policy)(scope, receive, send))
+    assert sent[0]["status"] == 413 and served == []
+
+
+def test_unexpected_errors_answer_one_line_500(client, monkeypatch):
+    def boom():
+        raise ZeroDivisionError("secret internals")
+
+    monkeypatch.setattr(client.session, "joint_info", boom)
+    r = client.get("/api/robot")
+    assert r.status_code == 500
+    assert r.json() == {"error": "internal error (ZeroDivisionError); the server log has the details"}
+    assert r.headers["x-frame-options"] == "DENY"
+
+
+# ----------------------------------------------------------------- URDF programs: no file-system probing
+URDF = Path(__file__).parent / "data" / "arm6_test.urdf"
+
+
+def _urdf_program(path: str) -> str:
+    return (f"robot: {{urdf: '{path}', tip_link: tool0}}\npoints:\n"
+            "  a: {joints_deg: [0, 20, 10, 0, 60, 0]}\n  b: {joints_deg: [10, 20, 10, 0, 60, 0]}\n"
+            "program:\n  - PTP: a\n  - PTP: b\n")
+
+
+def test_programs_cannot_probe_the_file_system(tmp_path):
+    robots = tmp_path / "robots"
+    robots.mkdir()
+    (robots / "arm.urdf").write_text(URDF.read_text())
+    (tmp_path / "outside.urdf").write_text(URDF.read_text())
+    (robots / "link.urdf").symlink_to(tmp_path / "outside.urdf")
+    app = create_app(programs_dir=tmp_path / "programs", robots_dir=robots)
+    with page_client(app) as c:
+        res = c.post("/api/job", json={"kind": "program", "text": _urdf_program("arm.urdf")})
+        assert res.status_code == 200, res.text
+        assert c.session.job.kind == "program"
+        msgs = {}
+        for path in ("/etc/passwd", "/etc/hostname.urdf", "/nonexistent/x.urdf", "../outside.urdf",
+                     str(tmp_path / "outside.urdf"), "link.urdf", "missing.urdf", "arm"):
+            for url, body in (("/api/job", {"kind": "program", "text": _urdf_program(path)}),
+                              ("/api/programs", {"name": "probe", "text": _urdf_program(path)})):
+                msg = error_of(c.post(url, json=body), 400)
+                msgs[re.sub(r"'[^']*'", "PATH", msg).split(":", 2)[2]] = path
+        # one message for every refused path, whether it exists or not
+        assert list(msgs) == [" robot.urdf: PATH is not a URDF file of the robots folder"]
+        assert not (tmp_path / "programs" / "probe.yaml").exists()
+    app = create_app(programs_dir=tmp_path / "programs")  # no robots folder: built-in robots only
+    with page_client(app) as c:
+        msg = error_of(c.post("/api/job", json={"kind": "program", "text": _urdf_program(str(URDF))}), 400)
+        assert msg.endswith("is not a URDF file of a robots folder (none is configured)")
+    with pytest.raises(InvalidInputError, match="is not a folder"):
+        create_app(robots_dir=tmp_path / "nope")
+
+
+# ----------------------------------------------------------------- what runs is what is shown
+def test_failed_plan_disarms(client):
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    assert client.get("/api/status").json()["job"].startswith("saddle")
+    job_id = client.get("/api/status").json()["job_id"]
+    msg = error_of(client.post("/api/job", json={"kind": "saddle", "main_radius_mm": 90}), 400)
+    assert "R=90.0" in msg
+    assert client.session.job is None
+    assert client.get("/api/job").json() == {"job": None}
+    st = client.get("/api/status").json()
+    assert st["job"] is None and "axes" not in st and st["job_id"] > job_id
+    assert "no job loaded" in error_of(client.post("/api/run/start"), 409)
+    ev = client.get("/api/events").json()["events"][-1]
+    assert ev["level"] == "warning" and ev["text"].startswith("plan failed: ") and "unloaded" in ev["text"]
+    # a refused value disarms as well
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    error_of(client.post("/api/job", json={"kind": "saddle", "feed_mm_s": "fast"}), 422)
+    assert client.session.job is None
+
+
+def test_status_and_axes_follow_the_loaded_job(client):
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    client.post("/api/run/start")
+    wait_state(client, "running")
+    client.post("/api/run/stop")
+    wait_state(client, "idle")
+    st = client.get("/api/status").json()
+    assert [a["name"] for a in st["axes"]] == ["theta", "Z"]
+    res = client.post("/api/job", json={"kind": "pallet", "planner": "ptp", "layers": 1})
+    assert res.status_code == 200, res.text
+    st = client.get("/api/status").json()
+    assert st["job"] == res.json()["title"] and st["job"].startswith("palletizing")
+    assert [a["name"] for a in st["axes"]] == ["A", "B", "C", "D"]
+    assert st["progress"] == 0.0 and st["plan_time_s"] == 0.0
+    q0 = client.session.job.q[0]
+    assert [a["position"] for a in st["axes"]] == pytest.approx(
+        [float(x * s) for x, s in zip(q0, client.session.job.axis_scale)], abs=1e-12)
+    assert all(a["following_error"] == 0.0 and a["velocity"] == 0.0 for a in st["axes"])
+
+
+def test_servo_is_at_rest_on_the_command_after_estop_and_reset(client):
+    """After an emergency stop the brakes stop every axis; after reset no following error stays."""
+    assert client.post("/api/job", json={"kind": "pallet", "planner": "ptp", "layers": 1}).status_code == 200
+    client.post("/api/run/start")
+    sess = client.session
+    deadline = time.monotonic() + WAIT_S
+    while np.max(np.abs(sess.drive.streamer.servo.v)) < 0.2:  # moving at speed
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    client.post("/api/run/estop")
+    assert client.post("/api/run/reset").json()["state"] == "idle"  # waits for the brakes
+    wait_state(client, "idle")
+    deadline = time.monotonic() + WAIT_S
+    while sess._thread is not None and (sess._cmds or not sess.drive.at_rest()):
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    servo = sess.drive.streamer.servo
+    assert not servo.braking
+    np.testing.assert_array_equal(servo.v, 0.0)
+    st = client.get("/api/status").json()
+    for a in st["axes"]:
+        assert abs(a["following_error"]) <= 1e-9, a  # [mm or deg]: command and actual agree
+        assert a["velocity"] == 0.0
+    np.testing.assert_allclose(sess.drive.last.position, servo.measured, rtol=0, atol=1e-12)
+    # the run continues from there (a re-entry move first) and ends at the goal
+    assert client.post("/api/run/start").json()["state"] == "running"
+    client.post("/api/run/stop")
+    wait_state(client, "idle")
+
+
+def test_setpoint_cap_is_checked_on_the_planned_duration(client):
+    """Nominal feed: ~170 k setpoints; the slowed plan: 4.6 M, above the 2 M cap."""
+    from trajkit.hmi.jobs import MAX_SETPOINTS
+
+    body = {"kind": "saddle", "period_s": 0.0001, "z_vmax_mm_s": 0.5}
+    msg = error_of(client.post("/api/job", json=body), 400)
+    assert re.search(rf"the plan lasts 45\d\.\d+ s: at period_s 0.0001 that is \d+ setpoints, more than "
+                     rf"the {MAX_SETPOINTS} a job may have \(at most 200.0 s at this period\)", msg), msg
+    assert client.session.job is None
+
+
+def test_live_tool_speed_of_a_path_job(client):
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    client.post("/api/run/start")
+    speeds = []
+    deadline = time.monotonic() + WAIT_S
+    while client.session.state != "idle" or not speeds:
+        st = client.get("/api/status").json()
+        if st["state"] == "running" and "tool_speed_mm_s" in st:
+            speeds.append(st["tool_speed_mm_s"])
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    assert max(speeds) > 0.5 * FAST_SADDLE["feed_mm_s"]
+    assert max(speeds) <= FAST_SADDLE["feed_mm_s"] * (1 + 1e-6)  # the torch never exceeds the feed

@@ -72,6 +72,7 @@ from .models import (
 from .security import (
     CSRF_HEADER,
     MAX_BODY_BYTES,
+    MAX_ECHO_CHARS,
     AccessPolicy,
     Guard,
     echo,
@@ -106,7 +107,8 @@ def _static_dir() -> str:
 def _fmt_validation(errors: list) -> str:
     parts = []
     for err in errors:
-        loc = [str(x) for x in err.get("loc", ()) if x not in ("body",)]
+        loc = [str(x) if len(str(x)) <= MAX_ECHO_CHARS else echo(str(x))
+               for x in err.get("loc", ()) if x not in ("body",)]
         field = ".".join(loc) or "request"
         msg = err.get("msg", "invalid")
         msg = msg.removeprefix("Value error, ")
@@ -239,7 +241,10 @@ def create_app(token: str | None = None, programs_dir: str | os.PathLike | None 
         try:
             try:
                 payload = _parse_body(raw)
-                kind = payload.get("kind") if isinstance(payload, dict) else None
+                if not isinstance(payload, dict):
+                    raise InvalidInputError(
+                        f"request body: must be a JSON object, got {type(payload).__name__}")
+                kind = payload.get("kind")
                 if kind not in _JOB_MODELS:
                     raise InvalidInputError(
                         f"kind must be one of {', '.join(_JOB_MODELS)}, got {echo(kind)}")
