@@ -111,19 +111,24 @@ def page():
         shutil.rmtree(profile, ignore_errors=True)
 
 
+def until(page, expr: str, timeout: int = WAIT_MS) -> None:
+    """Wait until the JavaScript expression is true (passed as a function: the page's CSP forbids eval)."""
+    page.wait_for_function(f"() => ({expr})", timeout=timeout)
+
+
 def _axis_value(page, axis: str, what: str) -> float:
     txt = page.locator(f'#axes tr[data-axis="{axis}"] .axis-{what}').inner_text()
     return float(re.match(r"\s*(-?[0-9.]+)", txt).group(1))
 
 
 def _wait_state(page, state: str) -> None:
-    page.wait_for_function(f"document.getElementById('state').textContent === '{state}'", timeout=WAIT_MS)
+    until(page, f"document.getElementById('state').textContent === '{state}'", timeout=WAIT_MS)
 
 
 def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     base, app = hmi_server
     page.goto(base + "/")
-    page.wait_for_function("document.getElementById('conn').textContent === 'live'")
+    until(page, "document.getElementById('conn').textContent === 'live'")
     assert "trajkit" in page.title()
 
     # set saddle parameters; a bad value first: clear message, nothing loaded
@@ -138,7 +143,7 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     page.fill('#pane-saddle input[name="feed_mm_s"]', "50")
     page.fill('#pane-saddle input[name="period_s"]', "0.002")
     page.click("#plan-saddle")
-    page.wait_for_function("document.getElementById('msg').textContent.startsWith('planned')")
+    until(page, "document.getElementById('msg').textContent.startsWith('planned')")
     job = app.state.session.job
     assert job is not None and job.kind == "saddle" and job.period == 0.002
     assert page.locator("#axes tbody tr").count() == 2
@@ -146,7 +151,7 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     # start: live values change
     page.click("#btn-start")
     _wait_state(page, "running")
-    page.wait_for_function(
+    until(page, 
         "document.querySelector('#axes tr[data-axis=\"theta\"] .axis-pos').textContent.startsWith('-') === false"
         " && parseFloat(document.querySelector('#axes tr[data-axis=\"theta\"] .axis-pos').textContent) > 1")
     th1 = _axis_value(page, "theta", "pos")
@@ -165,7 +170,7 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     assert _axis_value(page, "theta", "vel") == 0.0
     page.click("#btn-resume")
     _wait_state(page, "running")
-    page.wait_for_function(
+    until(page, 
         f"parseFloat(document.querySelector('#axes tr[data-axis=\"theta\"] .axis-pos').textContent) > {p1 + 1}")
 
     # emergency stop: fault shown, axes frozen, start refused until reset
@@ -203,8 +208,8 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
 def test_jog_teach_build_save_load(hmi_server, page):
     base, app = hmi_server
     page.goto(base + "/")
-    page.wait_for_function("document.getElementById('conn').textContent === 'live'")
-    page.wait_for_function("document.querySelectorAll('#jog-joint option').length === 4")
+    until(page, "document.getElementById('conn').textContent === 'live'")
+    until(page, "document.querySelectorAll('#jog-joint option').length === 4")
     sess = app.state.session
     q0 = sess.q.copy()
 
@@ -220,20 +225,20 @@ def test_jog_teach_build_save_load(hmi_server, page):
     page.click("#jog-plus")
     # the jog's reply ("jogging J3") may arrive after the run: wait for both, so the
     # page does not re-render under the next click
-    page.wait_for_function("document.getElementById('state').textContent === 'idle'"
+    until(page, "document.getElementById('state').textContent === 'idle'"
                            " && document.querySelector('#joints').textContent.includes('50.000 mm')"
                            " && document.getElementById('msg').textContent === 'jogging J3'")
     assert sess.q[2] == pytest.approx(0.05, abs=1e-12)
     page.click("#btn-teach")  # p1
-    page.wait_for_function("document.querySelectorAll('#step-point option').length === 1")
+    until(page, "document.querySelectorAll('#step-point option').length === 1")
     page.select_option("#jog-joint", "J1")
     page.fill("#jog-step", "20")
     page.click("#jog-plus")
-    page.wait_for_function("document.getElementById('state').textContent === 'idle'"
+    until(page, "document.getElementById('state').textContent === 'idle'"
                            " && document.querySelector('#joints').textContent.includes('20.000 deg')"
                            " && document.getElementById('msg').textContent === 'jogging J1'")
     page.click("#btn-teach")  # p2
-    page.wait_for_function("document.querySelectorAll('#step-point option').length === 2")
+    until(page, "document.querySelectorAll('#step-point option').length === 2")
     assert set(sess.points) == {"p1", "p2"}
 
     page.select_option("#step-op", "PTP")
@@ -243,18 +248,18 @@ def test_jog_teach_build_save_load(hmi_server, page):
     page.select_option("#step-point", "p2")
     page.click("#btn-add-step")
     page.click("#btn-build")
-    page.wait_for_function("document.getElementById('program-text').value.includes('LIN: p2')")
+    until(page, "document.getElementById('program-text').value.includes('LIN: p2')")
 
     page.fill("#program-name", "cell_1")
     page.click("#btn-save")
-    page.wait_for_function("document.getElementById('msg').textContent === 'saved cell_1.yaml'")
+    until(page, "document.getElementById('msg').textContent === 'saved cell_1.yaml'")
     saved = Path(sess.programs_dir) / "cell_1.yaml"
     assert saved.is_file() and "LIN: p2" in saved.read_text()
 
     page.fill("#program-text", "robot: scara\n")
     page.click("#btn-load")
-    page.wait_for_function("document.getElementById('program-text').value.includes('LIN: p2')")
+    until(page, "document.getElementById('program-text').value.includes('LIN: p2')")
     page.click("#plan-program")
-    page.wait_for_function("document.getElementById('msg').textContent.startsWith('planned')")
+    until(page, "document.getElementById('msg').textContent.startsWith('planned')")
     assert sess.job.kind == "program" and sess.job.robot == "scara"
     assert not page.js_errors, page.js_errors
