@@ -283,7 +283,7 @@ def test_change_robot(client):
 def test_page_is_self_contained(client):
     html = client.get("/").text
     assert "<title>trajkit HMI</title>" in html
-    srcs = re.findall(r'(?:src|href)="([^"]+)"', html)
+    srcs = [s for s in re.findall(r'(?:src|href)="([^"]+)"', html) if s != "data:,"]  # no favicon
     assert srcs and all(s.startswith("/static/") for s in srcs), srcs
     for s in srcs:
         assert client.get(s).status_code == 200, s
@@ -459,6 +459,7 @@ def test_a_link_from_another_site_opens_the_page_only(client):
     nav = {"Sec-Fetch-Site": "cross-site", "Sec-Fetch-Mode": "navigate", "Sec-Fetch-Dest": "document"}
     assert client.get("/", headers=nav).status_code == 200
     assert client.get("/api/status", headers=nav).status_code == 403
+    assert client.get("/", headers={**nav, "Sec-Fetch-Dest": "iframe"}).status_code == 403
 
 
 def test_changing_requests_need_the_csrf_header(client):

@@ -155,7 +155,7 @@ SUMMARY_LABELS = {
     "feed_mm_s": ("Programmed feed", "mm/s"),
     "max_tool_speed_mm_s": ("Highest tool speed", "mm/s"),
     "slowdowns": ("Slowed stretches", ""),
-    "override_reserve": ("Acceleration and jerk planned at", "% of the machine's"),
+    "override_reserve": ("Planned accel. and jerk", "% of the machine's"),
     "boxes": ("Boxes", ""),
     "per_box_s": ("Time per box", "s"),
     "planner": ("Planner", ""),

@@ -15,7 +15,8 @@ front of the whole app, the page and its files included):
 3. **Fetch metadata**: a browser request another site made without
    ``Origin`` (``<img>``, ``<script>``, ``<link>``; ``Sec-Fetch-Site``
    ``cross-site`` or ``same-site``) is refused with 403; only a top-level
-   navigation to the page itself passes (a link to the HMI works).
+   navigation to the page itself passes (a link to the HMI works; a frame
+   does not).
 4. **Token** (when the HMI has one): header ``X-Trajkit-Token``,
    ``Authorization: Bearer``, ``?token=`` or the cookie the page sets;
    else 401 (the page, its files and the OpenAPI schema included). A
@@ -380,6 +381,9 @@ class Guard:
                     raise _Refused(403, "missing or wrong X-Trajkit-CSRF header (GET /api/session "
                                         "gives it; reload the page)")
         except _Refused as r:
+            if _log.isEnabledFor(logging.INFO):
+                _log.info("hmi: refused %s %s (%d): %s", "WEBSOCKET" if kind == "websocket" else method,
+                          path[:80], r.status, r.message)
             if kind == "websocket":
                 await self._ws_close(receive, send, WS_CLOSE_REFUSED, r.message, accept=False)
             elif path == "/" and r.status == 401:
@@ -442,7 +446,8 @@ class Guard:
         site = headers.get("sec-fetch-site", "").lower()
         if site in ("cross-site", "same-site"):
             navigate = (kind == "http" and method == "GET" and path == "/"
-                        and headers.get("sec-fetch-mode", "").lower() == "navigate")
+                        and headers.get("sec-fetch-mode", "").lower() == "navigate"
+                        and headers.get("sec-fetch-dest", "document").lower() == "document")
             if not navigate:
                 raise _Refused(403, f"a request made by another site ({site}) is not allowed")
 
