@@ -13,8 +13,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._atomicio import atomic_write
-from ._constants import DURATION_RTOL, PERIOD_RTOL
-from ._validate import check_array, check_positive
+from ._constants import DURATION_RTOL
+from ._sampling import MAX_SAMPLES, period_times
+from ._validate import check_array
 from .errors import InfeasibleError, InvalidInputError
 from .limits import AxisLimits
 from .profiles.profile import (
@@ -116,14 +117,13 @@ class Trajectory:
             out[3, :, k] = s.jerk
         return TrajectorySample(tt, out[0], out[1], out[2], out[3])
 
-    def times(self, period: float) -> np.ndarray:
-        """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``."""
-        dt = check_positive(period, "period")
-        n = int(math.floor(self.duration / dt + PERIOD_RTOL))
-        t = np.arange(n + 1) * dt
-        if t[-1] < self.duration:
-            t = np.append(t, self.duration)
-        return t
+    def times(self, period: float, max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
+        """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``.
+
+        Refuses (:class:`InvalidInputError`) more than ``max_samples`` samples
+        (:data:`trajkit._sampling.MAX_SAMPLES` by default; ``None``: no cap).
+        """
+        return period_times(self.duration, period, end="exact", max_samples=max_samples)
 
     def to_dict(self) -> dict:
         """JSON-ready description: duration, sync mode and per-axis profiles."""

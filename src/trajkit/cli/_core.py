@@ -11,23 +11,24 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import math
 import os
 import sys
 from typing import Any, Literal, Sequence
 
 import numpy as np
-import yaml
+
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._atomicio import atomic_write
 from .._validate import check_finite
+from ..io.document import plain, read_document
+from ..io.schema import Real, RealOrInf, validation_message
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
 from ..trajectory import SYNC_MODES, Trajectory, plan_ptp
-from ._console import _fmt, print_json, print_table
+from ._console import print_json, print_table
 
 __all__ = ["register", "load_ptp_job", "PtpJob", "JobLimits"]
 
@@ -90,13 +91,13 @@ class JobLimits(BaseModel):
     """Limits of one axis in a job file (same fields as :class:`AxisLimits`)."""
 
     model_config = ConfigDict(extra="forbid")
-    v_max: float
-    a_max: float
-    j_max: float
-    a_max_decel: float | None = None
-    j_max_decel: float | None = None
-    position_min: float = -math.inf
-    position_max: float = math.inf
+    v_max: RealOrInf
+    a_max: RealOrInf
+    j_max: RealOrInf
+    a_max_decel: RealOrInf | None = None
+    j_max_decel: RealOrInf | None = None
+    position_min: RealOrInf = -math.inf
+    position_max: RealOrInf = math.inf
 
 
 class PtpJob(BaseModel):
@@ -118,28 +119,18 @@ class PtpJob(BaseModel):
     """
 
     model_config = ConfigDict(extra="forbid")
-    start: list[float] = Field(min_length=1)
-    goal: list[float] = Field(min_length=1)
+    start: list[Real] = Field(min_length=1)
+    goal: list[Real] = Field(min_length=1)
     limits: list[JobLimits] = Field(min_length=1)
     names: list[str] | None = None
     sync: Literal["time", "phase", "none"] = "time"
-    duration: float | None = None
+    duration: Real | None = None
     unit: str | list[str] = "m"
 
     @field_validator("limits", mode="before")
     @classmethod
     def _one_or_many(cls, v: Any) -> Any:
         return [v] if isinstance(v, dict) else v
-
-
-def _first_error(exc: Any) -> str:
-    errs = exc.errors()
-    e = errs[0]
-    loc = ".".join(str(p) for p in e.get("loc", ())) or "(top level)"
-    more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
-    got = e.get("input")
-    shown = "" if isinstance(got, dict) else f", got {got!r}"
-    return f"field {loc}: {e.get('msg', 'invalid')}{shown}{more}"
 
 
 def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
@@ -166,53 +157,17 @@ def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
     kind = _JOB_SUFFIXES.get(os.path.splitext(p)[1].lower())
     if kind is None:
         raise InvalidInputError(f"--file must end in .yaml, .yml or .json, got {p!r}")
-    with open(p, encoding="utf-8") as fh:
-        text = fh.read()
-    try:
-        data = json.loads(text) if kind == "json" else yaml.safe_load(text)
-    except (ValueError, yaml.YAMLError) as exc:  # json.JSONDecodeError is a ValueError
-        mark = getattr(exc, "problem_mark", None)
-        if mark is not None:
-            problem = getattr(exc, "problem", None) or "syntax error"
-            first = f"{problem} at line {mark.line + 1}, column {mark.column + 1}"
-        else:
-            first = " ".join(str(exc).split())
-        raise InvalidInputError(f"{p}: not valid {kind.upper()}: {first}") from None
+    data = plain(read_document(p, kind=kind))
     if not isinstance(data, dict):
         raise InvalidInputError(f"{p}: expected a mapping of fields at the top level, "
                                 f"got {type(data).__name__}")
     try:
         return PtpJob.model_validate(data)
     except ValidationError as exc:
-        raise InvalidInputError(f"{p}: {_first_error(exc)}") from None
+        raise InvalidInputError(f"{p}: {validation_message(exc)}") from None
 
 
 # ------------------------------------------------------------------- outputs
-def _print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
-    """Print a table wide enough for every cell, without console markup.
-
-    Like :func:`trajkit.cli._console.print_table`, but the rich console is as
-    wide as the table (no ellipsis in long shape names) and cells are plain
-    text (``[s]`` in a header is a unit, not rich markup).
-    """
-    try:
-        from rich.console import Console
-        from rich.table import Table
-        from rich.text import Text
-    except ImportError:  # pragma: no cover - rich is optional
-        print_table(title, columns, rows)
-        return
-    cells = [[_fmt(c) for c in row] for row in rows]
-    widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(columns)]
-    width = max(sum(widths) + 3 * len(widths) + 1, len(title))
-    table = Table(title=Text(title))
-    for h in columns:
-        table.add_column(Text(h), justify="right", no_wrap=True)
-    for r in cells:
-        table.add_row(*(Text(c) for c in r))
-    Console(width=width).print(table)
-
-
 def _jsonable(obj: Any) -> Any:
     """Replace non-finite floats by the strings "inf"/"-inf"/"nan" (strict JSON)."""
     if isinstance(obj, float):
@@ -279,7 +234,7 @@ def _print_phases(title: str, profile: Profile, unit: str) -> None:
     for k, name in enumerate(PHASE_NAMES):
         rows.append([k + 1, name, profile.phase_durations[k], profile.jerks[k],
                      end[k, 0], end[k, 1], end[k, 2], end[k, 3]])
-    _print_table(
+    print_table(
         title,
         ["#", "phase", "duration [s]", f"jerk [{unit}/s^3]", "t_end [s]",
          f"pos [{unit}]", f"vel [{unit}/s]", f"acc [{unit}/s^2]"],
@@ -393,7 +348,7 @@ def _cmd_move(args: argparse.Namespace) -> int:
     if args.json:
         print_json(_jsonable(_profile_json(profile, None, unit)))
     else:
-        _print_table(
+        print_table(
             f"move {start:g} -> {goal:g} {unit}",
             ["duration [s]", "min duration [s]", "shape", "reached limits",
                    f"peak vel [{unit}/s]", f"peak acc [{unit}/s^2]",
@@ -489,7 +444,7 @@ def _cmd_ptp(args: argparse.Namespace) -> int:
             "axes": [_profile_json(p, nm, u) for p, nm, u in zip(traj.axes, names, units)],
         }))
     else:
-        _print_table(
+        print_table(
             f"ptp, {traj.n_axes} axes, sync={traj.sync}: duration {traj.duration:.6g} s",
             ["axis", "start", "goal", "unit", "duration [s]", "min duration [s]",
                    "shape", "reached limits", "peak vel [unit/s]"],

@@ -62,13 +62,19 @@ def write_transfer_plot(scenario: Any, out_dir: Path, box: int = 0) -> Path | No
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    from .._atomicio import output_folder
+
+    out = Path(args.out)
+    with output_folder(out):  # checked before planning; all figures or none
+        return _demo(out)
+
+
+def _demo(out: Path) -> int:
     from ..palletizing.report import TABLE_COLUMNS, bound_lines, summarize, table_rows
     from ..plot.pallet import write_pallet_plots
     from ._console import print_table
     from ._pallet import run_pallet
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)  # fail fast on a bad folder, before planning
     scenario, plans, reports = run_pallet(None, progress=sys.stderr.isatty())
     summary = summarize(plans)
     print_table(

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from .._atomicio import atomic_write
+from .._sampling import count_samples
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..paths import Arc3, CompositePath, Line, SaddleCurve, circle_through, discretize, uniform_chord_count
@@ -29,9 +30,6 @@ MM = 1e-3  # metres per millimetre
 
 #: Default tangent jump [deg] treated as a corner by ``trajkit path``.
 DEFAULT_CORNER_DEG = 0.01
-
-#: Largest number of CSV rows an export may write (a typo in --period must not fill the disk).
-MAX_CSV_ROWS = 5_000_000
 
 _UNITS_NOTE = "Units: lengths in mm, speeds in mm/s, mm/s^2, mm/s^3, angles in deg, period in s."
 
@@ -203,14 +201,9 @@ def _run_saddle(args: argparse.Namespace) -> int:
 # -------------------------------------------------------------------- path
 def load_path_file(filename: str) -> dict:
     """Read a path job (YAML) into a dict with ``start`` and ``segments`` (mm)."""
-    import yaml
+    from ..io.document import plain, read_document
 
-    try:
-        with open(filename, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise InvalidInputError(f"{filename}: not valid YAML: {first}") from None
+    data = plain(read_document(filename))
     if not isinstance(data, dict):
         raise InvalidInputError(f"{filename}: expected a mapping with 'start' and 'segments'")
     unknown = set(data) - {"start", "segments", "feed", "tolerance", "period", "accel", "jerk", "units",
@@ -346,12 +339,10 @@ def _motion_values(args) -> tuple[float, float, float, float, float]:
     return feed, tol, period, acc, jerk
 
 
-def _check_rows(duration_guess: float, period: float) -> None:
-    if period > 0 and duration_guess / period > MAX_CSV_ROWS:
-        raise InvalidInputError(
-            f"about {duration_guess / period:.3g} setpoints at period {period!r} s: more than "
-            f"{MAX_CSV_ROWS}; use a longer --period"
-        )
+def _check_rows(duration_floor: float, period: float) -> None:
+    """Refuse early when even the nominal duration (a lower bound) gives too many setpoints;
+    the planned duration is checked again before sampling."""
+    count_samples(duration_floor, period, what="setpoints")
 
 
 def _write_csv(filename: str, t, points, axes: dict) -> None:

@@ -55,6 +55,7 @@ from starlette.concurrency import run_in_threadpool
 
 from .._atomicio import atomic_write
 from ..errors import InvalidInputError, TrajkitError
+from ..io.document import parse_document
 from .engine import COMMAND_WAIT_S, ConflictError, Session
 from .jobs import plan_jog, plan_job
 from .models import (
@@ -73,11 +74,11 @@ from .security import (
     CSRF_HEADER,
     MAX_BODY_BYTES,
     MAX_ECHO_CHARS,
+    MAX_JSON_DEPTH,
     AccessPolicy,
     Guard,
     echo,
     one_line,
-    parse_json_body,
 )
 
 __all__ = ["create_app", "WS_RATE_HZ", "MAX_WS_CLIENTS", "WS_CLOSE_BUSY"]
@@ -119,8 +120,9 @@ def _fmt_validation(errors: list) -> str:
 
 
 def _parse_body(data: bytes) -> Any:
-    """The one place where the HMI decodes a request body (strict JSON)."""
-    return parse_json_body(data)
+    """The one place where the HMI decodes a request body: the library's safe loader (strict JSON)."""
+    return parse_document(data, source="request body", kind="json", max_bytes=MAX_BODY_BYTES,
+                          max_depth=MAX_JSON_DEPTH)
 
 
 def _validate(model, data: Any):

@@ -46,7 +46,6 @@ from __future__ import annotations
 import hmac
 import json
 import logging
-import math
 import secrets
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -59,7 +58,7 @@ from ..errors import InvalidInputError
 __all__ = [
     "AccessPolicy", "Guard", "MAX_BODY_BYTES", "CSRF_HEADER", "TOKEN_HEADER", "WS_CLOSE_TOKEN",
     "WS_CLOSE_REFUSED", "LOOPBACK_HOSTS", "SECURITY_HEADERS", "MAX_ERROR_CHARS", "MAX_ECHO_CHARS",
-    "one_line", "echo", "parse_json_body", "normalize_host", "normalize_origin", "MAX_JSON_DEPTH",
+    "one_line", "echo", "normalize_host", "normalize_origin", "MAX_JSON_DEPTH",
 ]
 
 #: Largest request body [bytes] (1 MiB); larger answers 413.
@@ -87,7 +86,8 @@ MAX_ERROR_CHARS = 300
 #: Longest part of a submitted value echoed in an error message [characters].
 MAX_ECHO_CHARS = 40
 
-#: Deepest nesting of a JSON request body (arrays and objects).
+#: Deepest nesting of a JSON request body (arrays and objects); the HMI's
+#: requests need 3 levels.
 MAX_JSON_DEPTH = 32
 
 #: Requests that pass without the anti-CSRF header: the emergency stop.
@@ -126,59 +126,6 @@ def echo(value: Any, limit: int = MAX_ECHO_CHARS) -> str:
     """``repr(value)`` cut to ``limit`` characters, for error messages."""
     s = repr(value)
     return s if len(s) <= limit else s[: limit - 3] + "..."
-
-
-# ---------------------------------------------------------------------------- JSON bodies
-def parse_json_body(data: bytes) -> Any:
-    """Decode a JSON request body strictly.
-
-    UTF-8 only, no duplicate keys, no ``NaN``/``Infinity``, at most
-    :data:`MAX_JSON_DEPTH` levels of nesting.
-
-    Raises
-    ------
-    InvalidInputError
-        One line naming what is wrong (never the whole body).
-    """
-    if len(data) > MAX_BODY_BYTES:
-        raise InvalidInputError(f"request body: larger than {MAX_BODY_BYTES} bytes")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise InvalidInputError(f"request body: not UTF-8 (byte {exc.start})") from None
-
-    def pairs(items):
-        out = {}
-        for k, v in items:
-            if k in out:
-                raise InvalidInputError(f"request body: duplicate key {echo(k)}")
-            out[k] = v
-        return out
-
-    def constant(name):
-        raise InvalidInputError(f"request body: {name} is not a JSON number")
-
-    def number(lexeme):
-        x = float(lexeme)
-        if not math.isfinite(x):
-            raise InvalidInputError(f"request body: number {echo(lexeme)} is out of range")
-        return x
-
-    try:
-        doc = json.loads(text, object_pairs_hook=pairs, parse_constant=constant, parse_float=number)
-    except RecursionError:
-        raise InvalidInputError(f"request body: nested deeper than {MAX_JSON_DEPTH} levels") from None
-    except json.JSONDecodeError as exc:
-        raise InvalidInputError(f"request body: not valid JSON: {exc.msg} at line {exc.lineno} "
-                                f"column {exc.colno}") from None
-    stack = [(doc, 1)]
-    while stack:
-        node, depth = stack.pop()
-        if isinstance(node, (dict, list)):
-            if depth > MAX_JSON_DEPTH:
-                raise InvalidInputError(f"request body: nested deeper than {MAX_JSON_DEPTH} levels")
-            stack.extend((v, depth + 1) for v in (node.values() if isinstance(node, dict) else node))
-    return doc
 
 
 # ---------------------------------------------------------------------------- hosts and origins

@@ -25,13 +25,14 @@ from pathlib import Path
 from typing import Any, Literal, Optional
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from ..errors import InvalidInputError
 from ..kinematics.palletizer import DEFAULT_JOINT_TABLE, JOINT_NAMES, CylindricalPalletizer
 from ..palletizing.patterns import BoxSize, LayerPattern, StackPattern, make_pattern
 from ..palletizing.scenario import PalletScenario
+from .document import plain, read_document
+from .schema import Count, Real, validation_message
 
 __all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "parse_job"]
 
@@ -46,13 +47,13 @@ class _Model(BaseModel):
 class JointSpec(_Model):
     """One joint's limits in deg (A, D) or mm (B, C) units."""
 
-    v_max: float = Field(gt=0, allow_inf_nan=False)
-    a_max: float = Field(gt=0, allow_inf_nan=False)
-    j_max: float = Field(gt=0, allow_inf_nan=False)
-    min: float = Field(allow_inf_nan=False)
-    max: float = Field(allow_inf_nan=False)
-    a_max_decel: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
-    j_max_decel: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
+    v_max: Real = Field(gt=0, allow_inf_nan=False)
+    a_max: Real = Field(gt=0, allow_inf_nan=False)
+    j_max: Real = Field(gt=0, allow_inf_nan=False)
+    min: Real = Field(allow_inf_nan=False)
+    max: Real = Field(allow_inf_nan=False)
+    a_max_decel: Optional[Real] = Field(default=None, gt=0, allow_inf_nan=False)
+    j_max_decel: Optional[Real] = Field(default=None, gt=0, allow_inf_nan=False)
 
 
 class RobotSpec(_Model):
@@ -63,17 +64,17 @@ class RobotSpec(_Model):
 
 
 class PickSpec(_Model):
-    x_mm: float = Field(allow_inf_nan=False)
-    y_mm: float = Field(allow_inf_nan=False)
-    z_mm: float = Field(allow_inf_nan=False)
-    yaw_deg: float = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Real = Field(allow_inf_nan=False)
+    y_mm: Real = Field(allow_inf_nan=False)
+    z_mm: Real = Field(allow_inf_nan=False)
+    yaw_deg: Real = Field(default=0.0, allow_inf_nan=False)
 
 
 class PalletSpec(_Model):
-    centre_mm: tuple[float, float, float]
-    length_mm: float = Field(gt=0, allow_inf_nan=False)
-    width_mm: float = Field(gt=0, allow_inf_nan=False)
-    overhang_mm: float = Field(default=0.0, ge=0, allow_inf_nan=False)
+    centre_mm: tuple[Real, Real, Real]
+    length_mm: Real = Field(gt=0, allow_inf_nan=False)
+    width_mm: Real = Field(gt=0, allow_inf_nan=False)
+    overhang_mm: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
 
     @field_validator("centre_mm")
     @classmethod
@@ -84,17 +85,17 @@ class PalletSpec(_Model):
 
 
 class BoxSpec(_Model):
-    length_mm: float = Field(gt=0, allow_inf_nan=False)
-    width_mm: float = Field(gt=0, allow_inf_nan=False)
-    height_mm: float = Field(gt=0, allow_inf_nan=False)
+    length_mm: Real = Field(gt=0, allow_inf_nan=False)
+    width_mm: Real = Field(gt=0, allow_inf_nan=False)
+    height_mm: Real = Field(gt=0, allow_inf_nan=False)
 
 
 class BoxPlace(_Model):
     """A box of a custom layer: centre offset from the pallet centre and yaw."""
 
-    x_mm: float = Field(allow_inf_nan=False)
-    y_mm: float = Field(allow_inf_nan=False)
-    yaw_deg: float = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Real = Field(allow_inf_nan=False)
+    y_mm: Real = Field(allow_inf_nan=False)
+    yaw_deg: Real = Field(default=0.0, allow_inf_nan=False)
 
 
 class PatternSpec(_Model):
@@ -104,8 +105,8 @@ class PatternSpec(_Model):
 
 
 class GripperSpec(_Model):
-    grip_s: float = Field(default=0.0, ge=0, allow_inf_nan=False)
-    release_s: float = Field(default=0.0, ge=0, allow_inf_nan=False)
+    grip_s: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
+    release_s: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
 
 
 class PalletJob(_Model):
@@ -117,19 +118,10 @@ class PalletJob(_Model):
     pallet: PalletSpec
     box: BoxSpec
     pattern: PatternSpec = Field(default_factory=PatternSpec)
-    layers: int = Field(ge=1)
-    lift_mm: float = Field(default=400.0, ge=0, allow_inf_nan=False)
-    approach_mm: float = Field(default=200.0, ge=0, allow_inf_nan=False)
+    layers: Count = Field(ge=1)
+    lift_mm: Real = Field(default=400.0, ge=0, allow_inf_nan=False)
+    approach_mm: Real = Field(default=200.0, ge=0, allow_inf_nan=False)
     gripper: GripperSpec = Field(default_factory=GripperSpec)
-
-
-def _fmt_error(err: ValidationError, source: str) -> str:
-    e = err.errors()[0]
-    loc = ".".join(str(x) for x in e["loc"]) or "(top level)"
-    val = e.get("input")
-    shown = "" if isinstance(val, dict) else f" (got {val!r})"
-    more = f" [+{err.error_count() - 1} more]" if err.error_count() > 1 else ""
-    return f"{source}: field {loc}: {e['msg']}{shown}{more}"
 
 
 def parse_job(data: Any, source: str = "job") -> PalletJob:
@@ -145,7 +137,7 @@ def parse_job(data: Any, source: str = "job") -> PalletJob:
     try:
         return PalletJob.model_validate(data)
     except ValidationError as exc:
-        raise InvalidInputError(_fmt_error(exc, source)) from None
+        raise InvalidInputError(f"{source}: {validation_message(exc)}") from None
 
 
 def scenario_from_job(job: PalletJob | dict, source: str = "job") -> PalletScenario:
@@ -221,13 +213,7 @@ def load_job(path: str | os.PathLike) -> PalletScenario:
         A place outside the robot's reach.
     """
     p = Path(path)
-    text = p.read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise InvalidInputError(f"{p}: not valid YAML{where}: {getattr(exc, 'problem', exc)}") from None
+    data = plain(read_document(p))
     return scenario_from_job(parse_job(data, str(p)), str(p))
 
 

@@ -29,22 +29,30 @@ FIGURE_DPI = 110
 
 
 def save_figure(fig, path, dpi: int = FIGURE_DPI) -> None:
-    """Write ``fig`` to ``path`` atomically (temporary file, then rename).
+    """Write ``fig`` to ``path`` atomically (see :func:`trajkit._atomicio.write_file`).
 
     The format follows the extension (``.png`` when there is none); a failed
     write leaves neither a half-written image nor the temporary file behind.
     ``path=None`` writes nothing.
+
+    Raises
+    ------
+    ValueError
+        An extension matplotlib cannot write (the message lists the ones it can).
+    OSError
+        The folder does not exist or is not writable.
     """
     import os
+
+    from .._atomicio import write_file
+    from ..errors import InvalidInputError
 
     if path is None:
         return
     path = os.fspath(path)
     ext = os.path.splitext(path)[1].lower().lstrip(".") or "png"
-    tmp = f"{path}.tmp-{os.getpid()}"
-    try:
-        fig.savefig(tmp, format=ext, dpi=dpi)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    formats = fig.canvas.get_supported_filetypes()
+    if ext not in formats:
+        raise InvalidInputError(
+            f"cannot write {path}: figures can be {', '.join(sorted(formats))}, not .{ext}")
+    write_file(path, lambda tmp: fig.savefig(tmp, format=ext, dpi=dpi))
