@@ -377,6 +377,22 @@ def test_cli_refuses_public_bind_without_token(capsys):
                            "binding to it requires --token")
 
 
+@pytest.mark.parametrize("args, message", [
+    (["--host", "0.0.0.0", "--token", "aaaaaaaaaaaaaaaaaaaa"],
+     "token is too easy to guess: it needs at least 6 different characters, got 1"),
+    (["--token", "short"], "token must have at least 16 characters, got 5"),
+    (["--allow-origin", "evil"], "allowed origin must look like http://host[:port] or https://host[:port], "
+                                 "got 'evil'"),
+    (["--allow-host", "*"], "allowed host must be a host name or address, got '*'"),
+    (["--robots-dir", "/nonexistent/robots"], "--robots-dir '/nonexistent/robots' is not a folder"),
+])
+def test_cli_refuses_bad_settings_in_one_line(capsys, args, message):
+    from trajkit.cli import main
+
+    assert main(["hmi", *args]) == 2
+    assert capsys.readouterr().err.strip() == f"trajkit hmi: error: {message}"
+
+
 def test_cli_serves_on_localhost_and_prints_its_address(tmp_path):
     import subprocess
     import sys

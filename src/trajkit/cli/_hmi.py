@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from .. import errors
@@ -47,6 +48,8 @@ def _run(args: argparse.Namespace) -> int:
 
     check_bind(args.host, args.port, args.token)  # before importing the web stack
     AccessPolicy.build(args.token, args.allow_host or None, args.allow_origin)  # refuse bad names early
+    if args.robots_dir is not None and not os.path.isdir(args.robots_dir):
+        raise errors.InvalidInputError(f"--robots-dir {args.robots_dir!r} is not a folder")
     try:
         import fastapi  # noqa: F401
         import uvicorn  # noqa: F401

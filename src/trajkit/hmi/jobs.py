@@ -200,7 +200,7 @@ def _scale(kinds) -> tuple[tuple, np.ndarray]:
 
 
 def plan_saddle_job(req: SaddleJob) -> JobTable:
-    """Plan a saddle seam (seed 003) and tabulate theta and Z at the period."""
+    """Plan a saddle seam on the theta/Z machine and tabulate theta and Z at the period."""
     from ..interpolation import SaddleMachine, plan_saddle
     from ..paths import SaddleCurve
 
@@ -259,7 +259,7 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
 
 
 def plan_pallet_job(req: PalletJob) -> JobTable:
-    """Plan the first ``boxes`` boxes of the seed-000 palletizing job."""
+    """Plan the reference palletizing cell (:func:`trajkit.palletizing.seed_scenario`) for ``layers`` layers."""
     from ..palletizing import plan_cycle, seed_scenario
 
     machine = seed_scenario(layers=req.layers).robot
