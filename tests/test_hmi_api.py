@@ -775,3 +775,27 @@ def test_live_tool_speed_of_a_path_job(client):
         time.sleep(0.02)
     assert max(speeds) > 0.5 * FAST_SADDLE["feed_mm_s"]
     assert max(speeds) <= FAST_SADDLE["feed_mm_s"] * (1 + 1e-6)  # the torch never exceeds the feed
+
+
+def test_a_body_that_never_arrives_answers_408(monkeypatch):
+    import asyncio
+
+    from trajkit.hmi import security
+
+    monkeypatch.setattr(security, "BODY_TIMEOUT_S", 0.05)
+    policy = security.AccessPolicy.build()
+    sent = []
+
+    async def app(scope, receive, send):  # pragma: no cover - must not be reached
+        raise AssertionError("the app must not run")
+
+    async def receive():
+        await asyncio.sleep(3600)  # a client that sends nothing more
+
+    async def send(msg):
+        sent.append(msg)
+
+    scope = {"type": "http", "method": "POST", "path": "/api/job", "query_string": b"",
+             "headers": [(b"host", b"127.0.0.1:8765"), (b"x-trajkit-csrf", policy.csrf_token.encode())]}
+    asyncio.run(security.Guard(app, policy)(scope, receive, send))
+    assert sent[0]["status"] == 408

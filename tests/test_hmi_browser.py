@@ -434,3 +434,27 @@ def test_dns_rebinding_is_refused(hmi_server, page_without_pna):
     assert r["reset"] == 403 and r["start"] == 403 and r["status"] == 403, r
     assert "not allowed" in r["text"] and '"state"' not in r["text"]
     assert sess.state == "fault"
+
+
+def test_token_mode_page_works_and_needs_the_token(page, tmp_path):
+    """Opened with ?token=, the page loads its files (cookie), reads the live stream and commands."""
+    from hmi_support import ServerThread
+
+    from trajkit.hmi.app import create_app
+
+    token = "pl4nt-floor-T0ken-7781"
+    app = create_app(token=token, programs_dir=tmp_path)
+    with ServerThread(app) as srv:
+        r = page.goto(srv.url + "/")
+        assert r.status == 401 and "needs its token" in page.inner_text("body")
+        page.goto(srv.url + f"/?token={token}")
+        until(page, "document.getElementById('conn').textContent === 'live'")
+        page.click("#btn-estop")
+        _wait_state(page, "E-STOP")
+        page.click("#btn-reset")
+        _wait_state(page, "idle")
+        assert not page.js_errors, page.js_errors
+        # the page's files came with the cookie it set; without it they are refused
+        assert page.request.get(srv.url + "/static/hmi.js").status == 200
+        page.context.clear_cookies()
+        assert page.request.get(srv.url + "/static/hmi.js").status == 401

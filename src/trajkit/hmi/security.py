@@ -31,7 +31,8 @@ front of the whole app, the page and its files included):
    (it still passes checks 1 to 4).
 6. **Size**: a request body above :data:`MAX_BODY_BYTES` is refused with
    413 as soon as its declared length or the bytes received so far exceed
-   the limit (nothing more is read).
+   the limit (nothing more is read); one that takes longer than
+   :data:`BODY_TIMEOUT_S` to arrive with 408.
 
 Every HTTP answer carries :data:`SECURITY_HEADERS` (CSP with
 ``frame-ancestors 'none'``, ``X-Frame-Options: DENY``,
@@ -43,6 +44,7 @@ a value.
 
 from __future__ import annotations
 
+import asyncio
 import hmac
 import json
 import logging
@@ -63,6 +65,9 @@ __all__ = [
 
 #: Largest request body [bytes] (1 MiB); larger answers 413.
 MAX_BODY_BYTES = 1 << 20
+
+#: Longest time a request body may take to arrive [s]; slower answers 408.
+BODY_TIMEOUT_S = 30.0
 
 #: Header that carries the anti-CSRF value on every changing request.
 CSRF_HEADER = "x-trajkit-csrf"
@@ -408,8 +413,13 @@ class Guard:
                 raise _Refused(413, f"request body of {int(declared)} bytes is larger than the "
                                     f"{limit} bytes allowed")
         chunks, size = [], 0
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + BODY_TIMEOUT_S
         while True:
-            msg = await receive()
+            try:
+                msg = await asyncio.wait_for(receive(), max(deadline - loop.time(), 0.0))
+            except asyncio.TimeoutError:
+                raise _Refused(408, f"the request body did not arrive within {BODY_TIMEOUT_S:g} s") from None
             if msg["type"] == "http.disconnect":
                 raise _Refused(400, "the client went away")
             body = msg.get("body", b"")
@@ -436,7 +446,7 @@ class Guard:
         raw = body.encode("utf-8")
         hdrs = [(b"content-type", ctype.encode()), (b"content-length", str(len(raw)).encode())]
         hdrs += _HEADER_BYTES
-        if status == 413:
+        if status in (408, 413):
             hdrs.append((b"connection", b"close"))
         await send({"type": "http.response.start", "status": status, "headers": hdrs})
         await send({"type": "http.response.body", "body": raw})

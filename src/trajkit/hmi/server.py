@@ -22,6 +22,9 @@ MIN_TOKEN_CHARS = 16
 #: Fewest different characters in an accepted token.
 MIN_TOKEN_DISTINCT = 6
 
+#: Largest WebSocket message accepted from a client [bytes].
+WS_MAX_MESSAGE_BYTES = 64 * 1024
+
 _WILDCARDS = ("0.0.0.0", "::", "")
 
 
@@ -119,8 +122,10 @@ def make_server(host: str = "127.0.0.1", port: int = 8765, token: str | None = N
     app = create_app(token=token, programs_dir=programs_dir,
                      allowed_hosts=default_allowed_hosts(host, allowed_hosts),
                      allowed_origins=allowed_origins, robots_dir=robots_dir)
+    # the HMI never reads messages from its WebSocket clients: a small frame size bounds
+    # what a client can make the server buffer
     config = uvicorn.Config(app, host=host, port=port, log_level=log_level, ws="auto",
-                            server_header=False)
+                            server_header=False, ws_max_size=WS_MAX_MESSAGE_BYTES)
     return uvicorn.Server(config)
 
 
