@@ -29,8 +29,8 @@ validation (the field, the message and the value), 400 for a request the
 library refuses (e.g. pipes that do not meet) or a body that is not valid
 JSON, 409 for a command the state does not allow (start while a run is
 active), 401 for a missing or wrong token, 403 for a foreign host or origin
-or a missing anti-CSRF header, 413 for a body above the size limit. A failed
-request changes nothing, except a failed ``POST /api/job``: it unloads the
+or a missing anti-CSRF header, 413 for a body above the size limit, 408 for
+a body that does not arrive in time. A failed request changes nothing, except a failed ``POST /api/job``: it unloads the
 previous job (what the operator planned is not what would run).
 """
 
