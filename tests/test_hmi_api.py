@@ -719,6 +719,15 @@ def test_status_and_axes_follow_the_loaded_job(client):
     assert [a["position"] for a in st["axes"]] == pytest.approx(
         [float(x * s) for x, s in zip(q0, client.session.job.axis_scale)], abs=1e-12)
     assert all(a["following_error"] == 0.0 and a["velocity"] == 0.0 for a in st["axes"])
+    # a jog shows the robot's joints while it moves; once it ends, the job that Start runs
+    assert client.post("/api/jog", json={"joint": "J1", "step": 5}).status_code == 200
+    wait_state(client, "idle")
+    deadline = time.monotonic() + WAIT_S
+    while client.session._snap.get("run_title", "").startswith("jog"):
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    st = client.get("/api/status").json()
+    assert [a["name"] for a in st["axes"]] == ["A", "B", "C", "D"] and st["progress"] == 0.0
 
 
 def test_servo_is_at_rest_on_the_command_after_estop_and_reset(client):

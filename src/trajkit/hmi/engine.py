@@ -582,6 +582,9 @@ class Session:
             "job_id": self.job_id,
             "server_time": time.time(),
         }
+        if (drive is not None and job is not None and drive.table is not job
+                and drive.table.kind == "jog" and self.state == "idle"):
+            drive = None  # a finished jog: the views show the job that Start will run
         if drive is not None:
             st = drive.streamer
             tb = drive.table
