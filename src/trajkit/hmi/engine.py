@@ -180,6 +180,9 @@ class Session:
         self.programs_dir = programs_dir
         self._clock = clock
         self._lock = threading.RLock()
+        # events and the actual-path trail have their own short lock: the live stream
+        # reads them without waiting for the run loop (which holds _lock while it ticks)
+        self._feed_lock = threading.Lock()
         self._cmds: collections.deque[_Command] = collections.deque()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -210,14 +213,15 @@ class Session:
     # ------------------------------------------------------------------ events
     def event(self, level: str, text: str) -> None:
         """Append to the event log (``level`` info, warning or fault)."""
-        with self._lock:
+        with self._feed_lock:
             self._event_id += 1
             self.events.append({"id": self._event_id, "time": time.time(), "level": level, "text": text})
             del self.events[:-MAX_EVENTS]
         log.info("hmi %s: %s", level, text)
 
     def events_since(self, last_id: int) -> list[dict]:
-        with self._lock:
+        """Events with an id above ``last_id`` (never waits for the run loop)."""
+        with self._feed_lock:
             return [e for e in self.events if e["id"] > last_id]
 
     # ------------------------------------------------------------------ robot / teach
@@ -357,9 +361,10 @@ class Session:
             if not resume:
                 drive = RuntimeDrive(table)
                 drive.command("override", self.override)
-                self.run_id += 1
-                self.trail.clear()
-                self._trail_total = 0
+                with self._feed_lock:
+                    self.run_id += 1
+                    self.trail.clear()
+                    self._trail_total = 0
                 self.ticks = 0
                 self.drive = drive
             cmd = _Command("start", self._clock())
@@ -535,8 +540,10 @@ class Session:
         q = sp.actual if sp.actual is not None else sp.position
         tool = drive.table.tool_of(q) if drive.table.tool_of is not None else None
         if tool is not None:
-            self.trail.append((np.asarray(tool) / MM).round(4).tolist())
-            self._trail_total += 1
+            pt = (np.asarray(tool) / MM).round(4).tolist()
+            with self._feed_lock:
+                self.trail.append(pt)
+                self._trail_total += 1
 
     def _log_runtime_events(self, drive: RuntimeDrive) -> None:
         for ev in drive.new_events():
@@ -641,7 +648,7 @@ class Session:
         Returns the new points, the new count and whether the reader must
         drop what it has (another run began since ``run_id``).
         """
-        with self._lock:
+        with self._feed_lock:
             pts = list(self.trail)
             total = self._trail_total
             fresh = run_id != self.run_id
