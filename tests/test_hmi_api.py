@@ -808,3 +808,22 @@ def test_a_body_that_never_arrives_answers_408(monkeypatch):
              "headers": [(b"host", b"127.0.0.1:8765"), (b"x-trajkit-csrf", policy.csrf_token.encode())]}
     asyncio.run(security.Guard(app, policy)(scope, receive, send))
     assert sent[0]["status"] == 408
+
+
+def test_estop_queued_as_the_run_is_unloaded_still_latches(client):
+    """An emergency stop that raced with loading a job (which drops the old run) is not lost."""
+    from trajkit.hmi.engine import _Command
+
+    sess = client.session
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    client.post("/api/run/start")
+    client.post("/api/run/stop")
+    wait_state(client, "idle")
+    with sess._lock:  # the stop is queued for the old run, then the job is replaced
+        cmd = _Command("estop", sess._clock())
+        sess._cmds.append(cmd)
+        sess.drive = None
+    sess._wake.set()
+    assert cmd.done.wait(WAIT_S)
+    assert client.get("/api/status").json()["state"] == "fault"
+    assert client.post("/api/run/reset").json()["state"] == "idle"

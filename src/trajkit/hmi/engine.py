@@ -459,9 +459,23 @@ class Session:
     # ------------------------------------------------------------------ loop
     def _loop(self) -> None:
         while not self._closing:
+            latched = False
             with self._lock:
                 drive = self.drive
+                if drive is None and self._cmds:
+                    # the run was unloaded after these were queued (a new job): an
+                    # emergency stop still latches the fault; other commands lapse
+                    while self._cmds:
+                        c = self._cmds.popleft()
+                        if c.name == "estop" and self.state != "fault":
+                            self.state = "fault"
+                            self.last_estop_latency_s = max(self._clock() - c.arrival, 0.0)
+                            latched = True
+                        c.done.set()
+                    self._publish()
                 busy = drive is not None and (self._cmds or self.state in _ACTIVE)
+            if latched:
+                self.event("fault", "EMERGENCY STOP (machine at rest)")
             if not busy:
                 self._wake.wait(0.1)
                 self._wake.clear()
