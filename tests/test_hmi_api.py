@@ -827,3 +827,17 @@ def test_estop_queued_as_the_run_is_unloaded_still_latches(client):
     assert cmd.done.wait(WAIT_S)
     assert client.get("/api/status").json()["state"] == "fault"
     assert client.post("/api/run/reset").json()["state"] == "idle"
+
+
+def test_every_snapshot_of_a_loaded_or_running_job_has_its_axes(client):
+    """The page rebuilds its axes table from the live values: they never lapse at a start."""
+    sess = client.session
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    with sess._lock:  # a start whose first period has not run yet
+        from trajkit.hmi.engine import RuntimeDrive
+
+        sess.drive = RuntimeDrive(sess.job)
+        sess._publish()
+    st = client.get("/api/status").json()
+    assert [a["name"] for a in st["axes"]] == ["theta", "Z"]
+    assert st["axes"][0]["position"] == pytest.approx(float(np.degrees(sess.job.q[0, 0])), abs=1e-12)

@@ -622,6 +622,8 @@ class Session:
             if sp is not None:
                 act = sp.actual if sp.actual is not None else sp.position
                 self._axes_view(snap, tb, sp.position, act, sp.velocity)
+            else:  # started, first period not yet run: the machine is at the start
+                self._axes_view(snap, tb, tb.q[0], tb.q[0], np.zeros_like(tb.q[0]))
         elif job is not None:  # a job loaded, not started: the machine waits at its start
             snap["plan_time_s"] = 0.0
             snap["duration_s"] = job.duration
