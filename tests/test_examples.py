@@ -7,6 +7,7 @@ nowhere else. Examples added later are picked up by the glob.
 
 from __future__ import annotations
 
+import fnmatch
 import os
 import subprocess
 import sys
@@ -14,6 +15,8 @@ import time
 from pathlib import Path
 
 import pytest
+
+from trajkit._atomicio import TEMP_GLOB
 
 EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
 EXAMPLES = sorted(EXAMPLES_DIR.glob("[0-9]*.py"))
@@ -129,7 +132,7 @@ def test_example_runs(script, example_runs):
     assert written, f"{script.name} wrote nothing into --out"
     for name in written:
         assert (out / name).stat().st_size > 0, name
-        assert ".tmp-" not in name
+        assert not fnmatch.fnmatch(name, TEMP_GLOB), name
     assert list(cwd.iterdir()) == [], "an example wrote into the working directory"
     for text in EXPECTED.get(script.stem, []):
         assert text in proc.stdout, text

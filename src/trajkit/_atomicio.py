@@ -20,7 +20,7 @@ import itertools
 import os
 from typing import Callable, Iterator
 
-__all__ = ["atomic_write", "write_file", "check_target", "output_group", "OutputGroup", "output_folder"]
+__all__ = ["atomic_write", "write_file", "check_target", "output_group", "OutputGroup", "output_folder", "TEMP_GLOB"]
 
 
 class OutputGroup:
@@ -103,6 +103,9 @@ def check_target(path: str | os.PathLike, what: str = "output") -> str:
 
 
 _SERIAL = itertools.count()
+
+#: Glob pattern of the temporary files (hidden, next to their target).
+TEMP_GLOB = ".*.trajkit-*.tmp"
 
 
 def _tmp_name(path: str) -> str:

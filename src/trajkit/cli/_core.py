@@ -10,9 +10,9 @@ planner itself is unit-agnostic), times in seconds.
 from __future__ import annotations
 
 import argparse
-import io
 import math
 import os
+import re
 import sys
 from typing import Any, Literal, Sequence
 
@@ -21,9 +21,11 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._atomicio import atomic_write
+from .._csvio import csv_text, unit_suffix
+from .._sampling import MAX_SAMPLES, count_samples
 from .._validate import check_finite
 from ..io.document import plain, read_document
-from ..io.schema import Real, RealOrInf, validation_message
+from ..io.schema import Real, RealOrInf, short_repr, validation_message
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
@@ -34,7 +36,10 @@ __all__ = ["register", "load_ptp_job", "PtpJob", "JobLimits"]
 
 #: Largest number of CSV rows a ``--csv`` export may write (guards against a
 #: typo in ``--period`` filling the disk).
-MAX_CSV_ROWS = 10_000_000
+MAX_CSV_ROWS = MAX_SAMPLES
+
+#: Most axes of a ``trajkit ptp`` job (for many independent moves use ``plan_moves``).
+MAX_PTP_AXES = 1024
 
 #: Suffixes accepted by ``--file``.
 _JOB_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
@@ -119,8 +124,8 @@ class PtpJob(BaseModel):
     """
 
     model_config = ConfigDict(extra="forbid")
-    start: list[Real] = Field(min_length=1)
-    goal: list[Real] = Field(min_length=1)
+    start: list[Real] = Field(min_length=1, max_length=MAX_PTP_AXES)
+    goal: list[Real] = Field(min_length=1, max_length=MAX_PTP_AXES)
     limits: list[JobLimits] = Field(min_length=1)
     names: list[str] | None = None
     sync: Literal["time", "phase", "none"] = "time"
@@ -279,31 +284,23 @@ def _check_sampling(args: argparse.Namespace, duration: float) -> float | None:
     dt = _number(args.period, "--period")
     if not (math.isfinite(dt) and dt > 0.0):
         raise InvalidInputError(f"--period must be a finite time > 0 s, got {dt!r}")
-    rows = duration / dt + 2
-    if rows > MAX_CSV_ROWS:
-        raise InvalidInputError(
-            f"--period {dt!r} s gives {rows:.3g} samples over {duration:.6g} s, "
-            f"more than the {MAX_CSV_ROWS} allowed"
-        )
+    count_samples(duration, dt, MAX_CSV_ROWS, what="CSV rows")
     return dt
 
 
 def _write_csv(path: str, traj: Trajectory, names: Sequence[str], units: Sequence[str],
                period: float, single: bool) -> int:
     """Write samples with a header row naming quantity and unit; return the row count."""
-    t = traj.times(period)
+    t = traj.times(period, max_samples=MAX_CSV_ROWS)
     s = traj.sample(t)
-    header = ["t [s]"]
+    header = ["t_s"]
     cols = [t]
     for k, (nm, u) in enumerate(zip(names, units)):
         pre = "" if single else f"{nm}_"
-        header += [f"{pre}position [{u}]", f"{pre}velocity [{u}/s]",
-                   f"{pre}acceleration [{u}/s^2]", f"{pre}jerk [{u}/s^3]"]
+        header += [f"{pre}{q}_{unit_suffix(u, d)}"
+                   for d, q in enumerate(("position", "velocity", "acceleration", "jerk"))]
         cols += [s.position[:, k], s.velocity[:, k], s.acceleration[:, k], s.jerk[:, k]]
-    buf = io.StringIO()
-    buf.write(",".join(header) + "\n")
-    np.savetxt(buf, np.column_stack(cols), delimiter=",", fmt="%.17g")
-    atomic_write(path, buf.getvalue())
+    atomic_write(path, csv_text(header, cols))
     return int(t.size)
 
 
@@ -369,6 +366,27 @@ def _cmd_move(args: argparse.Namespace) -> int:
     return 0
 
 
+_UNIT = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
+
+
+def _check_axes(names: Sequence[str], units: Sequence[str], where: str) -> None:
+    """Refuse duplicate axis names, too many axes and units that are not plain words."""
+    if len(names) > MAX_PTP_AXES:
+        raise InvalidInputError(f"{where or ''}start has {len(names)} axes, more than the "
+                                f"{MAX_PTP_AXES} a ptp job may have (plan_moves plans many "
+                                "independent moves at once)")
+    seen: dict[str, int] = {}
+    for k, nm in enumerate(names):
+        if nm in seen:
+            raise InvalidInputError(f"{where or '--'}names: axes {seen[nm]} and {k} are both "
+                                    f"called {short_repr(nm)}; axis names must be unique")
+        seen[nm] = k
+    for u in units:
+        if not _UNIT.match(u):
+            raise InvalidInputError(f"{where or '--'}unit: {short_repr(u)} is not a unit name "
+                                    "(letters and digits, e.g. m, rad, deg, mm)")
+
+
 def _ptp_inputs(args: argparse.Namespace):
     """Return start, goal, limits list, names, units, sync, duration from options or --file."""
     if args.file is not None:
@@ -426,6 +444,7 @@ def _ptp_inputs(args: argparse.Namespace):
     if names is None:
         names = [f"q{k}" for k in range(n)]
     where = "" if args.file is None else f"{args.file}: field "
+    _check_axes(names, units, where)
     start = [check_finite(x, f"{where}start", names[k]) for k, x in enumerate(start)]
     goal = [check_finite(x, f"{where}goal", names[k]) for k, x in enumerate(goal)]
     return start, goal, limits, list(names), list(units), sync, duration

@@ -8,8 +8,6 @@ angles in degrees, the period in seconds; the library works in m, rad, s.
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import math
 import os
 from typing import Any
@@ -17,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .._atomicio import atomic_write
+from .._csvio import csv_text
 from .._sampling import count_samples
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
@@ -132,7 +131,8 @@ def _motion_options(p, required: bool = True) -> None:
 
 def _output_options(p) -> None:
     p.add_argument("--json", action="store_true", help="print a JSON summary")
-    p.add_argument("--csv", metavar="FILE", help="write setpoints: t [s], x, y, z [mm], machine axes")
+    p.add_argument("--csv", metavar="FILE",
+                   help="write setpoints: t_s, x_mm, y_mm, z_mm (saddle: and theta_deg, z_axis_mm)")
     p.add_argument("--plot", metavar="FILE.png", help="write a figure: path with chords, axes against time")
 
 
@@ -186,7 +186,7 @@ def _run_saddle(args: argparse.Namespace) -> int:
         ],
     }
     if args.csv:
-        _write_csv(args.csv, fs.t, fs.points, {"theta": th_deg, "z_axis": ax[1, 0] / MM})
+        _write_csv(args.csv, fs.t, fs.points, {"theta_deg": th_deg, "z_axis_mm": ax[1, 0] / MM})
     if args.plot:
         from ..plot.paths import plot_saddle_plan
 
@@ -346,13 +346,9 @@ def _check_rows(duration_floor: float, period: float) -> None:
 
 
 def _write_csv(filename: str, t, points, axes: dict) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["t", "x", "y", "z", *axes.keys()])
+    """Setpoints: ``t_s, x_mm, y_mm, z_mm`` and the machine axes (names carry their units)."""
     cols = [t, points[:, 0] / MM, points[:, 1] / MM, points[:, 2] / MM, *axes.values()]
-    for row in np.column_stack(cols):
-        w.writerow([repr(float(x)) for x in row])
-    atomic_write(os.fspath(filename), buf.getvalue())
+    atomic_write(os.fspath(filename), csv_text(["t_s", "x_mm", "y_mm", "z_mm", *axes.keys()], cols))
 
 
 def _print_summary(title: str, summary: dict) -> None:

@@ -25,19 +25,26 @@ from pathlib import Path
 from typing import Any, Literal, Optional
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ..errors import InvalidInputError
 from ..kinematics.palletizer import DEFAULT_JOINT_TABLE, JOINT_NAMES, CylindricalPalletizer
 from ..palletizing.patterns import BoxSize, LayerPattern, StackPattern, make_pattern
 from ..palletizing.scenario import PalletScenario
 from .document import plain, read_document
-from .schema import Count, Real, validation_message
+from .schema import Angle_deg, Coordinate_mm, Count, Length_mm, LimitValue, PositiveLength_mm, Time_s, validation_message
 
 __all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "parse_job"]
 
 _MM = 1e-3
 _DEG = math.pi / 180.0
+
+
+#: Most layers in a job.
+MAX_LAYERS = 1000
+
+#: Most boxes in a custom layer.
+MAX_BOXES_PER_LAYER = 10000
 
 
 class _Model(BaseModel):
@@ -47,13 +54,13 @@ class _Model(BaseModel):
 class JointSpec(_Model):
     """One joint's limits in deg (A, D) or mm (B, C) units."""
 
-    v_max: Real = Field(gt=0, allow_inf_nan=False)
-    a_max: Real = Field(gt=0, allow_inf_nan=False)
-    j_max: Real = Field(gt=0, allow_inf_nan=False)
-    min: Real = Field(allow_inf_nan=False)
-    max: Real = Field(allow_inf_nan=False)
-    a_max_decel: Optional[Real] = Field(default=None, gt=0, allow_inf_nan=False)
-    j_max_decel: Optional[Real] = Field(default=None, gt=0, allow_inf_nan=False)
+    v_max: LimitValue
+    a_max: LimitValue
+    j_max: LimitValue
+    min: Coordinate_mm
+    max: Coordinate_mm
+    a_max_decel: Optional[LimitValue] = None
+    j_max_decel: Optional[LimitValue] = None
 
 
 class RobotSpec(_Model):
@@ -64,49 +71,42 @@ class RobotSpec(_Model):
 
 
 class PickSpec(_Model):
-    x_mm: Real = Field(allow_inf_nan=False)
-    y_mm: Real = Field(allow_inf_nan=False)
-    z_mm: Real = Field(allow_inf_nan=False)
-    yaw_deg: Real = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Coordinate_mm
+    y_mm: Coordinate_mm
+    z_mm: Coordinate_mm
+    yaw_deg: Angle_deg = 0.0
 
 
 class PalletSpec(_Model):
-    centre_mm: tuple[Real, Real, Real]
-    length_mm: Real = Field(gt=0, allow_inf_nan=False)
-    width_mm: Real = Field(gt=0, allow_inf_nan=False)
-    overhang_mm: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
-
-    @field_validator("centre_mm")
-    @classmethod
-    def _finite(cls, v):
-        if not all(math.isfinite(x) for x in v):
-            raise ValueError("must be finite numbers")
-        return v
+    centre_mm: tuple[Coordinate_mm, Coordinate_mm, Coordinate_mm]
+    length_mm: PositiveLength_mm
+    width_mm: PositiveLength_mm
+    overhang_mm: Length_mm = 0.0
 
 
 class BoxSpec(_Model):
-    length_mm: Real = Field(gt=0, allow_inf_nan=False)
-    width_mm: Real = Field(gt=0, allow_inf_nan=False)
-    height_mm: Real = Field(gt=0, allow_inf_nan=False)
+    length_mm: PositiveLength_mm
+    width_mm: PositiveLength_mm
+    height_mm: PositiveLength_mm
 
 
 class BoxPlace(_Model):
     """A box of a custom layer: centre offset from the pallet centre and yaw."""
 
-    x_mm: Real = Field(allow_inf_nan=False)
-    y_mm: Real = Field(allow_inf_nan=False)
-    yaw_deg: Real = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Coordinate_mm
+    y_mm: Coordinate_mm
+    yaw_deg: Angle_deg = 0.0
 
 
 class PatternSpec(_Model):
     name: Literal["seed", "column", "interlock", "pinwheel", "custom"] = "interlock"
     alternate: Literal["none", "rotate180", "mirror"] = "rotate180"
-    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1)
+    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1, max_length=MAX_BOXES_PER_LAYER)
 
 
 class GripperSpec(_Model):
-    grip_s: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
-    release_s: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
+    grip_s: Time_s = 0.0
+    release_s: Time_s = 0.0
 
 
 class PalletJob(_Model):
@@ -118,9 +118,9 @@ class PalletJob(_Model):
     pallet: PalletSpec
     box: BoxSpec
     pattern: PatternSpec = Field(default_factory=PatternSpec)
-    layers: Count = Field(ge=1)
-    lift_mm: Real = Field(default=400.0, ge=0, allow_inf_nan=False)
-    approach_mm: Real = Field(default=200.0, ge=0, allow_inf_nan=False)
+    layers: Count = Field(ge=1, le=MAX_LAYERS)
+    lift_mm: Length_mm = 400.0
+    approach_mm: Length_mm = 200.0
     gripper: GripperSpec = Field(default_factory=GripperSpec)
 
 

@@ -47,7 +47,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import Pose, RobotModel
 from .document import MAX_DOCUMENT_BYTES, LineDict, LineList, parse_document, plain
-from .schema import Real, short_repr
+from .schema import Angle_deg, Coordinate_mm, Length_mm, PositiveLength_mm, Real, Time_s, short_repr
 
 __all__ = ["Program", "load_program", "parse_program", "make_robot", "ROBOT_MODELS"]
 
@@ -58,6 +58,15 @@ _DEG = math.pi / 180.0
 ROBOT_MODELS = ("arm6", "scara", "palletizer")
 
 INSTRUCTIONS = ("PTP", "LIN", "CIRC", "WAIT")
+
+#: Most instructions in a program (planning costs about 30 ms per LIN/CIRC).
+MAX_INSTRUCTIONS = 2000
+
+#: Most taught points in a program.
+MAX_POINTS = 10000
+
+#: Most joints of a point.
+MAX_JOINTS = 64
 
 
 def _line_of(raw: Any, loc: tuple) -> int:
@@ -95,16 +104,16 @@ class UrdfSpec(_Model):
 
 
 class Defaults(_Model):
-    speed_mm_s: Real = Field(default=250.0, gt=0, allow_inf_nan=False)
+    speed_mm_s: PositiveLength_mm = 250.0
     speed_pct: Real = Field(default=100.0, gt=0, le=100, allow_inf_nan=False)
-    zone_mm: Real = Field(default=0.0, ge=0, allow_inf_nan=False)
+    zone_mm: Length_mm = 0.0
 
 
 class PointSpec(_Model):
-    joints_deg: Optional[list[Real]] = None
-    joints: Optional[dict[str, Real]] = None
-    xyz_mm: Optional[list[Real]] = Field(default=None, min_length=3, max_length=3)
-    abc_deg: Optional[list[Real]] = Field(default=None, min_length=3, max_length=3)
+    joints_deg: Optional[list[Angle_deg]] = Field(default=None, max_length=MAX_JOINTS)
+    joints: Optional[dict[str, Angle_deg]] = Field(default=None, max_length=MAX_JOINTS)
+    xyz_mm: Optional[list[Coordinate_mm]] = Field(default=None, min_length=3, max_length=3)
+    abc_deg: Optional[list[Angle_deg]] = Field(default=None, min_length=3, max_length=3)
     config: Optional[Union[str, dict[str, str]]] = None
 
     @model_validator(mode="after")
@@ -126,24 +135,24 @@ class PointSpec(_Model):
 class PtpSpec(_Model):
     PTP: str
     speed_pct: Optional[Real] = Field(default=None, gt=0, le=100, allow_inf_nan=False)
-    zone_mm: Optional[Real] = Field(default=None, ge=0, allow_inf_nan=False)
+    zone_mm: Optional[Length_mm] = None
 
 
 class LinSpec(_Model):
     LIN: str
-    speed_mm_s: Optional[Real] = Field(default=None, gt=0, allow_inf_nan=False)
-    zone_mm: Optional[Real] = Field(default=None, ge=0, allow_inf_nan=False)
+    speed_mm_s: Optional[PositiveLength_mm] = None
+    zone_mm: Optional[Length_mm] = None
 
 
 class CircSpec(_Model):
     CIRC: str
     via: str
-    speed_mm_s: Optional[Real] = Field(default=None, gt=0, allow_inf_nan=False)
-    zone_mm: Optional[Real] = Field(default=None, ge=0, allow_inf_nan=False)
+    speed_mm_s: Optional[PositiveLength_mm] = None
+    zone_mm: Optional[Length_mm] = None
 
 
 class WaitBody(_Model):
-    time_s: Real = Field(ge=0, allow_inf_nan=False)
+    time_s: Time_s
 
 
 class WaitSpec(_Model):
@@ -157,8 +166,8 @@ class ProgramFile(_Model):
     robot: Union[str, UrdfSpec]
     defaults: Defaults = Defaults()
     start: Optional[str] = None
-    points: dict[str, PointSpec] = Field(min_length=1)
-    program: list[dict[str, Any]] = Field(min_length=1)
+    points: dict[str, PointSpec] = Field(min_length=1, max_length=MAX_POINTS)
+    program: list[dict[str, Any]] = Field(min_length=1, max_length=MAX_INSTRUCTIONS)
 
 
 # --------------------------------------------------------------------------- result

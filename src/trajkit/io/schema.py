@@ -10,9 +10,10 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Strict, ValidationError
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, ValidationError
 
-__all__ = ["Real", "RealOrInf", "Count", "FileModel", "validation_message", "short_repr"]
+__all__ = ["Real", "RealOrInf", "Count", "Coordinate_mm", "Length_mm", "PositiveLength_mm", "Angle_deg", "Time_s",
+           "LimitValue", "MAX_LENGTH_MM", "MAX_ANGLE_DEG", "MAX_TIME_S", "MAX_LIMIT_VALUE", "FileModel", "validation_message", "short_repr"]
 
 #: A real number field: int or float, never a bool or a string.
 Real = Annotated[float, Strict()]
@@ -33,6 +34,37 @@ RealOrInf = Annotated[float, Strict(), BeforeValidator(_spelled_infinity)]
 
 #: An integer field: never a bool, a float or a string.
 Count = Annotated[int, Strict()]
+
+
+#: Supported range of lengths and coordinates in files [mm] (1 km).
+MAX_LENGTH_MM = 1e6
+
+#: Supported range of angles in files [deg] (a thousand turns).
+MAX_ANGLE_DEG = 360e3
+
+#: Longest dwell, wait or gripper time in files [s] (one day).
+MAX_TIME_S = 86400.0
+
+#: Largest limit value (velocity, acceleration, jerk) in files, in the file's units.
+MAX_LIMIT_VALUE = 1e12
+
+#: A coordinate [mm] within +-MAX_LENGTH_MM.
+Coordinate_mm = Annotated[Real, Field(ge=-MAX_LENGTH_MM, le=MAX_LENGTH_MM, allow_inf_nan=False)]
+
+#: A length [mm] in [0, MAX_LENGTH_MM].
+Length_mm = Annotated[Real, Field(ge=0, le=MAX_LENGTH_MM, allow_inf_nan=False)]
+
+#: A length [mm] in (0, MAX_LENGTH_MM].
+PositiveLength_mm = Annotated[Real, Field(gt=0, le=MAX_LENGTH_MM, allow_inf_nan=False)]
+
+#: An angle [deg] within +-MAX_ANGLE_DEG.
+Angle_deg = Annotated[Real, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG, allow_inf_nan=False)]
+
+#: A time [s] in [0, MAX_TIME_S].
+Time_s = Annotated[Real, Field(ge=0, le=MAX_TIME_S, allow_inf_nan=False)]
+
+#: A limit (velocity, acceleration, jerk) in (0, MAX_LIMIT_VALUE].
+LimitValue = Annotated[Real, Field(gt=0, le=MAX_LIMIT_VALUE, allow_inf_nan=False)]
 
 
 class FileModel(BaseModel):

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 import os
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -12,6 +9,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._atomicio import atomic_write
+from .._csvio import csv_text
 from .._sampling import MAX_SAMPLES, period_times
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import RobotModel
@@ -217,24 +215,15 @@ class RobotRun:
 
     def to_csv(self, samples: RobotSamples, path: str | os.PathLike | None = None) -> str:
         """Samples as CSV: t [s], joints (deg for revolute, mm for prismatic), tool x/y/z [mm], speed [mm/s]."""
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
         names = []
-        scale = []
-        for nm, kind in zip(self.robot.joint_names, self.robot.joint_kinds):
-            if kind == "revolute":
-                names.append(f"{nm}_deg")
-                scale.append(180.0 / math.pi)
-            else:
-                names.append(f"{nm}_mm")
-                scale.append(1e3)
-        w.writerow(["t_s", *names, "x_mm", "y_mm", "z_mm", "tool_speed_mm_s", "instruction"])
-        sc = np.array(scale)
-        for i in range(samples.t.size):
-            w.writerow([repr(float(samples.t[i])), *(repr(float(x)) for x in samples.q[i] * sc),
-                        *(repr(float(x)) for x in 1e3 * samples.xyz[i]),
-                        repr(float(1e3 * samples.tool_speed[i])), int(samples.motion[i])])
-        text = buf.getvalue()
+        cols = [samples.t]
+        for k, nm in enumerate(self.robot.joint_names):
+            unit, sc = self.robot.joint_unit(k)
+            names.append(f"{nm}_{unit}")
+            cols.append(samples.q[:, k] * sc)
+        cols += [1e3 * samples.xyz[:, 0], 1e3 * samples.xyz[:, 1], 1e3 * samples.xyz[:, 2],
+                 1e3 * samples.tool_speed, samples.motion]
+        text = csv_text(["t_s", *names, "x_mm", "y_mm", "z_mm", "tool_speed_mm_s", "instruction"], cols)
         if path is not None:
             atomic_write(path, text)
         return text
