@@ -36,6 +36,10 @@ EXPECTED = {
     "01_single_axis_move": ["symmetric : T = 1.150000 s, shape 7-phase",
                             "final position 0.8 m"],
     "02_multi_axis_ptp": ["sync=time : T = 1.350000 s", "spread of the normalised progress"],
+    # override and pause act while moving (rate 0.40, at rest, back to 1.00)
+    "08_runtime_stream": ["override 40 %   at cycle  100: rate 0.40 from cycle",
+                          "rate 0.00 from cycle", "resume          at cycle",
+                          "largest |v|/v_max = 1.0000"],
 }
 
 
