@@ -203,18 +203,51 @@ class Program:
         return run_motions(self.robot, self.motions, self.start)
 
 
-def make_robot(spec: Any, base_dir: str | os.PathLike | None = None) -> RobotModel:
-    """Robot model from a ``robot:`` value: ``"arm6"``, ``"scara"``, ``"palletizer"`` or a URDF spec."""
+class UrdfRefusedError(InvalidInputError):
+    """A URDF path outside the allowed folders (the message never says whether it exists)."""
+
+
+def make_robot(spec: Any, base_dir: str | os.PathLike | None = None, *,
+               urdf_dirs: Any = None) -> RobotModel:
+    """Robot model from a ``robot:`` value: ``"arm6"``, ``"scara"``, ``"palletizer"`` or a URDF spec.
+
+    Parameters
+    ----------
+    spec : str or UrdfSpec
+    base_dir : path, optional
+        Folder that a relative URDF path is relative to (without ``urdf_dirs``).
+    urdf_dirs : sequence of path, optional
+        When given, a URDF file is opened only if it is a ``.urdf`` file
+        inside one of these folders once links and ``..`` are resolved (a
+        relative path is looked up in each folder in turn); any other path
+        is refused with :class:`UrdfRefusedError`, with the same message
+        whether or not it exists. Empty: built-in robots only.
+    """
     if isinstance(spec, str):
         from ..robot.models import robot_by_name
 
         return robot_by_name(spec)
+    if urdf_dirs is not None:
+        p = _urdf_inside(spec.urdf, urdf_dirs)
+    else:
+        p = Path(spec.urdf)
+        if not p.is_absolute() and base_dir is not None:
+            p = Path(base_dir) / p
     from ..kinematics.urdf import UrdfRobot
 
-    p = Path(spec.urdf)
-    if not p.is_absolute() and base_dir is not None:
-        p = Path(base_dir) / p
     return UrdfRobot(p, spec.tip_link)
+
+
+def _urdf_inside(name: str, dirs: Any) -> Path:
+    shown = name if len(name) <= 60 else name[:57] + "..."
+    if "\x00" not in name and name.lower().endswith(".urdf"):
+        for d in dirs:
+            root = Path(d).resolve()
+            cand = (root / name).resolve()
+            if cand.is_relative_to(root) and cand.is_file():
+                return cand
+    where = "the robots folder" if dirs else "a robots folder (none is configured)"
+    raise UrdfRefusedError(f"{shown!r} is not a URDF file of {where}")
 
 
 def load_program(path: str | os.PathLike) -> Program:
@@ -240,8 +273,9 @@ def load_program(path: str | os.PathLike) -> Program:
 
 
 def parse_program(text: str | bytes, source: str = "<string>",
-                  base_dir: str | os.PathLike | None = None) -> Program:
-    """Validate program ``text`` (YAML, str or UTF-8 bytes); see :func:`load_program`."""
+                  base_dir: str | os.PathLike | None = None, *, urdf_dirs: Any = None) -> Program:
+    """Validate program ``text`` (YAML, str or UTF-8 bytes); see :func:`load_program` and,
+    for ``urdf_dirs``, :func:`make_robot`."""
     raw = parse_document(text, source=source, kind="yaml")
     if not isinstance(raw, dict):
         raise InvalidInputError(f"{source}: a program must be a mapping with robot, points, program")
@@ -259,7 +293,10 @@ def parse_program(text: str | bytes, source: str = "<string>",
         got_s = "" if isinstance(got, (dict, list)) else f" (got {short_repr(got)})"
         fail(loc, f"{err['msg']}{got_s}")
 
-    robot = make_robot(spec.robot, base_dir)
+    try:
+        robot = make_robot(spec.robot, base_dir, urdf_dirs=urdf_dirs)
+    except UrdfRefusedError as exc:
+        fail(("robot", "urdf"), str(exc))
 
     from ..robot.motion import CartesianTarget, Circ, JointTarget, Lin, Ptp, Wait
 
