@@ -80,6 +80,7 @@ def test_lines_are_recorded():
     ("[" * 100_000 + "]" * 100_000, r"nested deeper than 64 levels|nest"),
     ("a: " + "9" * 5000 + "\n", r"doc\.yaml:1: integer 9+\.\.\. is too long"),
     ("a: [1, 2\nb: 3\n", r"doc\.yaml:\d: not valid YAML: "),
+    ("a: 1e999\n", r"doc\.yaml:1: number 1e999 is out of the range of a float"),
 ])
 def test_hostile_yaml_is_refused(text, match):
     with pytest.raises(InvalidInputError, match=match):
@@ -111,6 +112,7 @@ def test_bytes_size_and_encoding(kind):
     ('{"a": 1, "a": 2}', r"duplicate key 'a'"),
     ('{"a": NaN}', r"NaN is not valid JSON"),
     ('{"a": -Infinity}', r"-Infinity is not valid JSON"),
+    ('{"a": -1e999}', r"number -1e999 is out of the range of a float"),
     ("[" * 100_000 + "]" * 100_000, r"nested deeper than 64 levels"),
     ('{"a": 1,}', r"src:1: not valid JSON: .*column 9"),
     ('{"a": ' + "9" * 5000 + "}", r"not valid JSON"),

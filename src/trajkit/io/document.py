@@ -16,7 +16,9 @@ rules:
   ``true``/``false`` are booleans, ``null``/``~``/empty is null, ``1e3`` and
   ``.inf`` are floats, and ``yes``, ``on``, ``2024-01-01`` or ``0777``-style
   octals stay what they look like (strings, decimal integers);
-- JSON is strict: no ``NaN``/``Infinity`` literals.
+- JSON is strict: no ``NaN``/``Infinity`` literals; in both formats a number
+  that overflows a float (``1e999``) is refused (YAML's explicit ``.inf`` is
+  kept: some fields mean "no limit" by it).
 
 Every refusal is an :class:`~trajkit.errors.InvalidInputError` with one line
 that names the source and, for YAML, the line.
@@ -25,6 +27,7 @@ that names the source and, for YAML, the line.
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 from pathlib import Path
@@ -173,7 +176,10 @@ class _CoreConstructor(SafeConstructor):
             return float("-inf") if value.startswith("-") else float("inf")
         if value == ".nan":
             return float("nan")
-        return float(value)
+        x = float(value)
+        if math.isinf(x):  # 1e999: overflow, not the explicit .inf
+            raise _Refused(f"number {value[:20]} is out of the range of a float", node.start_mark)
+        return x
 
     def construct_yaml_map(self, node: Any):  # type: ignore[override]
         out = LineDict()
@@ -281,6 +287,13 @@ def _refuse_constant(name: str) -> Any:
     raise ValueError(f"{name} is not valid JSON")
 
 
+def _json_float(text: str) -> float:
+    x = float(text)
+    if math.isinf(x):
+        raise ValueError(f"number {text[:20]} is out of the range of a float")
+    return x
+
+
 def _json_object(pairs: list) -> dict:
     out: dict = {}
     for k, v in pairs:
@@ -294,7 +307,8 @@ def _parse_json(text: str, raw: bytes, source: str, max_depth: int) -> Any:
     if _json_depth(raw) > max_depth:
         raise InvalidInputError(f"{source}: nested deeper than {max_depth} levels")
     try:
-        return json.loads(text, object_pairs_hook=_json_object, parse_constant=_refuse_constant)
+        return json.loads(text, object_pairs_hook=_json_object, parse_constant=_refuse_constant,
+                          parse_float=_json_float)
     except json.JSONDecodeError as exc:
         raise InvalidInputError(
             f"{source}:{exc.lineno}: not valid JSON: {exc.msg} (column {exc.colno})") from None
