@@ -560,7 +560,7 @@ def test_hostile_job_bodies_answer_one_line(client, body, pattern):
 
 def test_out_of_range_numbers_are_refused(client):
     r = client.post("/api/job", content=b'{"kind": "saddle", "feed_mm_s": 1e999}')
-    assert error_of(r, 422) == "feed_mm_s: Input should be a finite number (got inf)"
+    assert error_of(r, 400) == "request body: not valid JSON: number 1e999 is out of the range of a float"
     r = client.post("/api/override", content=b'{"percent": ' + b"9" * 400 + b"}")
     assert error_of(r, 422).startswith("percent: Input should be")
 
