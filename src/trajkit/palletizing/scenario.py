@@ -15,6 +15,7 @@ import numpy as np
 from .._validate import check_array, check_finite
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.palletizer import CylindricalPalletizer, default_palletizer
+from .cell import Cell
 from .patterns import BoxSize, StackPattern, check_layer_fit, make_pattern
 
 __all__ = ["PalletScenario", "TripSpec", "seed_scenario"]
@@ -80,6 +81,11 @@ class PalletScenario:
     overhang : float
         Allowed overhang past the pallet edge [m].
     name : str
+    cell : Cell, optional
+        The cell's geometry (obstacles, gripper volume, clearance, settle
+        height); ``None`` for a job planned under the clearance heights
+        alone. The ``cell`` planner needs one, and :func:`verify_plan`
+        checks every plan against it.
 
     Raises
     ------
@@ -102,6 +108,7 @@ class PalletScenario:
     release_s: float = 0.0
     overhang: float = 0.0
     name: str = "scenario"
+    cell: Cell | None = None
     _cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -119,6 +126,8 @@ class PalletScenario:
             object.__setattr__(self, f, v)
         L, W = (check_finite(x, "pallet_size") for x in self.pallet_size)
         object.__setattr__(self, "pallet_size", (L, W))
+        if self.cell is not None and not isinstance(self.cell, Cell):
+            raise InvalidInputError(f"cell must be a Cell or None, got {self.cell!r}")
         check_layer_fit(self.pattern.layer_at(0), L, W, self.overhang)
         check_layer_fit(self.pattern.layer_at(1), L, W, self.overhang)
         self._validate_reach()
@@ -209,6 +218,7 @@ class PalletScenario:
             "grip_s": self.grip_s,
             "release_s": self.release_s,
             "boxes": self.n_boxes,
+            **({"cell": self.cell.to_dict()} if self.cell is not None else {}),
         }
 
 
