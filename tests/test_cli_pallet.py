@@ -66,7 +66,7 @@ def test_plots_written(tmp_path, capsys):
 
 @pytest.mark.parametrize("args,match", [
     (["pallet", "/nonexistent/job.yaml"], "No such file"),
-    (["pallet", "--planner", "fastest"], r"--planner must be one of \['merged', 'optimal', 'ptp'\], got 'fastest'"),
+    (["pallet", "--planner", "fastest"], r"--planner must be one of \['cell', 'merged', 'optimal', 'ptp'\], got 'fastest'"),
     (["pallet", "--box", "25"], r"--box must be in \[0, 24\] for this job, got 25"),
 ])
 def test_errors_one_line_exit_2(capsys, args, match):
