@@ -123,6 +123,10 @@ class CellReport:
         moves).
     min_clearance_at : tuple
         ``(t, trip, obstacle, joints)`` of that point (joints shape (4,)).
+    min_clearance_bound : float
+        Certified lower bound [m] on the distance over the whole continuous
+        motion wherever the full clearance applies (from the certified
+        intervals and the closed-form B-only stretches).
     samples : int
         Distance evaluations (poses x obstacles are counted once per pose).
     certified_intervals : int
@@ -132,6 +136,7 @@ class CellReport:
     findings: list = field(default_factory=list)
     min_clearance: float = math.inf
     min_clearance_at: tuple = ()
+    min_clearance_bound: float = math.inf
     samples: int = 0
     certified_intervals: int = 0
 
@@ -383,6 +388,7 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
             req = np.where(contact, 0.0, c)
             rep.samples += 1
             for k in np.flatnonzero(~contact):
+                rep.min_clearance_bound = min(rep.min_clearance_bound, float(d[k]))
                 if d[k] < rep.min_clearance:
                     rep.min_clearance = float(d[k])
                     qq = q_rest.copy()
@@ -417,6 +423,9 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
                 bad_ends = np.any((d_lo < c - CLEARANCE_ATOL) | (d_hi < c - CLEARANCE_ATOL), axis=1)
                 need &= ~bad_ends
                 rep.certified_intervals += int(np.count_nonzero(~need))
+                if (~need).any():
+                    rep.min_clearance_bound = min(rep.min_clearance_bound,
+                                                  float(np.min(lb[~need])))
                 if not need.any():
                     break
                 tm = 0.5 * (lo_t[need] + hi_t[need])
