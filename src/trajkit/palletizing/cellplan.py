@@ -390,8 +390,15 @@ class _Block:
         box = (scenario.box.length, scenario.box.width, scenario.box.height)
         grip = cell.gripper_size(box[0], box[1])
         if mode == "search":
-            self.floors = [volume_floors(q, box, grip, carrying, g, c - CLEARANCE_ATOL).max(axis=1)
-                           if len(g) else np.full(n, -np.inf) for g in groups]
+            # one pass over every obstacle, then the maximum per group
+            sizes = [len(g) for g in groups]
+            allg = groups[0]
+            for g in groups[1:]:
+                allg = allg.concat(g)
+            F = volume_floors(q, box, grip, carrying, allg, c - CLEARANCE_ATOL)
+            cuts = np.cumsum([0] + sizes)
+            self.floors = [F[:, a:b].max(axis=1) if b > a else np.full(n, -np.inf)
+                           for a, b in zip(cuts[:-1], cuts[1:])]
             return
         obst = groups[0]
         h = np.diff(self.tau)
@@ -583,17 +590,26 @@ class _BSearch:
         self.up, self.dn = _Throttle(lb, "accel", z0), _Throttle(lb, "decel", z3)
         m = np.isfinite(E)
         self.m = m
+        # Only the record cells matter for "latest t_up(E_i) - tau_i" (a cell
+        # with a higher floor no later dominates) and for "latest tau_i+1 +
+        # t_dn(E_i)" (a higher floor no earlier dominates): prefix and suffix
+        # maxima of the floor, exact and few.
+        Ef = np.where(m, E, -np.inf)
+        pre = np.maximum.accumulate(Ef)
+        self.i_up = np.flatnonzero(m & (Ef >= pre) & (Ef > np.concatenate([[-np.inf], pre[:-1]])))
+        suf = np.maximum.accumulate(Ef[::-1])[::-1]
+        nxt = np.concatenate([suf[1:], [-np.inf]])
+        self.i_dn = np.flatnonzero(m & (Ef >= suf) & (Ef > nxt))
         if m.any():
-            a = np.full(E.shape, -np.inf)
-            a[m] = self.up.time_at(E[m]) - tau[:-1][m]
-            iu = int(np.argmax(a))
-            self.t_s = float(max(0.0, a[iu]))
-            self.tau_u = float(tau[iu]) if a[iu] > 0.0 else 0.0
-            e = np.full(E.shape, -np.inf)
-            e[m] = tau[1:][m] + self.dn.time_at(E[m])
-            idd = int(np.argmax(e))
-            self.e = float(max(t_h, e[idd]))
-            self.tau_d = float(tau[idd + 1]) if e[idd] >= t_h else t_h
+            iu_, id_ = self.i_up, self.i_dn
+            a = self.up.time_at(E[iu_]) - tau[:-1][iu_]
+            k = int(np.argmax(a))
+            self.t_s = float(max(0.0, a[k]))
+            self.tau_u = float(tau[iu_[k]]) if a[k] > 0.0 else 0.0
+            e = tau[1:][id_] + self.dn.time_at(E[id_])
+            k = int(np.argmax(e))
+            self.e = float(max(t_h, e[k]))
+            self.tau_d = float(tau[id_[k] + 1]) if e[k] >= t_h else t_h
         else:
             self.t_s, self.tau_u, self.e, self.tau_d = 0.0, 0.0, t_h, t_h
         self.T0 = self.t_s + self.e
@@ -652,9 +668,14 @@ PEAK_TURNS = (1.0, 0.5)
 PEAK_XTOL = 5e-5
 
 
-def _peak(srch: "_BSearch", zp: float, ap: float):
+def _peak(srch: "_BSearch", zp: float, ap: float, check: bool = True):
     """B alone to a peak ``(zp, 0, ap)`` and down, minimum time each way; the
-    block placed at the earliest start its floor allows (or None)."""
+    block placed at the earliest start its floor allows (or None).
+
+    For a motion that rises, then falls, the starts that keep every cell of
+    the floor form one interval, exact from the record cells; ``check`` also
+    samples the motion against the whole floor (and the settle rule).
+    """
     lb, z0, z3 = srch.lb, srch.z0, srch.z3
     try:
         u = plan_state_to_state((z0, 0.0, 0.0), (zp, 0.0, ap), lb)
@@ -669,14 +690,15 @@ def _peak(srch: "_BSearch", zp: float, ap: float):
         if np.max(E[m]) > zp:
             return None
         rise, fall = _Rise(pu, z0), _Rise(_reverse(pd), z3)
-        r = rise.time_at(E[m])
-        f = T - fall.time_at(E[m])
-        lo = max(0.0, float(np.max(r - tau[:-1][m])))
-        hi = min(T - srch.t_h, float(np.min(f - tau[1:][m])))
+        iu_, id_ = srch.i_up, srch.i_dn
+        lo = max(0.0, float(np.max(rise.time_at(E[iu_]) - tau[:-1][iu_])))
+        hi = min(T - srch.t_h, float(np.min(T - fall.time_at(E[id_]) - tau[1:][id_])))
     else:
         lo, hi = 0.0, T - srch.t_h
     if lo > hi:
         return None
+    if not check:
+        return prof, lo, math.nan
     got = srch.accept(prof, lo)
     return None if got is None else (prof, lo, got[1])
 
@@ -690,21 +712,31 @@ def _best_peak(srch: "_BSearch"):
     best = None
     for f in PEAK_TURNS:
         ap = -f * A
-        top = _peak(srch, zhi, ap)
-        if top is None:
+        if _peak(srch, zhi, ap, check=False) is None:
             continue
-        lo, hi, found = zlo, zhi, top
-        r = _peak(srch, lo, ap)
-        if r is not None:
-            found, hi = r, lo
+        lo, hi = zlo, zhi
+        if _peak(srch, lo, ap, check=False) is not None:
+            hi = lo
         while hi - lo > PEAK_XTOL:
             mid = 0.5 * (lo + hi)
-            r = _peak(srch, mid, ap)
-            if r is None:
+            if _peak(srch, mid, ap, check=False) is None:
                 lo = mid
             else:
-                hi, found = mid, r
-        if best is None or found[0].duration < best[0].duration:
+                hi = mid
+        # the full check on the result; where it says no (a motion that is not
+        # up-then-down, the settle rule), search again above with it
+        found = _peak(srch, hi, ap)
+        if found is None and _peak(srch, zhi, ap) is not None:
+            lo, hi2 = hi, zhi
+            found = _peak(srch, zhi, ap)
+            while hi2 - lo > PEAK_XTOL:
+                mid = 0.5 * (lo + hi2)
+                r = _peak(srch, mid, ap)
+                if r is None:
+                    lo = mid
+                else:
+                    hi2, found = mid, r
+        if found is not None and (best is None or found[0].duration < best[0].duration):
             best = found
     return best
 
