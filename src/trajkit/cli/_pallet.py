@@ -49,7 +49,8 @@ def register(subparsers: Any) -> None:
                     "Without JOB the shipped seed scenario (25 boxes) is used.",
     )
     p.add_argument("job", nargs="?", metavar="JOB.yaml",
-                   help="job file (YAML; mm and deg); default: the seed scenario")
+                   help="job file (YAML; mm and deg), or a shipped job: seed (the default), "
+                        "seed_cell (the seed scenario in its cell)")
     p.add_argument("--json", action="store_true",
                    help='print {"boxes": N, "plans": {name: {"total_s", "per_box_s", ...}}}')
     p.add_argument("--plot", metavar="DIR", help="write the figures (PNG) into DIR")
@@ -99,7 +100,8 @@ def run_pallet(job: str | None, planners=None, verify: bool = True,
     Parameters
     ----------
     job : str or None
-        Job file; the shipped seed scenario when ``None``.
+        Job file, or the name of a shipped job (``"seed"``, ``"seed_cell"``);
+        the seed scenario when ``None``.
     planners : sequence of str, optional
         Default :data:`DEFAULT_PLANNERS`, plus :data:`CELL_PLANNER` for a
         job with a cell.
@@ -118,10 +120,17 @@ def run_pallet(job: str | None, planners=None, verify: bool = True,
         plan under the seed rule, breaking the cell's rules is reported in
         its report, not raised).
     """
-    from ..io.pallet_job import load_job, seed_job_path
+    from ..io.pallet_job import load_job, seed_cell_job_path, seed_job_path
     from ..palletizing import PLANNERS, plan_cycle, verify_plan
 
-    scenario = load_job(Path(job) if job else seed_job_path())
+    shipped = {"seed": seed_job_path, "seed_cell": seed_cell_job_path}
+    if not job:
+        path = seed_job_path()
+    elif job in shipped and not Path(job).exists():
+        path = shipped[job]()
+    else:
+        path = Path(job)
+    scenario = load_job(path)
     if planners is None:
         planners = DEFAULT_PLANNERS + ((CELL_PLANNER,) if scenario.cell is not None else ())
     names = list(planners)
