@@ -33,7 +33,7 @@ from trajkit.palletizing.cell import (
     volume_floors,
 )
 from trajkit.palletizing.cellcheck import CLEARANCE_ATOL
-from trajkit.palletizing.planners import CyclePlan, TripPlan
+from trajkit.palletizing.planners import CyclePlan
 from trajkit.palletizing.report import cycle_rows
 from trajkit.palletizing.timeline import Piece, Timeline
 

@@ -32,7 +32,6 @@ All quantities in SI (m, rad).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
