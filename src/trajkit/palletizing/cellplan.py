@@ -26,20 +26,38 @@ rest at ``Z3``), every floor point ``(tau, F)`` demands
     t_s >= t_up(F) - tau        and        T >= t_s + tau + t_dn(F),
 
 so no B motion beats the *window bound*
-``max_tau (t_up(F) - tau)^+ + max(tH, max_tau (tau + t_dn(F)))``. Neither
-does it beat ``t_B``, B alone from rest over ``max F`` to rest (the
-``optimal`` planner's search over the turning acceleration). The planner
-starts the block at the earliest ``t_s``, lets B rise at full throttle
-(``U``), turn in a minimum-time state-to-state piece, and descend at full
-throttle (``D``); when this turn clears the floor the trip takes exactly the
-window bound. Otherwise the trip is lengthened (bisection on ``T``) or B
-holds at the top of the floor (the fallback that always clears it).
+``max_tau (t_up(F) - tau)^+ + max(tH, max_tau (tau + t_dn(F)))`` (only the
+record points of the floor matter: its prefix maxima for the first term, its
+suffix maxima for the second). Neither does it beat ``t_B``, B alone from
+rest over ``max F`` to rest (the ``optimal`` planner's search over the
+turning acceleration). Candidates, the fastest that clears the floor wins:
 
-The floor is evaluated on a grid of the block's time with the clearance
-widened, at each point, by how far the footprint can move in half a step
-(its speed bound times the step), and B is checked on the grid with the
-sag a jerk-limited motion can have between two points; so a trip that passes
-the planner's check keeps the true clearance between the points too.
+``"window"``
+    The block at the earliest ``t_s``; B rises at full throttle (``U``) to
+    the binding rising floor point, a state-to-state middle of the remaining
+    time joins the full-throttle descent (``D``) where it passes the binding
+    falling point (or a minimum-time turn from ``U`` onto ``D``): the trip
+    takes exactly the window bound.
+``"peak"``
+    B alone to a peak ``(zp, 0, ap)`` and down, minimum time each way, with
+    the lowest ``zp`` whose motion clears the floor for some block start
+    (for a motion that rises, then falls, those starts form one interval,
+    exact from the record points).
+``"stretched"``
+    As ``"window"``, the trip lengthened (bisection on ``T``) until the
+    middle clears the floor.
+``"hold"``
+    B rests at the top of the floor while the block runs (a fallback that
+    always clears it).
+
+The floor is evaluated on a grid of the block's time (finer within
+:data:`FINE_SPAN` of its ends, where the volume leaves or reaches obstacles
+it nearly touches). Between two grid points no footprint distance can fall
+more than the footprint's speed bound times the gap, a cone from each end;
+the planner's *envelope* keeps the clearance at the cones' low point, and B
+is checked on the grid with the sag a motion within B's acceleration limit
+can have between two points. So a trip that passes the planner's check keeps
+the clearance over the continuous motion (to :data:`CLEARANCE_ATOL`);
 :func:`~trajkit.palletizing.verify.verify_plan` checks the result again,
 independently.
 
@@ -142,9 +160,10 @@ class CellTrip:
     Attributes
     ----------
     candidate : str
-        ``"window"`` (the trip takes its window bound), ``"turn"`` (B
-        turns at speed, the trip lengthened until the turn clears the
-        floor) or ``"hold"`` (B rests at the top of the floor).
+        ``"window"`` (the trip takes its window bound), ``"peak"`` (B alone
+        to the lowest feasible peak and down), ``"stretched"`` (B turns at
+        speed, the trip lengthened until the turn clears the floor) or
+        ``"hold"`` (B rests at the top of the floor).
     duration : float
         Trip duration [s].
     lower_bound : float
@@ -167,7 +186,7 @@ class CellTrip:
     floor_max : float
         Highest point of the floor [m].
     margin : float
-        Smallest height of B above the (widened) floor [m].
+        Smallest height of B above the planner's floor envelope [m].
     """
 
     candidate: str
@@ -256,13 +275,6 @@ class _Rise:
         out[up] = self.tb[i] + t
         return out
 
-    @property
-    def top(self) -> float:
-        """Height of the last finite phase end (``inf`` while the rise goes on)."""
-        v_last = self.V[-1]
-        a_last = self.A[-1]
-        return float(self.P[-1]) if v_last == 0.0 and a_last == 0.0 else math.inf
-
     def phases_until(self, t: float) -> list:
         """The rise's phases ``(dt, jerk, a0)`` cut at time ``t``."""
         out, acc = [], 0.0
@@ -313,7 +325,7 @@ _NEWTON_ITER = 60
 _TABLE_SIZE = 1025
 
 
-def _Throttle(limits: AxisLimits, leg: str, z0: float) -> _Rise:
+def _throttle(limits: AxisLimits, leg: str, z0: float) -> _Rise:
     """B's full-throttle rise from rest at ``z0`` (see :func:`full_throttle_phases`)."""
     return _Rise(full_throttle_phases(limits, leg), z0)
 
@@ -587,7 +599,7 @@ class _BSearch:
 
     def __init__(self, lb, z0, z3, tau, E, t_h, zs):
         self.lb, self.z0, self.z3, self.tau, self.E, self.t_h, self.zs = lb, z0, z3, tau, E, t_h, zs
-        self.up, self.dn = _Throttle(lb, "accel", z0), _Throttle(lb, "decel", z3)
+        self.up, self.dn = _throttle(lb, "accel", z0), _throttle(lb, "decel", z3)
         m = np.isfinite(E)
         self.m = m
         # Only the record cells matter for "latest t_up(E_i) - tau_i" (a cell
@@ -814,21 +826,13 @@ class _Ctx:
     def throttle(self, leg: str, z: float) -> _Rise:
         key = (leg, z)
         if key not in self.throttles:
-            self.throttles[key] = _Throttle(self.lb, leg, z)
+            self.throttles[key] = _throttle(self.lb, leg, z)
         return self.throttles[key]
 
     def boxes(self, idx, names=True) -> Prisms:
         idx = list(idx)
         return stack_prisms(self.poses[idx], *self.dims,
                             names=tuple(f"box {i}" for i in idx) if names else ())
-
-    def bound(self, kind: str, z0: float, z3: float, block: _Block, F: np.ndarray):
-        s = self.cell.settle
-        F = F.copy()
-        F[0] = max(F[0], z0 + s)
-        F[-1] = max(F[-1], z3 + s)
-        return _window_bound(self.throttle("accel", z0), self.throttle("decel", z3), block.tau,
-                             F, block.t_h)
 
 
 def _trip_q(ctx: _Ctx, kind: str, q_place):
