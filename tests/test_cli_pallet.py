@@ -7,6 +7,7 @@ import json
 import pytest
 import yaml
 
+from trajkit._atomicio import TEMP_GLOB
 from trajkit.cli import main
 from trajkit.io import seed_job_path
 from trajkit.palletizing import plan_cycle, seed_scenario
@@ -61,7 +62,7 @@ def test_plots_written(tmp_path, capsys):
         assert f.stat().st_size > 10_000
         assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert f"wrote {f}" in out
-    assert not list(d.glob("*.tmp-*"))
+    assert not list(d.glob(TEMP_GLOB))
 
 
 @pytest.mark.parametrize("args,match", [

@@ -37,6 +37,9 @@ from trajkit.profiles.state import (
     plan_state_to_state,
 )
 
+#: Compares two code paths (see floatcmp); CI runs it again with numpy SIMD off.
+pytestmark = pytest.mark.codepaths
+
 needs_numba = pytest.mark.skipif(not SJ.AVAILABLE, reason="numba not installed")
 
 

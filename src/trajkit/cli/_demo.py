@@ -67,6 +67,14 @@ def write_transfer_plot(scenario: Any, out_dir: Path, box: int = 0) -> Path | No
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    from .._atomicio import output_folder
+
+    out = Path(args.out)
+    with output_folder(out):  # checked before planning; all figures or none
+        return _demo(out)
+
+
+def _demo(out: Path) -> int:
     from ..io.pallet_job import seed_cell_job_path
     from ..palletizing.report import (
         CELL_COLUMNS,
@@ -81,8 +89,6 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from ._console import print_table
     from ._pallet import run_pallet
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)  # fail fast on a bad folder, before planning
     scenario, plans, reports = run_pallet(str(seed_cell_job_path()), progress=sys.stderr.isatty())
     summary = summarize(plans, reports=reports)
     print_table(

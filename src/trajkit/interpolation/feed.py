@@ -19,6 +19,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from .._sampling import MAX_SAMPLES, period_times
 from .._validate import check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
@@ -104,21 +105,21 @@ class FeedSample:
     points: np.ndarray
 
 
-def setpoint_times(duration: float, period: float) -> np.ndarray:
+def setpoint_times(duration: float, period: float,
+                   max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
     """Fixed-period sample times ``k * period``, k = 0 .. ceil(duration / period).
 
     The last sample is at or after the end (where the motion holds the goal
     at rest), so consecutive samples are always exactly one period apart.
+    More than ``max_samples`` setpoints are refused before anything is
+    allocated (:data:`trajkit._sampling.MAX_SAMPLES` by default).
 
     Returns
     -------
     ndarray, shape (n,) [s]
     """
     dt = _check_period(period)
-    n = int(math.ceil(duration / dt)) if duration > 0 else 0
-    if n * dt < duration:  # round-off in the division
-        n += 1
-    return np.arange(n + 1) * dt
+    return period_times(duration, dt, end="after", max_samples=max_samples, what="setpoints")
 
 
 def _check_period(period: float) -> float:
@@ -173,9 +174,9 @@ class FeedPlan:
         pts = self.path.point(s) if points else np.empty((tt.size, 0))
         return FeedSample(tt, s, v, a, j, pts)
 
-    def setpoints(self, period: float) -> FeedSample:
+    def setpoints(self, period: float, max_samples: int | None = MAX_SAMPLES) -> FeedSample:
         """Samples at a fixed control period (see :func:`setpoint_times`)."""
-        return self.sample(setpoint_times(self.duration, period))
+        return self.sample(setpoint_times(self.duration, period, max_samples))
 
     @property
     def peak_speed(self) -> float:

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from .._sampling import MAX_SAMPLES
 from .._validate import check_positive
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
@@ -171,9 +172,11 @@ class SaddlePlan:
         """
         return axis_states(self.curve, self.feed_plan.sample(t, points=False))
 
-    def setpoints(self, period: float) -> tuple[FeedSample, np.ndarray]:
-        """Fixed-period setpoints: the feed samples and the axis states (2, 4, n)."""
-        fs = self.feed_plan.sample(setpoint_times(self.duration, period))
+    def setpoints(self, period: float,
+                  max_samples: int | None = MAX_SAMPLES) -> tuple[FeedSample, np.ndarray]:
+        """Fixed-period setpoints: the feed samples and the axis states (2, 4, n);
+        at most ``max_samples`` (see :func:`~trajkit.interpolation.setpoint_times`)."""
+        fs = self.feed_plan.sample(setpoint_times(self.duration, period, max_samples))
         return fs, axis_states(self.curve, fs)
 
     def report(self) -> list[dict]:

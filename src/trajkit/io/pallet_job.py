@@ -34,7 +34,6 @@ from pathlib import Path
 from typing import Any, Literal, Optional
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from ..errors import InvalidInputError
@@ -42,12 +41,21 @@ from ..kinematics.palletizer import DEFAULT_JOINT_TABLE, JOINT_NAMES, Cylindrica
 from ..palletizing.cell import Cell, GripperVolume, Obstacle
 from ..palletizing.patterns import BoxSize, LayerPattern, StackPattern, make_pattern
 from ..palletizing.scenario import PalletScenario
+from .document import plain, read_document
+from .schema import Angle_deg, Coordinate_mm, Count, Length_mm, LimitValue, PositiveLength_mm, Time_s, validation_message
 
 __all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "seed_cell_job_path",
            "parse_job"]
 
 _MM = 1e-3
 _DEG = math.pi / 180.0
+
+
+#: Most layers in a job.
+MAX_LAYERS = 1000
+
+#: Most boxes in a custom layer.
+MAX_BOXES_PER_LAYER = 10000
 
 
 class _Model(BaseModel):
@@ -57,13 +65,13 @@ class _Model(BaseModel):
 class JointSpec(_Model):
     """One joint's limits in deg (A, D) or mm (B, C) units."""
 
-    v_max: float = Field(gt=0, allow_inf_nan=False)
-    a_max: float = Field(gt=0, allow_inf_nan=False)
-    j_max: float = Field(gt=0, allow_inf_nan=False)
-    min: float = Field(allow_inf_nan=False)
-    max: float = Field(allow_inf_nan=False)
-    a_max_decel: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
-    j_max_decel: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
+    v_max: LimitValue
+    a_max: LimitValue
+    j_max: LimitValue
+    min: Coordinate_mm
+    max: Coordinate_mm
+    a_max_decel: Optional[LimitValue] = None
+    j_max_decel: Optional[LimitValue] = None
 
 
 class RobotSpec(_Model):
@@ -74,90 +82,80 @@ class RobotSpec(_Model):
 
 
 class PickSpec(_Model):
-    x_mm: float = Field(allow_inf_nan=False)
-    y_mm: float = Field(allow_inf_nan=False)
-    z_mm: float = Field(allow_inf_nan=False)
-    yaw_deg: float = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Coordinate_mm
+    y_mm: Coordinate_mm
+    z_mm: Coordinate_mm
+    yaw_deg: Angle_deg = 0.0
 
 
 class PalletSpec(_Model):
-    centre_mm: tuple[float, float, float]
-    length_mm: float = Field(gt=0, allow_inf_nan=False)
-    width_mm: float = Field(gt=0, allow_inf_nan=False)
-    overhang_mm: float = Field(default=0.0, ge=0, allow_inf_nan=False)
-
-    @field_validator("centre_mm")
-    @classmethod
-    def _finite(cls, v):
-        if not all(math.isfinite(x) for x in v):
-            raise ValueError("must be finite numbers")
-        return v
+    centre_mm: tuple[Coordinate_mm, Coordinate_mm, Coordinate_mm]
+    length_mm: PositiveLength_mm
+    width_mm: PositiveLength_mm
+    overhang_mm: Length_mm = 0.0
 
 
 class BoxSpec(_Model):
-    length_mm: float = Field(gt=0, allow_inf_nan=False)
-    width_mm: float = Field(gt=0, allow_inf_nan=False)
-    height_mm: float = Field(gt=0, allow_inf_nan=False)
+    length_mm: PositiveLength_mm
+    width_mm: PositiveLength_mm
+    height_mm: PositiveLength_mm
 
 
 class BoxPlace(_Model):
     """A box of a custom layer: centre offset from the pallet centre and yaw."""
 
-    x_mm: float = Field(allow_inf_nan=False)
-    y_mm: float = Field(allow_inf_nan=False)
-    yaw_deg: float = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Coordinate_mm
+    y_mm: Coordinate_mm
+    yaw_deg: Angle_deg = 0.0
 
 
 class PatternSpec(_Model):
     name: Literal["seed", "column", "interlock", "pinwheel", "custom"] = "interlock"
     alternate: Literal["none", "rotate180", "mirror"] = "rotate180"
-    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1)
+    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1, max_length=MAX_BOXES_PER_LAYER)
 
 
 class GripperSpec(_Model):
-    grip_s: float = Field(default=0.0, ge=0, allow_inf_nan=False)
-    release_s: float = Field(default=0.0, ge=0, allow_inf_nan=False)
+    grip_s: Time_s = 0.0
+    release_s: Time_s = 0.0
 
 
-def _interval(v, what: str):
-    lo, hi = v
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise ValueError(f"{what} must be finite numbers")
-    if not hi > lo:
-        raise ValueError(f"{what} [min, max] needs max > min")
-    return v
+#: Most obstacles in a cell.
+MAX_OBSTACLES = 1000
 
 
 class ObstacleSpec(_Model):
     """A static obstacle: an axis-aligned box ``[x] x [y] x [z]`` in mm (robot base frame)."""
 
     name: str = "obstacle"
-    x_mm: tuple[float, float]
-    y_mm: tuple[float, float]
-    z_mm: tuple[float, float]
+    x_mm: tuple[Coordinate_mm, Coordinate_mm]
+    y_mm: tuple[Coordinate_mm, Coordinate_mm]
+    z_mm: tuple[Coordinate_mm, Coordinate_mm]
 
     @field_validator("x_mm", "y_mm", "z_mm")
     @classmethod
-    def _iv(cls, v):
-        return _interval(v, "an interval")
+    def _interval(cls, v):
+        if not v[1] > v[0]:
+            raise ValueError("an interval [min, max] needs max > min")
+        return v
 
 
 class GripperVolumeSpec(_Model):
     """The gripper above the gripper point; length/width default to the box's."""
 
-    height_mm: float = Field(default=100.0, gt=0, allow_inf_nan=False)
-    length_mm: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
-    width_mm: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
+    height_mm: PositiveLength_mm = 100.0
+    length_mm: Optional[PositiveLength_mm] = None
+    width_mm: Optional[PositiveLength_mm] = None
 
 
 class CellSpec(_Model):
     """The cell around the robot (obstacles, gripper volume, clearance, settle height)."""
 
-    clearance_mm: float = Field(default=10.0, ge=0, allow_inf_nan=False)
-    settle_mm: float = Field(default=20.0, ge=0, allow_inf_nan=False)
+    clearance_mm: Length_mm = 10.0
+    settle_mm: Length_mm = 20.0
     box_at_pick: bool = True
     gripper: GripperVolumeSpec = Field(default_factory=GripperVolumeSpec)
-    obstacles: list[ObstacleSpec] = Field(default_factory=list, max_length=1000)
+    obstacles: list[ObstacleSpec] = Field(default_factory=list, max_length=MAX_OBSTACLES)
 
 
 class PalletJob(_Model):
@@ -169,9 +167,9 @@ class PalletJob(_Model):
     pallet: PalletSpec
     box: BoxSpec
     pattern: PatternSpec = Field(default_factory=PatternSpec)
-    layers: int = Field(ge=1)
-    lift_mm: float = Field(default=400.0, ge=0, allow_inf_nan=False)
-    approach_mm: float = Field(default=200.0, ge=0, allow_inf_nan=False)
+    layers: Count = Field(ge=1, le=MAX_LAYERS)
+    lift_mm: Length_mm = 400.0
+    approach_mm: Length_mm = 200.0
     gripper: GripperSpec = Field(default_factory=GripperSpec)
     cell: Optional[CellSpec] = None
 
@@ -191,15 +189,6 @@ def cell_from_spec(spec: CellSpec) -> Cell:
     )
 
 
-def _fmt_error(err: ValidationError, source: str) -> str:
-    e = err.errors()[0]
-    loc = ".".join(str(x) for x in e["loc"]) or "(top level)"
-    val = e.get("input")
-    shown = "" if isinstance(val, dict) else f" (got {val!r})"
-    more = f" [+{err.error_count() - 1} more]" if err.error_count() > 1 else ""
-    return f"{source}: field {loc}: {e['msg']}{shown}{more}"
-
-
 def parse_job(data: Any, source: str = "job") -> PalletJob:
     """Validate a mapping (e.g. loaded YAML) as a :class:`PalletJob`.
 
@@ -213,7 +202,7 @@ def parse_job(data: Any, source: str = "job") -> PalletJob:
     try:
         return PalletJob.model_validate(data)
     except ValidationError as exc:
-        raise InvalidInputError(_fmt_error(exc, source)) from None
+        raise InvalidInputError(f"{source}: {validation_message(exc)}") from None
 
 
 def scenario_from_job(job: PalletJob | dict, source: str = "job") -> PalletScenario:
@@ -290,13 +279,7 @@ def load_job(path: str | os.PathLike) -> PalletScenario:
         A place outside the robot's reach.
     """
     p = Path(path)
-    text = p.read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise InvalidInputError(f"{p}: not valid YAML{where}: {getattr(exc, 'problem', exc)}") from None
+    data = plain(read_document(p))
     return scenario_from_job(parse_job(data, str(p)), str(p))
 
 

@@ -32,6 +32,7 @@ from scipy.special import roots_legendre
 from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError
 from ._tolerances import (
+    MAX_COORDINATE,
     ARC_INVERSION_MAX_ITER,
     ARC_INVERSION_RTOL,
     GAUSS_ORDER,
@@ -39,7 +40,7 @@ from ._tolerances import (
     SADDLE_LENGTH_RTOL,
     THETA_RANGE_ATOL,
 )
-from .base import Path
+from .base import Path, check_size
 
 __all__ = ["SaddleCurve"]
 
@@ -97,10 +98,13 @@ class SaddleCurve(Path):
         offset: float = 0.0,
         theta_start: float = 0.0,
     ) -> None:
-        R = check_positive(main_radius, "main pipe radius R")
-        r = check_positive(branch_radius, "branch pipe radius r")
+        R = check_size(check_positive(main_radius, "main pipe radius R"), "main pipe radius R")
+        r = check_size(check_positive(branch_radius, "branch pipe radius r"), "branch pipe radius r")
         a = check_finite(angle, "branch angle")
         d = check_finite(offset, "branch offset")
+        if abs(d) > MAX_COORDINATE:
+            raise InvalidInputError(f"branch offset {d:.6g} m is outside the supported range "
+                                    f"+-{MAX_COORDINATE:g} m")
         th0 = check_finite(theta_start, "theta_start")
         if not 0.0 < a < math.pi:
             raise InvalidInputError(

@@ -5,8 +5,9 @@
 :mod:`trajkit.profiles.batch` otherwise. The kernel is not a second
 implementation: the source of :mod:`trajkit.profiles._scalar` is compiled
 as it is (same operations in the same order, IEEE arithmetic without
-fast-math), so each move agrees with :func:`trajkit.plan_move` bit for bit;
-the tests check that on random and boundary cases.
+fast-math). Its transcendental functions (``cbrt``, ``pow``) come from LLVM
+rather than the C library, so each move agrees with :func:`trajkit.plan_move`
+to a few ulps; the tests check that on random and boundary cases.
 """
 
 from __future__ import annotations
