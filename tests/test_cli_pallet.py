@@ -141,7 +141,7 @@ def test_cell_job_table(cell_job, capsys):
     (["--csv", "x.csv"], "--csv needs --period DT"),
     (["--csv", "x.csv", "--period", "0"], "--period must be a finite time > 0 s, got 0.0"),
     (["--csv", "x.csv", "--period", "abc"], "--period must be a number, got 'abc'"),
-    (["--csv", "/nonexistent/dir/x.csv", "--period", "0.1"], "directory '/nonexistent/dir' does not exist"),
+    (["--csv", "/nonexistent/dir/x.csv", "--period", "0.1"], "folder /nonexistent/dir does not exist"),
     (["--csv", "x.csv", "--period", "1e-9"], "more than the 10000000 allowed"),
     (["--planner", "cell"], "the 'cell' planner needs a cell"),
 ])

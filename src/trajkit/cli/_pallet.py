@@ -163,9 +163,9 @@ def _csv_period(args: argparse.Namespace) -> float | None:
         raise InvalidInputError(f"--period must be a number, got {args.period!r}") from None
     if not (math.isfinite(dt) and dt > 0.0):
         raise InvalidInputError(f"--period must be a finite time > 0 s, got {dt!r}")
-    folder = os.path.dirname(os.path.abspath(args.csv))
-    if not os.path.isdir(folder):
-        raise InvalidInputError(f"--csv {args.csv!r}: directory {folder!r} does not exist")
+    from .._atomicio import check_target
+
+    check_target(args.csv, "--csv")  # the folder exists and the file is not a folder
     return dt
 
 
