@@ -95,7 +95,7 @@ from ..limits import AxisLimits
 from ..profiles import plan_move
 from ..profiles.state import min_state_duration, plan_state_to_state
 from ..trajectory import plan_ptp
-from ._crossing import clearance_crossings, position_peak
+from ._crossing import _solve_phase, clearance_crossings, position_peak
 from .cell import Prisms, footprint_distances, required_height, stack_prisms, volume_floors
 from .optimal import _best_turn, _phases_of, _reverse, _trip_profile, full_throttle_phases
 from .planners import HORIZONTAL_JOINTS, CyclePlan, TripPlan, _assemble, register_planner
@@ -117,14 +117,14 @@ PLANNER_NAME = "cell"
 SYNC_MODES = ("time", "phase")
 
 #: Grid step of the block's time for the order search [s].
-SEARCH_STEP = 2e-3
+SEARCH_STEP = 4e-3
 
 #: Grid step of the block's time for the final plan of each trip [s].
 PLAN_STEP = 5e-4
 
 #: Finer grid step [s] within :data:`FINE_SPAN` of the block's ends, where
 #: the volume leaves or reaches obstacles it touches (or nearly touches).
-FINE_STEP = 5e-5
+FINE_STEP = 1e-4
 
 #: Length [s] of the finely gridded stretches at the block's ends.
 FINE_SPAN = 0.06
@@ -265,7 +265,12 @@ class _Rise:
         hi_f = np.where(last, 1.0, hi)
         t = np.where(last, tl, 0.5 * hi_f)
         fin = ~last
-        if fin.any():
+        if fin.any() and np.count_nonzero(fin) <= _SCALAR_MAX:
+            # few heights: the scalar safeguarded Newton solve is cheaper
+            for k in np.flatnonzero(fin):
+                t[k] = _solve_phase(0.0, float(V[k]), float(A[k]), float(J[k]), float(d[k]),
+                                    float(hi_f[k]), 1.0)
+        elif fin.any():
             if self._table is None:
                 ts = np.linspace(0.0, float(self.tb[-1]), _TABLE_SIZE)
                 self._table = (self.state(ts)[0], ts)
@@ -323,6 +328,9 @@ _NEWTON_ITER = 60
 
 #: Points of the table that gives Newton its first guess.
 _TABLE_SIZE = 1025
+
+#: Up to this many heights are solved one by one (no table, no array passes).
+_SCALAR_MAX = 48
 
 
 def _throttle(limits: AxisLimits, leg: str, z0: float) -> _Rise:
@@ -677,7 +685,7 @@ class _BSearch:
 PEAK_TURNS = (1.0, 0.5)
 
 #: Absolute tolerance [m] of the search for the lowest feasible peak.
-PEAK_XTOL = 5e-5
+PEAK_XTOL = 1e-4
 
 
 def _peak(srch: "_BSearch", zp: float, ap: float, check: bool = True):
