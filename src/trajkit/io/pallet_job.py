@@ -14,6 +14,15 @@ Example::
     box: {length_mm: 600, width_mm: 400, height_mm: 200}
     pattern: {name: interlock, alternate: rotate180}
     layers: 5
+    cell:                        # optional: the cell's geometry (the ``cell`` planner)
+      clearance_mm: 10
+      settle_mm: 20
+      gripper: {height_mm: 100}  # footprint: the box's unless length_mm/width_mm are given
+      obstacles:
+        - {name: conveyor belt, x_mm: [600, 1500], y_mm: [-300, 300], z_mm: [0, 200]}
+
+The seed scenario in its cell ships as ``trajkit/data/seed_cell.yaml``
+(:func:`seed_cell_job_path`).
 """
 
 from __future__ import annotations
@@ -25,16 +34,18 @@ from pathlib import Path
 from typing import Any, Literal, Optional
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from ..errors import InvalidInputError
 from ..kinematics.palletizer import DEFAULT_JOINT_TABLE, JOINT_NAMES, CylindricalPalletizer
+from ..palletizing.cell import Cell, GripperVolume, Obstacle
 from ..palletizing.patterns import BoxSize, LayerPattern, StackPattern, make_pattern
 from ..palletizing.scenario import PalletScenario
 from .document import plain, read_document
 from .schema import Angle_deg, Coordinate_mm, Count, Length_mm, LimitValue, PositiveLength_mm, Time_s, validation_message
 
-__all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "parse_job"]
+__all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "seed_cell_job_path",
+           "parse_job"]
 
 _MM = 1e-3
 _DEG = math.pi / 180.0
@@ -109,6 +120,44 @@ class GripperSpec(_Model):
     release_s: Time_s = 0.0
 
 
+#: Most obstacles in a cell.
+MAX_OBSTACLES = 1000
+
+
+class ObstacleSpec(_Model):
+    """A static obstacle: an axis-aligned box ``[x] x [y] x [z]`` in mm (robot base frame)."""
+
+    name: str = "obstacle"
+    x_mm: tuple[Coordinate_mm, Coordinate_mm]
+    y_mm: tuple[Coordinate_mm, Coordinate_mm]
+    z_mm: tuple[Coordinate_mm, Coordinate_mm]
+
+    @field_validator("x_mm", "y_mm", "z_mm")
+    @classmethod
+    def _interval(cls, v):
+        if not v[1] > v[0]:
+            raise ValueError("an interval [min, max] needs max > min")
+        return v
+
+
+class GripperVolumeSpec(_Model):
+    """The gripper above the gripper point; length/width default to the box's."""
+
+    height_mm: PositiveLength_mm = 100.0
+    length_mm: Optional[PositiveLength_mm] = None
+    width_mm: Optional[PositiveLength_mm] = None
+
+
+class CellSpec(_Model):
+    """The cell around the robot (obstacles, gripper volume, clearance, settle height)."""
+
+    clearance_mm: Length_mm = 10.0
+    settle_mm: Length_mm = 20.0
+    box_at_pick: bool = True
+    gripper: GripperVolumeSpec = Field(default_factory=GripperVolumeSpec)
+    obstacles: list[ObstacleSpec] = Field(default_factory=list, max_length=MAX_OBSTACLES)
+
+
 class PalletJob(_Model):
     """A palletizing job (the schema of a job file; mm and deg)."""
 
@@ -122,6 +171,22 @@ class PalletJob(_Model):
     lift_mm: Length_mm = 400.0
     approach_mm: Length_mm = 200.0
     gripper: GripperSpec = Field(default_factory=GripperSpec)
+    cell: Optional[CellSpec] = None
+
+
+def cell_from_spec(spec: CellSpec) -> Cell:
+    """The SI :class:`~trajkit.palletizing.cell.Cell` of a job's ``cell`` section."""
+    g = spec.gripper
+    return Cell(
+        obstacles=tuple(Obstacle(tuple(v * _MM for v in o.x_mm), tuple(v * _MM for v in o.y_mm),
+                                 tuple(v * _MM for v in o.z_mm), o.name) for o in spec.obstacles),
+        gripper=GripperVolume(g.height_mm * _MM,
+                              None if g.length_mm is None else g.length_mm * _MM,
+                              None if g.width_mm is None else g.width_mm * _MM),
+        clearance=spec.clearance_mm * _MM,
+        settle=spec.settle_mm * _MM,
+        box_at_pick=spec.box_at_pick,
+    )
 
 
 def parse_job(data: Any, source: str = "job") -> PalletJob:
@@ -194,6 +259,7 @@ def scenario_from_job(job: PalletJob | dict, source: str = "job") -> PalletScena
             release_s=job.gripper.release_s,
             overhang=job.pallet.overhang_mm * _MM,
             name=job.name,
+            cell=None if job.cell is None else cell_from_spec(job.cell),
         )
     except InvalidInputError as exc:
         raise type(exc)(f"{source}: {exc}") from None
@@ -220,3 +286,9 @@ def load_job(path: str | os.PathLike) -> PalletScenario:
 def seed_job_path() -> Path:
     """Path of the shipped seed-scenario job file ``trajkit/data/seed_pallet.yaml``."""
     return Path(str(resources.files("trajkit") / "data" / "seed_pallet.yaml"))
+
+
+def seed_cell_job_path() -> Path:
+    """Path of the seed scenario in its cell, ``trajkit/data/seed_cell.yaml``
+    (conveyor, guides, end stop, pallet; 10 mm clearance, 20 mm settle)."""
+    return Path(str(resources.files("trajkit") / "data" / "seed_cell.yaml"))
