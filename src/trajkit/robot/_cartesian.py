@@ -25,6 +25,7 @@ from ..paths._tolerances import COINCIDENT_DIST
 from ..paths.arc import Arc3
 from ..paths.line import Line
 from ..timing import PathTiming, plan_path_timing
+from ..interpolation.feed import _binding_speed
 from ._jointpath import ChainJointPath
 from ._pieces import (
     BezierBlend,
@@ -547,9 +548,8 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
                and chain.pieces[k[j + 1]].motion == chain.pieces[k[i]].motion):
             j += 1
         seg = slice(i, j + 1)
-        # the speed where the limit binds (not on the ramps from and to rest)
-        binding = v[seg] >= 0.9 * cap[seg]
-        speed = float(v[seg][binding].min()) if binding.any() else float(v[seg].max())
+        # the planned speed where the limit binds and is lowest
+        speed = _binding_speed(v[seg], cap[seg])
         lengths = np.diff(s[i:j + 2]) if j + 1 < s.size else np.diff(s[i - 1:j + 1])
         names = [reason_at(n) for n in range(i, j + 1)]
         weight: dict[str, float] = {}

@@ -88,6 +88,8 @@ class GridProblem:
         the acceleration limit bounds the norm of ``(sddot, kappa sdot^2)``.
     kappa : ndarray, shape (n,), optional
         Curvature of the tool path at the nodes [1/path unit] (normal acceleration).
+    x_cap_mid : ndarray, shape (n - 1,), optional
+        Largest ``sdot^2`` at the middle of every interval (the path's speed cap there).
     x0, u0, xN, uN : float
         Boundary states (``sdot^2`` and ``sddot``).
     """
@@ -109,6 +111,7 @@ class GridProblem:
     xN: float = 0.0
     uN: float = 0.0
     kappa: np.ndarray | None = None
+    x_cap_mid: np.ndarray | None = None
 
 
 @dataclass
@@ -257,7 +260,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         j_dec=np.asarray(p.j_dec) * js, x_cap=p.x_cap * (T0 / L) ** 2,
         a_path=p.a_path * as_ / L, j_path=p.j_path * js / L,
         x0=p.x0 * (T0 / L) ** 2, u0=p.u0 * as_ / L, xN=p.xN * (T0 / L) ** 2, uN=p.uN * as_ / L,
-        kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L)
+        kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
+        x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
     sol = _solve_scaled(scaled, max_rounds, init_s)
     sol.x = sol.x * (L / T0) ** 2
@@ -401,6 +405,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         # the path's speed cap also in the middle of every interval (the speed
         # between nodes, not only at them): x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4
         capm = np.minimum(p.x_cap[:-1], p.x_cap[1:])
+        if p.x_cap_mid is not None:
+            capm = np.minimum(capm, p.x_cap_mid)
         cm = np.nonzero(np.isfinite(capm))[0]
         if cm.size:
             ineq.add([ix[cm], ix[cm + 1], iu[cm], iu[cm + 1]],

@@ -58,6 +58,12 @@ GRID_MAX = 1200
 #: misses the true one by more than this fraction of the limit it feeds.
 GRID_RTOL = 2e-3
 
+#: Samples of a speed-cap function searched for its steps.
+CAP_GRID = 4097
+
+#: A change of the speed cap between two samples that counts as a step (fraction).
+CAP_STEP = 0.01
+
 #: Refinement passes.
 GRID_PASSES = 6
 
@@ -81,7 +87,7 @@ SWING_SPLIT = 0.04
 JERK_MARGIN = 0.998
 
 #: Points checked inside every piece (besides its ends).
-CHECK_PER_PIECE = 6
+CHECK_PER_PIECE = 16
 
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
@@ -281,6 +287,27 @@ def _initial_grid(L: float, breaks: np.ndarray) -> np.ndarray:
     return pts[~near]
 
 
+def _mid_caps(s: np.ndarray, cap_fn, speed) -> np.ndarray:
+    """Squared speed cap at the middle of every grid interval (inf when the cap is a number)."""
+    if not callable(speed):
+        return np.full(s.size - 1, np.inf)
+    return cap_fn(0.5 * (s[:-1] + s[1:])) ** 2
+
+
+def _cap_edges(cap_fn, L: float) -> np.ndarray:
+    """Parameter values on both sides of every place where the speed cap changes by more
+    than CAP_STEP between neighbours of a CAP_GRID-point sampling (a dip of the cap then
+    always has nodes inside it)."""
+    g = np.linspace(0.0, L, CAP_GRID)
+    c = cap_fn(g)
+    fin = np.isfinite(c)
+    a, b = c[:-1], c[1:]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        jump = (fin[:-1] != fin[1:]) | (fin[:-1] & fin[1:] & (np.abs(b - a) > CAP_STEP * np.minimum(a, b)))
+    k = np.nonzero(jump)[0]
+    return np.unique(np.concatenate([g[k], g[k + 1]]))
+
+
 def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
     """Cubic Hermite value at ``sm`` from values f and slopes g at s0, s1 (broadcast over joints)."""
     h = (s1 - s0)[:, None]
@@ -407,7 +434,7 @@ def _uniform_scale(use: LimitUse) -> float:
 
 
 def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_path, j_path,
-           kappa=None, cap=None):
+           kappa=None, cap=None, cap_fn=None):
     """Limit use at every piece boundary and CHECK_PER_PIECE points inside each piece.
 
     Returns the LimitUse and, per sample, the grid cell and the joint ratios."""
@@ -443,8 +470,11 @@ def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_pat
     else:
         acc_norm = np.abs(A)
     if cap is not None:
-        # the cap between two nodes: the smaller of the two (a cap may step at a node)
+        # the cap between two nodes: the smaller of the two (a cap may step at a node),
+        # and the cap function itself at the sample when it is a function
         cp = np.minimum(cap[cell], cap[cell + 1])
+        if cap_fn is not None:
+            cp = np.minimum(cp, cap_fn(S))
         with np.errstate(divide="ignore", invalid="ignore"):
             rs = np.where(np.isfinite(cp), V / cp, 0.0)
         path_speed = float(rs.max(initial=0.0))
@@ -522,6 +552,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
     breaks = breaks[(breaks > 0.0) & (breaks < L)]
     s = _initial_grid(L, breaks)
+    if callable(speed):  # nodes on both sides of every step of the speed cap
+        s = np.unique(np.concatenate([s, _cap_edges(cap_fn, L)]))
     der = path.derivatives(s)
     alim = np.minimum(aacc, adec)
     jlim = np.minimum(jacc, jdec)
@@ -552,7 +584,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
                                    j_acc=jacc * JERK_MARGIN, j_dec=jdec * JERK_MARGIN,
                                    x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
-                                   kappa=kappa, x0=start_speed**2, u0=start_accel,
+                                   kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed), x0=start_speed**2, u0=start_accel,
                                    xN=end_speed**2, uN=end_accel))
     jerk_free_time = first.jerk_free_time
     init = (first.x, first.u)
@@ -575,12 +607,14 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         scale_j = np.ones((n, m))
     tightened = 0
     best = None
+    xmid_scale = np.ones(s.size - 1)
     for attempt in range(MAX_TIGHTEN + 1):
         prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                            a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                            j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
                            j_dec=jdec[None, :] * scale_j * JERK_MARGIN,
                            x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
+                           x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                            x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
         sol = first if (attempt == 0 and not add.size) else solve_grid(prob, init=init)
         try:
@@ -591,7 +625,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             break
         t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
         use, cell, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
-                                               a_path, j_path, kappa, cap)
+                                               a_path, j_path, kappa, cap,
+                                               cap_fn if callable(speed) else None)
         k = _uniform_scale(use)
         # a timing that needs no uniform slow-down keeps its exact cruise speeds:
         # preferred unless a slowed one is clearly faster
@@ -616,6 +651,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
             for node in (c, c + 1):
                 np.minimum.at(x_cap, node, f * x_cap[node])
+            np.minimum.at(xmid_scale, c, f * xmid_scale[c])
     assert best is not None
     _, sol, dur, jk, use, k_scale, piv = best
     if k_scale > 1.0:
@@ -626,7 +662,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         dur = dur * k_scale
         jk = jk / k_scale**3
     t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
-    use, *_ = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap)
+    use, *_ = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                     cap_fn if callable(speed) else None)
     return PathTiming(path=path, limits=lims, duration=float(t[-1]), t=t, state=st, jerk=jk,
                       grid=s, grid_speed=np.sqrt(sol.x) / k_scale, speed_cap=vcap, jerk_free_time=jerk_free_time,
                       time_scale=k_scale, limit_use=use, rounds=sol.rounds, grid_derivatives=der,
