@@ -351,6 +351,7 @@ class _Shifted:
         self.n_joints = base.n_joints
         bp = np.asarray(getattr(base, "breakpoints", np.zeros(0)), dtype=float)
         self.breakpoints = bp[(bp > s0) & (bp < s1)] - s0
+        self.cheap_derivatives = bool(getattr(base, "cheap_derivatives", False))
 
     def derivatives(self, s: np.ndarray):
         return self.base.derivatives(np.clip(self.s0 + np.asarray(s, dtype=float), self.s0,
@@ -359,6 +360,9 @@ class _Shifted:
 
 class _ArcLength:
     """The path parameter itself as the one joint (``q = s``): the tangential limits."""
+
+    #: Exact derivatives are cheap: the timing engine checks its limits with them.
+    cheap_derivatives = True
 
     def __init__(self, length: float) -> None:
         self.length = length

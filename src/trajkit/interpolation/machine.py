@@ -46,8 +46,8 @@ CHECK_MAX_POINTS = 200_000
 #: Replanning rounds when the verification finds an excess.
 MAX_ROUNDS = 8
 
-#: Extra margin when shrinking budgets after an excess.
-SHRINK_MARGIN = 0.999
+#: Extra margin when the axis limits are lowered after an excess.
+SHRINK_MARGIN = 1.0 - 1e-6
 
 #: Relative slack of the final limit check (floating-point round-off).
 CHECK_RTOL = 1e-9
@@ -213,6 +213,9 @@ def check_axes(plan_curve: SaddleCurve, feed_plan: FeedPlan, machine: SaddleMach
 class SaddleAxesPath:
     """The saddle machine's axes theta(s), Z(s) along the seam (a :class:`trajkit.timing.JointPath`)
     with exact derivatives (:meth:`SaddleCurve.machine_axes`)."""
+
+    #: Exact derivatives are cheap: the timing engine checks its limits with them.
+    cheap_derivatives = True
 
     def __init__(self, curve: SaddleCurve) -> None:
         self.curve = curve

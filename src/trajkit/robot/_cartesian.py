@@ -550,10 +550,12 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
         seg = slice(i, j + 1)
         # the planned speed where the limit binds and is lowest
         speed = _binding_speed(v[seg], cap[seg])
-        lengths = np.diff(s[i:j + 2]) if j + 1 < s.size else np.diff(s[i - 1:j + 1])
-        names = [reason_at(n) for n in range(i, j + 1)]
+        # the reason that holds over the longest part of the stretch
+        lo = np.concatenate([[s[i]], 0.5 * (s[i:j] + s[i + 1:j + 1])])
+        hi = np.concatenate([0.5 * (s[i:j] + s[i + 1:j + 1]), [s[j]]])
         weight: dict[str, float] = {}
-        for nm, ln in zip(names, lengths):
+        for n, ln in zip(range(i, j + 1), hi - lo):
+            nm = reason_at(n)
             weight[nm] = weight.get(nm, 0.0) + float(ln)
         reason = max(weight, key=weight.get)
         mi = chain.motion_ids[chain.pieces[k[i]].motion]

@@ -117,14 +117,18 @@ class ChainJointPath:
         pts = np.where(fwd[:, None], s[:, None] + hk[:, None] * (off + 3),
                        np.where(bwd[:, None], s[:, None] - hk[:, None] * (off + 3),
                                 s[:, None] + hk[:, None] * off))
+        # the point itself from the walked branch, then every stencil point seeded
+        # with it: a redundant arm's solutions then move with the pose only
+        centre = np.where(fwd | bwd, 0, 3)
+        c_pts = pts[np.arange(n), centre]
+        q_c = self.ik(c_pts, k, self.seeds(c_pts))
         kk = np.repeat(k, 7)
         flat = pts.ravel()
-        seeds = self.seeds(np.clip(flat, 0.0, self.length))
+        seeds = np.repeat(q_c, 7, axis=0)
         q_all = self.ik(flat, kk, seeds).reshape(n, 7, m)
         q = np.empty((n, m))
         d = [np.empty((n, m)) for _ in range(3)]
-        centre_idx = np.where(fwd | bwd, 0, 3)
-        q[:] = q_all[np.arange(n), centre_idx]
+        q[:] = q_all[np.arange(n), centre]
         for order in range(3):
             wc = _CENTRAL[order]
             wf = _FORWARD[order]

@@ -48,7 +48,7 @@ import scipy.sparse as sp
 __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 
 #: Stop when a round changes the time by less than this fraction.
-ROUND_RTOL = 1e-4
+ROUND_RTOL = 5e-4
 
 #: Most rounds (the first is jerk-free).
 MAX_ROUNDS = 10
@@ -61,6 +61,15 @@ PRIMAL_RTOL = 1e-7
 
 #: The cones are scaled by the previous round's x, but not below this fraction of its largest.
 SCALE_FLOOR = 1e-9
+
+#: Screening: an inequality (normalised to coefficients <= 1) whose slack at the
+#: previous round's solution is above this is left out of the next round ...
+SCREEN_SLACK = 0.3
+
+#: ... unless the new solution violates it by more than this; then the round is
+#: solved again with it (at most SCREEN_ROUNDS times).
+SCREEN_TOL = 1e-9
+SCREEN_ROUNDS = 3
 
 #: Node speeds^2 below this fraction of the largest are treated as zero in the
 #: tangent planes (guards a division near a stop in the path's interior).
@@ -303,6 +312,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         xv = np.min(np.where(np.abs(d1) > 0, (vmax / np.abs(d1)) ** 2, np.inf), axis=1)
     xv = np.minimum(xv, p.x_cap)
     inner = np.arange(1, N)  # nodes whose state is free
+    d1_mid = 0.5 * (d1[:-1] + d1[1:]) + 0.125 * D[:, None] * (d2[:-1] - d2[1:])
+    with np.errstate(divide="ignore"):
+        xv_mid = np.min(np.where(np.abs(d1_mid) > 0,
+                                 (np.minimum(vmax[:-1], vmax[1:]) / np.abs(d1_mid)) ** 2, np.inf), axis=1)
 
     # objective: interval time D / mean speed (the rest intervals' constant-jerk phase: 1.5x)
     q = np.zeros(nv)
@@ -375,6 +388,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         return sg, rh, ta * ta, (uu[:-1] - uu[1:]) * ta / 12.0
 
     jerk_rounds = 0
+    z_prev = None
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
         sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
@@ -402,6 +416,14 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
 
         ineq = _Rows(nv)
         ineq.add([ix[inner]], [np.ones(inner.size)], xv[inner])
+        # joint velocities in the middle of every interval too (x_mid as for the cap below;
+        # q' there from its cubic Hermite interpolation)
+        ivm = np.isfinite(xv_mid)
+        if ivm.any():
+            im = np.nonzero(ivm)[0]
+            ineq.add([ix[im], ix[im + 1], iu[im], iu[im + 1]],
+                     [0.5 * np.ones(im.size), 0.5 * np.ones(im.size), 0.25 * D[im], -0.25 * D[im]],
+                     xv_mid[im])
         # the path's speed cap also in the middle of every interval (the speed
         # between nodes, not only at them): x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4
         capm = np.minimum(p.x_cap[:-1], p.x_cap[1:])
@@ -470,18 +492,34 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         nonneg.add([both], [-np.ones(both.size)], np.zeros(both.size))
 
         A_eq, b_eq = eq.matrix()
-        A_in, b_in = ineq.matrix(normalise=True)
+        A_in_all, b_in_all = ineq.matrix(normalise=True)
         A_nn, b_nn = nonneg.matrix()
-        A = sp.vstack([A_eq, A_in, A_nn, cone_matrix(sigma, rho), A_acc]).tocsc()
-        b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
-        cones = [clarabel.ZeroConeT(A_eq.shape[0]), clarabel.NonnegativeConeT(A_in.shape[0] + A_nn.shape[0])]
-        cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
-        settings = clarabel.DefaultSettings()
-        settings.verbose = False
-        settings.tol_gap_abs = SOLVER_TOL
-        settings.tol_gap_rel = SOLVER_TOL
-        settings.tol_feas = SOLVER_TOL
-        sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
+        A_cn = cone_matrix(sigma, rho)
+        # screening: rows with a wide margin at the previous round's solution are
+        # left out; rows the new solution violates are put back and it is solved again
+        if z_prev is not None:
+            keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK
+        else:
+            keep = np.ones(b_in_all.size, dtype=bool)
+        for _screen in range(SCREEN_ROUNDS + 1):
+            A_in, b_in = A_in_all[keep], b_in_all[keep]
+            A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc]).tocsc()
+            b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
+            cones = [clarabel.ZeroConeT(A_eq.shape[0]),
+                     clarabel.NonnegativeConeT(A_in.shape[0] + A_nn.shape[0])]
+            cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
+            settings = clarabel.DefaultSettings()
+            settings.verbose = False
+            settings.tol_gap_abs = SOLVER_TOL
+            settings.tol_gap_rel = SOLVER_TOL
+            settings.tol_feas = SOLVER_TOL
+            sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
+            if keep.all():
+                break
+            viol = (A_in_all @ np.asarray(sol.x) - b_in_all) > SCREEN_TOL
+            if not (viol & ~keep).any():
+                break
+            keep |= viol
         status = str(sol.status).split(".")[-1]
         times_status.append(status)
         usable = status in ("Solved", "AlmostSolved") or (
@@ -491,6 +529,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                 raise RuntimeError(f"path timing: the jerk-free grid problem failed ({status})")
             break  # keep the previous round's solution
         z = np.asarray(sol.x)
+        z_prev = z
         x = np.maximum(z[ix], 0.0)
         u = z[iu].copy()
         x[0], u[0], x[N], u[N] = p.x0, p.u0, p.xN, p.uN

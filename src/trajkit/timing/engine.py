@@ -58,6 +58,10 @@ GRID_MAX = 1200
 #: misses the true one by more than this fraction of the limit it feeds.
 GRID_RTOL = 2e-3
 
+#: The same for a path whose derivatives are cheap to evaluate exactly
+#: (``cheap_derivatives``): the limit check uses the exact ones.
+GRID_RTOL_CHEAP = 2e-2
+
 #: Samples of a speed-cap function searched for its steps.
 CAP_GRID = 4097
 
@@ -77,6 +81,10 @@ BREAK_TWIN = 1e-3
 #: The first of them, as a fraction of the regular spacing.
 END_FIRST = 0.02
 
+#: Rounds of the first solve (it only finds where the jerk phases are and
+#: where the second solve starts from).
+FIRST_ROUNDS = 3
+
 #: After the first solve, an interval whose path acceleration changes by more
 #: than this fraction of the acceleration's range is split (in 2 to 4).
 SWING_SPLIT = 0.04
@@ -88,6 +96,9 @@ JERK_MARGIN = 0.998
 
 #: Points checked inside every piece (besides its ends).
 CHECK_PER_PIECE = 16
+
+#: Points checked inside every piece by the final check of the chosen timing.
+FINAL_CHECK_PER_PIECE = 64
 
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
@@ -320,7 +331,7 @@ def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
 
 
 def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
-            breaks: np.ndarray = np.zeros(0)) -> tuple:
+            breaks: np.ndarray = np.zeros(0), rtol: float = GRID_RTOL) -> tuple:
     for _ in range(GRID_PASSES):
         if s.size >= GRID_MAX:
             break
@@ -338,7 +349,7 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         e1 = np.max(np.abs(i1 - m1) * vcap[:, None] / vlim, axis=1)
         e2 = np.max(np.abs(i2 - m2) * (vcap**2)[:, None] / alim, axis=1)
         e3 = np.max(np.abs(i3 - m3) * (vcap**3)[:, None] / jlim, axis=1)
-        split = np.maximum(np.maximum(e1, e2), e3) > GRID_RTOL
+        split = np.maximum(np.maximum(e1, e2), e3) > rtol
         split &= ~np.isin(s[1:], breaks)  # the twin interval before a breakpoint stays whole
         if not split.any():
             break
@@ -434,12 +445,13 @@ def _uniform_scale(use: LimitUse) -> float:
 
 
 def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_path, j_path,
-           kappa=None, cap=None, cap_fn=None):
+           kappa=None, cap=None, cap_fn=None, path=None, per_piece=None):
     """Limit use at every piece boundary and CHECK_PER_PIECE points inside each piece.
 
     Returns the LimitUse and, per sample, the grid cell and the joint ratios."""
     k = jerk.size
-    frac = np.linspace(0.0, 1.0, CHECK_PER_PIECE + 2)[:-1]
+    # both ends of every piece with its own jerk (the jerk steps at a boundary)
+    frac = np.linspace(0.0, 1.0, (per_piece or CHECK_PER_PIECE) + 2)
     dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
     piece = np.repeat(np.arange(k), frac.size)
     p0, v0, a0, jk = st[piece, 0], st[piece, 1], st[piece, 2], jerk[piece]
@@ -453,7 +465,10 @@ def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_pat
     jk = np.append(jk, jerk[-1] if k else 0.0)
     S = np.clip(S, s_grid[0], s_grid[-1])
     cell = np.clip(np.searchsorted(s_grid, S, side="right") - 1, 0, s_grid.size - 2)
-    f1, f2, f3 = _interp_derivatives(s_grid, der, S)
+    if path is not None:  # a path whose derivatives are cheap: the exact ones
+        _, f1, f2, f3 = path.derivatives(S)
+    else:
+        f1, f2, f3 = _interp_derivatives(s_grid, der, S)
     w = ((S - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell]))[:, None]
     qd = f1 * V[:, None]
     qdd = f2 * (V * V)[:, None] + f1 * A[:, None]
@@ -557,7 +572,12 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     der = path.derivatives(s)
     alim = np.minimum(aacc, adec)
     jlim = np.minimum(jacc, jdec)
-    s, der = _refine(path, s, der, vlim, alim, jlim, cap_fn, breaks)
+    # a path with cheap exact derivatives is checked with them: its grid only
+    # needs to resolve the motion, not to interpolate the derivatives exactly
+    cheap = bool(getattr(path, "cheap_derivatives", False))
+    exact = path if cheap else None
+    s, der = _refine(path, s, der, vlim, alim, jlim, cap_fn, breaks,
+                     GRID_RTOL_CHEAP if cheap else GRID_RTOL)
     q, d1, d2, d3 = der
     if not (np.isfinite(d1).all() and np.isfinite(d2).all() and np.isfinite(d3).all()):
         raise InfeasibleError("the joint path has no finite derivative somewhere (a singularity)")
@@ -584,8 +604,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
                                    j_acc=jacc * JERK_MARGIN, j_dec=jdec * JERK_MARGIN,
                                    x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
-                                   kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed), x0=start_speed**2, u0=start_accel,
-                                   xN=end_speed**2, uN=end_accel))
+                                   kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
+                                   x0=start_speed**2, u0=start_accel,
+                                   xN=end_speed**2, uN=end_accel), max_rounds=FIRST_ROUNDS)
     jerk_free_time = first.jerk_free_time
     init = (first.x, first.u)
     add = _solution_splits(s, first.x, first.u)
@@ -626,7 +647,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
         use, cell, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
                                                a_path, j_path, kappa, cap,
-                                               cap_fn if callable(speed) else None)
+                                               cap_fn if callable(speed) else None, exact)
         k = _uniform_scale(use)
         # a timing that needs no uniform slow-down keeps its exact cruise speeds:
         # preferred unless a slowed one is clearly faster
@@ -653,17 +674,22 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 np.minimum.at(x_cap, node, f * x_cap[node])
             np.minimum.at(xmid_scale, c, f * xmid_scale[c])
     assert best is not None
-    _, sol, dur, jk, use, k_scale, piv = best
-    if k_scale > 1.0:
-        if not (rest0 and restN):
+    _, sol, dur0, jk0, use, k_scale, piv = best
+    for _final in range(2):
+        if k_scale > 1.0 and not (rest0 and restN):
             raise InfeasibleError(
                 f"the timing exceeds a limit by {100 * (use.worst - 1):.3g} % and cannot be slowed "
                 "down uniformly with a moving boundary state")
-        dur = dur * k_scale
-        jk = jk / k_scale**3
-    t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
-    use, *_ = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                     cap_fn if callable(speed) else None)
+        dur = dur0 * k_scale
+        jk = jk0 / k_scale**3
+        t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
+        # the final check, denser than the rounds' (any excess left: a uniform slow-down)
+        use, *_ = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa,
+                         cap, cap_fn if callable(speed) else None, exact, FINAL_CHECK_PER_PIECE)
+        extra = _uniform_scale(use)
+        if extra <= 1.0:
+            break
+        k_scale *= extra
     return PathTiming(path=path, limits=lims, duration=float(t[-1]), t=t, state=st, jerk=jk,
                       grid=s, grid_speed=np.sqrt(sol.x) / k_scale, speed_cap=vcap, jerk_free_time=jerk_free_time,
                       time_scale=k_scale, limit_use=use, rounds=sol.rounds, grid_derivatives=der,

@@ -30,6 +30,10 @@ class JointPath(Protocol):
     breakpoints : ndarray
         Parameter values where the path's pieces meet (grid nodes are put
         there); may be empty.
+    cheap_derivatives : bool, optional
+        True when :meth:`derivatives` is cheap (analytic): the engine then
+        checks its limits with the exact derivatives at every check point
+        instead of their interpolation on the grid.
     """
 
     length: float
@@ -68,6 +72,9 @@ class LinearJointPath:
     length : float, optional
         Length of the parameter range; default the Euclidean joint distance.
     """
+
+    #: Exact derivatives are cheap: the timing engine checks its limits with them.
+    cheap_derivatives = True
 
     def __init__(self, start: Any, goal: Any, length: float | None = None) -> None:
         a = check_array(start, "start", ndim=1)
