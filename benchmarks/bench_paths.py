@@ -94,7 +94,7 @@ def arm_suite(name: str):
     out.append(("LIN 0.16 m short", q0, [lin(at([0.0, 0.15, 0.05]))], None))
     out.append(("LIN with 90 + 30 deg turn", q0, [lin(at([0.05, 0.25, 0.0], rot_z(math.pi / 2) @ rot_x(math.pi / 6)))], None))
     radial = pos * np.array([1.0, 1.0, 0.0])
-    out.append(("LIN radial toward reach", q0, [lin(at(0.25 * radial / np.linalg.norm(radial)))], None))
+    out.append(("LIN radial toward reach", q0, [lin(at(0.12 * radial / np.linalg.norm(radial)))], None))
     out.append(("CIRC half circle", q0, [Circ(CartesianTarget(at([0.15, 0.15, 0.0])),
                                              CartesianTarget(at([0.0, 0.3, 0.0])), v, label="C")], None))
     out.append(("LIN-LIN-LIN, 30 mm zones", q0, [lin(at([0.0, 0.2, 0.0]), 0.03),

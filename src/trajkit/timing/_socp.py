@@ -480,7 +480,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                 if not flag:
                     continue
                 qa = np.maximum(np.abs(d1[node]), np.abs(d1[0 if node == 1 else N]))
-                jl = np.where(qa > 0, j_both[node], np.inf)
+                # from rest the joints speed up (accel leg), to rest they slow down
+                jl = np.where(qa > 0, (j_acc if node == 1 else j_dec)[node], np.inf)
                 with np.errstate(divide="ignore"):
                     ub = float(np.min((6.0 * dd) ** (1.0 / 3.0) * (jl / qa) ** (2.0 / 3.0)))
                 if math.isfinite(p.j_path):

@@ -87,7 +87,7 @@ FIRST_ROUNDS = 3
 
 #: After the first solve, an interval whose path acceleration changes by more
 #: than this fraction of the acceleration's range is split (in 2 to 4).
-SWING_SPLIT = 0.04
+SWING_SPLIT = 0.02
 
 #: The grid problem plans with this fraction of every jerk limit: its pieces'
 #: jerks differ from the model's by a fraction of a per cent (two pieces per
@@ -97,8 +97,18 @@ JERK_MARGIN = 0.998
 #: Points checked inside every piece (besides its ends).
 CHECK_PER_PIECE = 16
 
+#: A joint whose |velocity| is below this fraction of its limit is at rest for the
+#: choice of the leg (speeding up or slowing down) in the limit check.
+REST_RTOL = 1e-9
+
 #: Points checked inside every piece by the final check of the chosen timing.
 FINAL_CHECK_PER_PIECE = 64
+
+#: The final check looks again, with ZOOM_PER_PIECE points, at the ZOOM_PIECES
+#: pieces that come closest to a limit (within ZOOM_ABOVE of it).
+ZOOM_PIECES = 24
+ZOOM_PER_PIECE = 2000
+ZOOM_ABOVE = 1e-3
 
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
@@ -112,7 +122,7 @@ TIGHTEN_ABOVE = 1e-6
 SCALED_PENALTY = 2e-3
 
 #: Margin kept under a limit that was lowered locally (fraction).
-TIGHTEN_MARGIN = 2e-3
+TIGHTEN_MARGIN = 1e-4
 
 #: Relative slack of the final check (round-off).
 CHECK_RTOL = 1e-9
@@ -473,9 +483,19 @@ def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_pat
     qd = f1 * V[:, None]
     qdd = f2 * (V * V)[:, None] + f1 * A[:, None]
     qddd = f3 * (V**3)[:, None] + 3.0 * f2 * (V * A)[:, None] + f1 * jk[:, None]
-    speeding = qd * qdd > 0
-    alim = np.where(speeding, alim_acc, np.where(qd * qdd < 0, alim_dec, np.minimum(alim_acc, alim_dec)))
-    jl = np.where(speeding, jacc, np.where(qd * qdd < 0, jdec, np.minimum(jacc, jdec)))
+    # the leg: speeding up (accel limits) or slowing down (decel limits); at rest,
+    # where the product vanishes, the leg of the piece's middle (a jerk phase that
+    # ends at rest is the end of a braking, one that starts there speeds up)
+    prod = qd * qdd
+    if k:
+        npp = frac.size
+        mid = np.repeat(prod[:-1].reshape(k, npp, -1)[:, npp // 2], npp, axis=0)
+        mid = np.vstack([mid, mid[-1:]])
+        at_rest = np.abs(qd) <= REST_RTOL * vlim
+        prod = np.where(at_rest, mid, prod)
+    speeding = prod > 0
+    alim = np.where(speeding, alim_acc, np.where(prod < 0, alim_dec, np.minimum(alim_acc, alim_dec)))
+    jl = np.where(speeding, jacc, np.where(prod < 0, jdec, np.minimum(jacc, jdec)))
     rv = np.abs(qd) / vlim
     ra = np.abs(qdd) / alim
     rj = np.abs(qddd) / jl
@@ -684,8 +704,24 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         jk = jk0 / k_scale**3
         t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
         # the final check, denser than the rounds' (any excess left: a uniform slow-down)
-        use, *_ = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa,
-                         cap, cap_fn if callable(speed) else None, exact, FINAL_CHECK_PER_PIECE)
+        cfn = cap_fn if callable(speed) else None
+        use, _c, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
+                                             a_path, j_path, kappa, cap, cfn, exact,
+                                             FINAL_CHECK_PER_PIECE)
+        # the pieces that come closest to a limit, again with many more points: the
+        # largest value inside a piece, not only at the sampled points
+        npp = FINAL_CHECK_PER_PIECE + 2
+        worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)[:-1]
+        per_piece = worst.reshape(-1, npp).max(axis=1)
+        close = np.argsort(-per_piece)[:ZOOM_PIECES]
+        for i in close[per_piece[close] > 1.0 - ZOOM_ABOVE]:
+            zu, *_ = _check(s, der, t[i:i + 2], st[i:i + 2], jk[i:i + 1], vlim, aacc, adec, jacc,
+                            jdec, a_path, j_path, kappa, cap, cfn, exact, ZOOM_PER_PIECE)
+            use = LimitUse(np.maximum(use.velocity, zu.velocity),
+                           np.maximum(use.acceleration, zu.acceleration),
+                           np.maximum(use.jerk, zu.jerk),
+                           max(use.path_acceleration, zu.path_acceleration),
+                           max(use.path_jerk, zu.path_jerk), max(use.path_speed, zu.path_speed))
         extra = _uniform_scale(use)
         if extra <= 1.0:
             break
