@@ -53,9 +53,6 @@ PLATEAU_BISECT = 100
 #: this fraction of it.
 SLOWDOWN_RTOL = 1e-3
 
-#: A node's limit binds when the planned speed is within this fraction of it.
-BINDING_RTOL = 1e-3
-
 #: Slow-down stretches are split where their limiting speed changes by this factor.
 SLOWDOWN_BAND = 1.25
 
@@ -390,15 +387,27 @@ def _engine_stretch(path: Path, s0: float, s1: float, F: float, A: float, J: flo
     return plan_path_timing(_Shifted(base, s0, s1), list(lims), speed=speed, accel=A, jerk=J)
 
 
-def _binding_speed(v: np.ndarray, cap: np.ndarray) -> float:
-    """The slowest planned speed where the limit binds (the ramps from and to rest
-    excluded), or the largest planned speed when it binds nowhere; never above the
-    lowest limit."""
-    bind = v >= (1.0 - BINDING_RTOL) * cap
-    lowest = float(cap.min())
-    if bind.any():
-        return float(min(v[bind].min(), lowest))
-    return float(min(v.max(), lowest))
+def ramp_mask(v: np.ndarray) -> np.ndarray:
+    """Nodes on the ramps from and to rest: before the first and after the last local
+    maximum of the planned speed ``v`` (their low speed is the start or the stop)."""
+    n = v.size
+    out = np.zeros(n, dtype=bool)
+    if n < 3:
+        return np.ones(n, dtype=bool)
+    up = np.nonzero(np.diff(v) <= 0.0)[0]
+    first = int(up[0]) if up.size else n - 1
+    down = np.nonzero(np.diff(v) >= 0.0)[0]
+    last = int(down[-1]) + 1 if down.size else 0
+    out[:first] = True
+    out[last + 1:] = True
+    return out
+
+
+def stretch_speed(v: np.ndarray, ramp: np.ndarray) -> float:
+    """The slowest planned speed of a slow-down stretch off the ramps from and to rest
+    (the fastest one when the stretch lies on a ramp)."""
+    off = ~ramp
+    return float(v[off].min()) if off.any() else float(v.max())
 
 
 def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], axes) -> list[Slowdown]:
@@ -423,6 +432,7 @@ def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], 
             vlim = np.where(lower, arr, vlim)
             label = [nm if lw else lb for lw, lb in zip(lower, label)]
     limited = vlim < F * (1.0 - SLOWDOWN_RTOL)
+    ramp = ramp_mask(v)
     band = np.floor(np.log(np.maximum(vlim, 1e-300) / F) / math.log(SLOWDOWN_BAND))
     out = []
     i = 0
@@ -435,7 +445,7 @@ def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], 
             j += 1
         seg = slice(i, j + 1)
         k = i + int(np.argmin(vlim[seg]))
-        out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), _binding_speed(v[seg], vlim[seg]),
+        out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), stretch_speed(v[seg], ramp[seg]),
                             float(vlim[k]), label[k]))
         i = j + 1
     return out

@@ -25,7 +25,7 @@ from ..paths._tolerances import COINCIDENT_DIST
 from ..paths.arc import Arc3
 from ..paths.line import Line
 from ..timing import PathTiming, plan_path_timing
-from ..interpolation.feed import _binding_speed
+from ..interpolation.feed import ramp_mask, stretch_speed
 from ._jointpath import ChainJointPath
 from ._pieces import (
     BezierBlend,
@@ -520,6 +520,7 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
         ])
     cap = caps.min(axis=1)
     col = np.argmin(caps, axis=1)
+    ramp = ramp_mask(v)
     limited = cap < SLOWDOWN_FRACTION * prog
     # bands of the limiting speed: a stretch is split where its cap changes by
     # more than SLOWDOWN_BAND, so each reports a speed that holds over it
@@ -531,8 +532,9 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
             return chain.pieces[k[i]].cap_reason or "programmed speed"
         if c == 4:
             return "path curvature (tool acceleration)"
-        ratio = (vmax / np.abs(d1[i]), np.sqrt(amax / np.abs(d2[i])), np.cbrt(jmax / np.abs(d3[i])))
         with np.errstate(divide="ignore"):
+            ratio = (vmax / np.abs(d1[i]), np.sqrt(amax / np.abs(d2[i])),
+                     np.cbrt(jmax / np.abs(d3[i])))
             j = int(np.argmin(ratio[c - 1]))
         return f"{('velocity', 'acceleration', 'jerk')[c - 1]} of joint {robot.joint_names[j]}"
 
@@ -548,8 +550,7 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
                and chain.pieces[k[j + 1]].motion == chain.pieces[k[i]].motion):
             j += 1
         seg = slice(i, j + 1)
-        # the planned speed where the limit binds and is lowest
-        speed = _binding_speed(v[seg], cap[seg])
+        speed = stretch_speed(v[seg], ramp[seg])
         # the reason that holds over the longest part of the stretch
         lo = np.concatenate([[s[i]], 0.5 * (s[i:j] + s[i + 1:j + 1])])
         hi = np.concatenate([0.5 * (s[i:j] + s[i + 1:j + 1]), [s[j]]])

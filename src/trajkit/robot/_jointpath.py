@@ -65,6 +65,13 @@ class ChainJointPath:
         self.table_q = table_q
         self.labels = labels
         self.h = STENCIL_STEP * float(robot.length_scale)
+        # seeds from a quintic spline through the walked joints: for a redundant arm
+        # the inverse kinematics keeps the seed's null-space part, so the path is as
+        # smooth as its seeds (a linear interpolation would put kinks in it)
+        from scipy.interpolate import make_interp_spline
+
+        k = min(5, table_s.size - 1)
+        self._seed = make_interp_spline(table_s, table_q, k=k) if k >= 1 else None
 
     # ---- geometry
     def piece_of(self, s: np.ndarray, side: str = "right") -> np.ndarray:
@@ -83,8 +90,9 @@ class ChainJointPath:
         return pos, matrix_from_quat(quat)
 
     def seeds(self, s: np.ndarray) -> np.ndarray:
-        return np.column_stack([np.interp(s, self.table_s, self.table_q[:, j])
-                                for j in range(self.n_joints)])
+        if self._seed is None:
+            return np.broadcast_to(self.table_q[0], (np.size(s), self.n_joints)).copy()
+        return self._seed(np.clip(s, self.table_s[0], self.table_s[-1]))
 
     def ik(self, s: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
         pos, rot = self.poses(s, k)
@@ -117,15 +125,10 @@ class ChainJointPath:
         pts = np.where(fwd[:, None], s[:, None] + hk[:, None] * (off + 3),
                        np.where(bwd[:, None], s[:, None] - hk[:, None] * (off + 3),
                                 s[:, None] + hk[:, None] * off))
-        # the point itself from the walked branch, then every stencil point seeded
-        # with it: a redundant arm's solutions then move with the pose only
         centre = np.where(fwd | bwd, 0, 3)
-        c_pts = pts[np.arange(n), centre]
-        q_c = self.ik(c_pts, k, self.seeds(c_pts))
         kk = np.repeat(k, 7)
         flat = pts.ravel()
-        seeds = np.repeat(q_c, 7, axis=0)
-        q_all = self.ik(flat, kk, seeds).reshape(n, 7, m)
+        q_all = self.ik(flat, kk, self.seeds(np.clip(flat, 0.0, self.length))).reshape(n, 7, m)
         q = np.empty((n, m))
         d = [np.empty((n, m)) for _ in range(3)]
         q[:] = q_all[np.arange(n), centre]
