@@ -445,7 +445,7 @@ def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], 
             j += 1
         seg = slice(i, j + 1)
         k = i + int(np.argmin(vlim[seg]))
-        out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), stretch_speed(v[seg], ramp[seg]),
-                            float(vlim[k]), label[k]))
+        spd = min(stretch_speed(v[seg], ramp[seg]), float(v[k]))
+        out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), spd, float(vlim[k]), label[k]))
         i = j + 1
     return out

@@ -461,6 +461,8 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
                                   jerk=robot.cartesian_jerk, curvature=curvature)
     except InfeasibleError as exc:
         raise UnreachableError(f"{labels[pieces[0].motion]}: {exc}") from None
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{labels[pieces[0].motion]}: {exc}") from None
     chain = CartesianChain(robot, pieces, offsets, path, timing, labels, list(motion_ids))
     chain.slowdowns = _slowdowns(chain, specs)
     return chain

@@ -51,7 +51,7 @@ __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 ROUND_RTOL = 5e-4
 
 #: Most rounds (the first is jerk-free).
-MAX_ROUNDS = 10
+MAX_ROUNDS = 6
 
 #: Solver tolerances (relative gap and feasibility).
 SOLVER_TOL = 1e-8
@@ -64,7 +64,7 @@ SCALE_FLOOR = 1e-9
 
 #: Screening: an inequality (normalised to coefficients <= 1) whose slack at the
 #: previous round's solution is above this is left out of the next round ...
-SCREEN_SLACK = 0.3
+SCREEN_SLACK = 1.0
 
 #: ... unless the new solution violates it by more than this; then the round is
 #: solved again with it (at most SCREEN_ROUNDS times).
@@ -388,6 +388,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         return sg, rh, ta * ta, (uu[:-1] - uu[1:]) * ta / 12.0
 
     jerk_rounds = 0
+    best = None
     z_prev = None
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
@@ -546,12 +547,17 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             jerk_free = t
         else:
             jerk_rounds += 1
+            if best is None or t < best[0]:
+                best = (t, x.copy(), u.copy())
             if jerk_rounds >= 2 and abs(times[-2] - t) <= ROUND_RTOL * t:
-                x_bar = x
                 converged = True
                 break
+            if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
+                break  # the rounds got slower (the linearised terms moved): keep the best
         x_bar, u_bar = x, u
         sigma, rho, tau2, ecorr = linearise_at(x, u)
-    return GridSolution(x=x, u=u, time=times[-1] if times else math.nan,
+    if best is not None:  # every round's solution keeps the constraints: the fastest
+        t, x, u = best
+    return GridSolution(x=x, u=u, time=t if times else math.nan,
                         jerk_free_time=jerk_free, rounds=len(times), converged=converged,
                         status=status, history=times)

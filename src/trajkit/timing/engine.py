@@ -43,10 +43,15 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from ..profiles._pieces import eval_pieces
 from ._hermite import hermite_pieces
-from ._socp import ROUND_RTOL, GridProblem, solve_grid
+from ..profiles import plan_move
+from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, solve_grid
 from .paths import JointPath
 
 __all__ = ["PathTiming", "plan_path_timing", "CHECK_PER_PIECE", "MAX_TIGHTEN", "LimitUse"]
+
+#: Longest motion the engine plans [s] (about 116 days); a longer one is refused
+#: before any work.
+MAX_DURATION = 1e7
 
 #: Grid nodes to start from (before refinement).
 GRID_START = 48
@@ -120,6 +125,9 @@ TIGHTEN_ABOVE = 1e-6
 #: A timing that had to be slowed down uniformly counts this fraction longer
 #: when the attempts are compared.
 SCALED_PENALTY = 2e-3
+
+#: Rounds of a solve after a limit was lowered locally (it starts from the previous one).
+TIGHTEN_ROUNDS = 3
 
 #: Margin kept under a limit that was lowered locally (fraction).
 TIGHTEN_MARGIN = 1e-4
@@ -446,6 +454,45 @@ def _interp_derivatives(s_grid: np.ndarray, der: tuple, S: np.ndarray):
     return f1, f2, f3
 
 
+def _sample_pieces(t: np.ndarray, st: np.ndarray, jerk: np.ndarray, tt: np.ndarray) -> np.ndarray:
+    """``s``, ``sdot`` at times ``tt`` of the pieces (2, n)."""
+    tc = np.clip(tt, 0.0, t[-1])
+    p, v, _, _ = eval_pieces(tc, t, st[:-1, 0], st[:-1, 1], st[:-1, 2], jerk)
+    return np.vstack([p, v])
+
+
+def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec, cap,
+              a_path: float, j_path: float, kappa):
+    """An always-feasible timing: one rest-to-rest S-curve of the path parameter whose
+    speed, acceleration and jerk are small enough for every joint everywhere on the
+    grid (the largest path derivatives with the smallest limits); what the final
+    check still finds is removed by a uniform slow-down. Far from optimal; used only
+    when the optimisation fails."""
+    _, d1, d2, d3 = der
+    a1 = np.abs(d1).max(axis=0)
+    a2 = np.abs(d2).max(axis=0)
+    a3 = np.abs(d3).max(axis=0)
+    A = np.minimum(aacc, adec)
+    J = np.minimum(jacc, jdec)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = float(np.min(np.where(a1 > 0, vlim / a1, np.inf)))
+        v = min(v, float(np.min(cap)), float(np.min(np.where(a2 > 0, np.sqrt(0.5 * A / a2), np.inf))),
+                float(np.min(np.where(a3 > 0, np.cbrt(0.25 * J / a3), np.inf))))
+        if kappa is not None and math.isfinite(a_path) and kappa.max() > 0:
+            v = min(v, math.sqrt(0.5 * a_path / float(kappa.max())))
+        a = float(np.min(np.where(a1 > 0, (A - a2 * v * v) / a1, np.inf)))
+        a = min(a, 0.5 * a_path) if math.isfinite(a_path) else a
+        j = float(np.min(np.where(a1 > 0, (J - a3 * v**3 - 3.0 * a2 * v * a) / a1, np.inf)))
+        j = min(j, j_path)
+    if not (math.isfinite(v) and v > 0):
+        v = 1.0
+    a = a if (math.isfinite(a) and a > 0) else v
+    j = j if (math.isfinite(j) and j > 0) else a
+    prof = plan_move(0.0, L, AxisLimits(v, a, j, name="path"))
+    keep = np.asarray(prof.phase_durations) > 0.0
+    return np.asarray(prof.phase_durations)[keep], np.asarray(prof.jerks)[keep]
+
+
 def _uniform_scale(use: LimitUse) -> float:
     """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3)."""
     k = max(1.0, float(use.velocity.max(initial=0.0)), use.path_speed,
@@ -611,98 +658,122 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         vcap = np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1)
     vcap = np.minimum(vcap, cap)
     n = s.size
+    # the work has to be worth it: a motion that cannot be shorter than MAX_DURATION
+    with np.errstate(divide="ignore"):
+        floor = float(np.sum(np.diff(s) / np.maximum(vcap[:-1], vcap[1:])))
+    if not floor <= MAX_DURATION:
+        raise InvalidInputError(
+            f"the motion along this path would take at least {floor:.3g} s, more than the "
+            f"{MAX_DURATION:g} s the path timing supports (a speed cap or limit far too low)")
     x_cap = cap ** 2  # lowered locally where the check finds the cap exceeded
     rest0 = start_speed == 0.0 and start_accel == 0.0
     restN = end_speed == 0.0 and end_accel == 0.0
 
-    # per-node limits, lowered where the check finds an excess
-    scale_v = np.ones((n, m))
-    scale_a = np.ones((n, m))
-    scale_j = np.ones((n, m))
-    # a first solve on the derivative-refined grid, then the grid refined where the
-    # path acceleration swings (the jerk phases) and solved again from there
-    first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
-                                   j_acc=jacc * JERK_MARGIN, j_dec=jdec * JERK_MARGIN,
-                                   x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
-                                   kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
-                                   x0=start_speed**2, u0=start_accel,
-                                   xN=end_speed**2, uN=end_accel), max_rounds=FIRST_ROUNDS)
-    jerk_free_time = first.jerk_free_time
-    init = (first.x, first.u)
-    add = _solution_splits(s, first.x, first.u)
-    if add.size:
-        s_new = np.unique(np.concatenate([s, add]))
-        der_new = path.derivatives(s_new)
-        init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
-        s, der = s_new, der_new
-        q, d1, d2, d3 = der
-        cap = cap_fn(s)
-        with np.errstate(divide="ignore"):
-            vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1), cap)
-        if kappa is not None:
-            kappa = np.abs(np.asarray(curvature(s), dtype=float))
-        n = s.size
-        x_cap = cap ** 2
+    best = None
+    try:
+        # per-node limits, lowered where the check finds an excess
         scale_v = np.ones((n, m))
         scale_a = np.ones((n, m))
         scale_j = np.ones((n, m))
-    tightened = 0
-    best = None
-    xmid_scale = np.ones(s.size - 1)
-    for attempt in range(MAX_TIGHTEN + 1):
-        prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
-                           a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
-                           j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
-                           j_dec=jdec[None, :] * scale_j * JERK_MARGIN,
-                           x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
-                           x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
-                           x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
-        sol = first if (attempt == 0 and not add.size) else solve_grid(prob, init=init)
-        try:
-            dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
-        except ValueError:
-            if best is None:
-                raise
-            break
-        t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
-        use, cell, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
-                                               a_path, j_path, kappa, cap,
-                                               cap_fn if callable(speed) else None, exact)
-        k = _uniform_scale(use)
-        # a timing that needs no uniform slow-down keeps its exact cruise speeds:
-        # preferred unless a slowed one is clearly faster
-        score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
-        if best is None or score < best[0]:
-            best = (score, sol, dur, jk, use, k, piv)
-        if use.worst <= 1.0 + TIGHTEN_ABOVE:
-            break  # a small excess costs less as a uniform slow-down than as another round
-        tightened += 1
-        for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
-            over = ratio > 1.0 + CHECK_RTOL
-            if not over.any():
-                continue
-            rows, cols = np.nonzero(over)
-            c = cell[rows]
-            f = (1.0 - TIGHTEN_MARGIN) / ratio[rows, cols]
-            for node in (c, c + 1):
-                np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
-        over = rs > 1.0 + CHECK_RTOL
-        if over.any():
-            c = cell[over]
-            f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
-            for node in (c, c + 1):
-                np.minimum.at(x_cap, node, f * x_cap[node])
-            np.minimum.at(xmid_scale, c, f * xmid_scale[c])
-    assert best is not None
-    _, sol, dur0, jk0, use, k_scale, piv = best
-    for _final in range(2):
+        # a first solve on the derivative-refined grid, then the grid refined where the
+        # path acceleration swings (the jerk phases) and solved again from there
+        first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
+                                       j_acc=jacc * JERK_MARGIN, j_dec=jdec * JERK_MARGIN,
+                                       x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
+                                       kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
+                                       x0=start_speed**2, u0=start_accel,
+                                       xN=end_speed**2, uN=end_accel), max_rounds=FIRST_ROUNDS)
+        jerk_free_time = first.jerk_free_time
+        init = (first.x, first.u)
+        add = _solution_splits(s, first.x, first.u)
+        if add.size:
+            s_new = np.unique(np.concatenate([s, add]))
+            der_new = path.derivatives(s_new)
+            init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
+            s, der = s_new, der_new
+            q, d1, d2, d3 = der
+            cap = cap_fn(s)
+            with np.errstate(divide="ignore"):
+                vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1), cap)
+            if kappa is not None:
+                kappa = np.abs(np.asarray(curvature(s), dtype=float))
+            n = s.size
+            x_cap = cap ** 2
+            scale_v = np.ones((n, m))
+            scale_a = np.ones((n, m))
+            scale_j = np.ones((n, m))
+        tightened = 0
+        best = None
+        xmid_scale = np.ones(s.size - 1)
+        for attempt in range(MAX_TIGHTEN + 1):
+            prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
+                               a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
+                               j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
+                               j_dec=jdec[None, :] * scale_j * JERK_MARGIN,
+                               x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
+                               x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
+                               x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
+            sol = first if (attempt == 0 and not add.size) else solve_grid(
+                prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init)
+            init = (sol.x, sol.u)  # a tightened attempt starts from this one
+            try:
+                dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
+            except ValueError:
+                if best is None:
+                    raise
+                break
+            t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
+            use, cell, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
+                                                   a_path, j_path, kappa, cap,
+                                                   cap_fn if callable(speed) else None, exact)
+            k = _uniform_scale(use)
+            # a timing that needs no uniform slow-down keeps its exact cruise speeds:
+            # preferred unless a slowed one is clearly faster
+            score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
+            if best is None or score < best[0]:
+                best = (score, sol, dur, jk, use, k, piv)
+            if use.worst <= 1.0 + TIGHTEN_ABOVE:
+                break  # a small excess costs less as a uniform slow-down than as another round
+            tightened += 1
+            for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
+                over = ratio > 1.0 + CHECK_RTOL
+                if not over.any():
+                    continue
+                rows, cols = np.nonzero(over)
+                c = cell[rows]
+                f = (1.0 - TIGHTEN_MARGIN) / ratio[rows, cols]
+                for node in (c, c + 1):
+                    np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
+            over = rs > 1.0 + CHECK_RTOL
+            if over.any():
+                c = cell[over]
+                f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
+                for node in (c, c + 1):
+                    np.minimum.at(x_cap, node, f * x_cap[node])
+                np.minimum.at(xmid_scale, c, f * xmid_scale[c])
+    except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
+        best = None
+    fallback = best is None
+    if fallback:
+        if not (rest0 and restN):
+            raise InfeasibleError("no timing found for a path with a moving boundary state")
+        dur0, jk0 = _fallback(s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
+        sol, piv, k_scale, tightened = None, None, 1.0, 0
+        jerk_free_time = math.nan
+    else:
+        _, sol, dur0, jk0, use, k_scale, piv = best
+    for _final in range(4):
         if k_scale > 1.0 and not (rest0 and restN):
             raise InfeasibleError(
                 f"the timing exceeds a limit by {100 * (use.worst - 1):.3g} % and cannot be slowed "
                 "down uniformly with a moving boundary state")
         dur = dur0 * k_scale
         jk = jk0 / k_scale**3
-        t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
+        if fallback:
+            t, st = _pieces_state(dur, jk, 0.0, 0.0, 0.0)
+            st[-1] = (L, 0.0, 0.0)
+        else:
+            t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
         # the final check, denser than the rounds' (any excess left: a uniform slow-down)
         cfn = cap_fn if callable(speed) else None
         use, _c, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
@@ -726,8 +797,16 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if extra <= 1.0:
             break
         k_scale *= extra
+    if fallback:
+        tt = np.linspace(0.0, t[-1], 20 * s.size)
+        sv = _sample_pieces(t, st, jk, tt)
+        grid_speed = np.interp(s, sv[0], sv[1])
+    else:
+        grid_speed = np.sqrt(sol.x) / k_scale
     return PathTiming(path=path, limits=lims, duration=float(t[-1]), t=t, state=st, jerk=jk,
-                      grid=s, grid_speed=np.sqrt(sol.x) / k_scale, speed_cap=vcap, jerk_free_time=jerk_free_time,
-                      time_scale=k_scale, limit_use=use, rounds=sol.rounds, grid_derivatives=der,
-                      info={"nodes": int(n), "tightened": tightened, "status": sol.status,
-                            "converged": sol.converged, "round_rtol": ROUND_RTOL})
+                      grid=s, grid_speed=grid_speed, speed_cap=vcap, jerk_free_time=jerk_free_time,
+                      time_scale=k_scale, limit_use=use, rounds=0 if fallback else sol.rounds,
+                      grid_derivatives=der,
+                      info={"nodes": int(s.size), "tightened": tightened,
+                            "status": "fallback" if fallback else sol.status,
+                            "converged": (not fallback) and sol.converged, "round_rtol": ROUND_RTOL})
