@@ -359,9 +359,15 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         i1 = _hermite_interp(s[:-1], s[1:], d1[:-1], d1[1:], d2[:-1], d2[1:], sm)
         i2 = _hermite_interp(s[:-1], s[1:], d2[:-1], d2[1:], d3[:-1], d3[1:], sm)
         i3 = 0.5 * (d3[:-1] + d3[1:])
-        # the speed the cell could run at: the velocity limits and the path's cap
-        with np.errstate(divide="ignore"):
+        # the speed the cell could run at: the velocity limits, the path's cap, and
+        # the speeds at which the curvature of the joint path alone uses the joints'
+        # acceleration and jerk limits
+        with np.errstate(divide="ignore", invalid="ignore"):
             vcap = np.min(np.where(np.abs(m1) > 0, vlim / np.abs(m1), np.inf), axis=1)
+            vcap = np.minimum(vcap, np.min(np.where(np.abs(m2) > 0, np.sqrt(alim / np.abs(m2)),
+                                                    np.inf), axis=1))
+            vcap = np.minimum(vcap, np.min(np.where(np.abs(m3) > 0, np.cbrt(jlim / np.abs(m3)),
+                                                    np.inf), axis=1))
         vcap = np.minimum(vcap, cap_fn(sm))
         vcap = np.where(np.isfinite(vcap), vcap, 0.0)
         e1 = np.max(np.abs(i1 - m1) * vcap[:, None] / vlim, axis=1)
