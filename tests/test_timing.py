@@ -114,15 +114,16 @@ def test_toppra_jerk_free_time_is_a_lower_bound():
             assert tm.duration >= tm.jerk_free_time * (1 - 1e-6)
 
 
+@pytest.mark.parametrize("shape", ["spline", "lines"])
 @pytest.mark.parametrize("seed", range(sweep_size(4)))
-def test_waypoints_pass_within_the_blend_and_keep_every_limit(seed):
+def test_waypoints_pass_within_the_blend_and_keep_every_limit(seed, shape):
     rng = np.random.default_rng(900 + seed)
     n = int(rng.integers(3, 9))
     m = int(rng.integers(2, 7))
     W = np.cumsum(rng.uniform(-0.7, 0.7, (n, m)), axis=0)
     lims = _random_limits(rng, m)
     blend = float(rng.uniform(0.02, 0.3))
-    tr = plan_waypoints(W, lims, blend=blend)
+    tr = plan_waypoints(W, lims, blend=blend, shape=shape)
     assert tr.deviation.max() <= blend * (1 + 1e-12)
     assert tr.deviation[0] == tr.deviation[-1] == 0.0
     # the path really passes that close: distance from every waypoint to dense samples
@@ -141,40 +142,93 @@ def test_waypoints_pass_within_the_blend_and_keep_every_limit(seed):
         max(lm.a_max, lm.a_max_decel) for lm in lims) * dt + 1e-12
 
 
-def test_waypoints_stop_only_where_the_path_reverses():
+@pytest.mark.parametrize("shape", ["spline", "lines"])
+def test_waypoints_stop_only_where_the_path_reverses(shape):
     lims = [AxisLimits(1.0, 4.0, 40.0)] * 2
     W = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 1.0 + 1e-12]]
-    tr = plan_waypoints(np.array(W[:4]), lims, blend=0.1)
+    tr = plan_waypoints(np.array(W[:4]), lims, blend=0.1, shape=shape)
     assert tr.stops == [0, 3] and len(tr.segments) == 1
-    tr = plan_waypoints(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]]), lims, blend=0.1)
+    tr = plan_waypoints(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]]), lims, blend=0.1, shape=shape)
     assert tr.stops == [0, 1, 2]
     smp = tr.sample(tr.offsets[1])
     assert np.abs(smp.velocity).max() <= 1e-9  # at rest at the reversal
 
 
-def test_waypoints_are_faster_than_stopping_at_each():
+@pytest.mark.parametrize("shape, blend, share", [("spline", 0.0, 0.8), ("spline", 0.2, 0.7),
+                                                   ("lines", 0.2, 0.85)])
+def test_waypoints_are_faster_than_stopping_at_each(shape, blend, share):
     lims = [AxisLimits(2.0, 10.0, 100.0)] * 3
     W = np.array([[0, 0, 0], [1, 0.2, 0], [1.5, 1, 0.3], [2.5, 1.2, 0.2], [3, 2, 1.0]], dtype=float)
-    tr = plan_waypoints(W, lims, blend=0.2)
+    tr = plan_waypoints(W, lims, blend=blend, shape=shape)
     stop = sum(plan_ptp(W[i], W[i + 1], lims).duration for i in range(len(W) - 1))
-    assert tr.duration < 0.85 * stop
+    assert tr.duration < share * stop
+
+
+def test_spline_waypoints_pass_every_waypoint_exactly_without_blend():
+    rng = np.random.default_rng(5)
+    W = np.cumsum(rng.uniform(-0.6, 0.6, (7, 4)), axis=0)
+    tr = plan_waypoints(W, AxisLimits(2.0, 10.0, 100.0))
+    assert tr.stops == [0, 6] and np.all(tr.deviation == 0.0)
+    path = tr.segments[0].path
+    q = path.derivatives(path.knots)[0]
+    np.testing.assert_allclose(q, W, rtol=0, atol=1e-12)
+    # the spline is C2 at the knots: left and right first and second derivatives agree
+    eps = 1e-9
+    for order in (1, 2):
+        left = path.derivatives(path.knots[1:-1] - eps)[order]
+        right = path.derivatives(path.knots[1:-1] + eps)[order]
+        np.testing.assert_allclose(left, right, atol=1e-5 * (1 + np.abs(left).max()))
+
+
+def test_least_bending_spline_uses_the_tolerance_and_bends_less():
+    rng = np.random.default_rng(8)
+    W = np.cumsum(rng.uniform(-0.6, 0.6, (9, 3)), axis=0)
+    lims = AxisLimits(2.0, 10.0, 100.0)
+    exact = plan_waypoints(W, lims)
+    loose = plan_waypoints(W, lims, blend=0.1)
+    assert loose.deviation.max() <= 0.1 * (1 + 1e-12) and loose.deviation.max() > 0.05
+
+    def bending(path):
+        s = np.linspace(0.0, path.length, 20001)
+        return float(np.sum(path.derivatives(s)[2] ** 2) * (s[1] - s[0]))
+
+    assert bending(loose.segments[0].path) < 0.8 * bending(exact.segments[0].path)
+    assert loose.duration < exact.duration
+
+
+def test_spline_waypoints_stop_where_the_spline_would_leave_a_joint_range():
+    # a spline through these overshoots 1.0 on joint 0 between waypoints 1 and 2
+    W = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.2]])
+    free = plan_waypoints(W, AxisLimits(1.0, 4.0, 40.0))
+    assert free.segments[0].path.joint_range()[1][:, 0].max() > 1.0 + 1e-3
+    lims = [AxisLimits(1.0, 4.0, 40.0, position_min=-1.0, position_max=1.0),
+            AxisLimits(1.0, 4.0, 40.0)]
+    tr = plan_waypoints(W, lims)
+    assert tr.stops == [0, 1, 2, 3]
+    smp = tr.sample(np.linspace(0.0, tr.duration, 20001))
+    assert smp.position[:, 0].max() <= 1.0 + 1e-12
+    for path in (sg.path for sg in tr.segments):
+        assert path.joint_range()[1][:, 0].max() <= 1.0 + 1e-12
 
 
 @pytest.mark.parametrize("bad, match", [
     (dict(waypoints=[[0.0, 0.0]]), r"at least two different joint positions"),
     (dict(waypoints=[[0.0, 0.0], [0.0, 0.0]]), r"at least two different joint positions"),
-    (dict(blend=0.0), r"blend should be larger than zero"),
-    (dict(blend=math.nan), r"blend must be a number"),
+    (dict(blend=0.0, shape="lines"), r"blend should be larger than zero"),
+    (dict(blend=-0.1), r"blend must be >= 0, got -0\.1"),
+    (dict(blend=math.nan), r"blend must be"),
+    (dict(shape="bezier"), r"shape must be one of 'spline', 'lines', got 'bezier'"),
     (dict(limits=[AxisLimits(1, 2, 10)]), r"limits has 1 entries but the waypoints have 2 joints"),
     (dict(waypoints=[[0.0, 0.0], [5.0, 0.0]],
           limits=[AxisLimits(1, 2, 10, position_min=-1, position_max=1)] * 2),
      r"waypoints\[1\] 5\.0 is outside the position range \[-1\.0, 1\.0\]"),
 ])
 def test_waypoint_errors_name_the_field(bad, match):
-    args = dict(waypoints=[[0.0, 0.0], [1.0, 0.5]], limits=[AxisLimits(1, 2, 10)] * 2, blend=0.1)
+    args = dict(waypoints=[[0.0, 0.0], [1.0, 0.5]], limits=[AxisLimits(1, 2, 10)] * 2, blend=0.1,
+                shape="spline")
     args.update(bad)
     with pytest.raises(InvalidInputError, match=match):
-        plan_waypoints(args["waypoints"], args["limits"], blend=args["blend"])
+        plan_waypoints(args["waypoints"], args["limits"], blend=args["blend"], shape=args["shape"])
 
 
 def test_engine_input_errors():

@@ -394,9 +394,9 @@ def ramp_mask(v: np.ndarray) -> np.ndarray:
     out = np.zeros(n, dtype=bool)
     if n < 3:
         return np.ones(n, dtype=bool)
-    up = np.nonzero(np.diff(v) <= 0.0)[0]
+    up = np.nonzero(np.diff(v) < 0.0)[0]
     first = int(up[0]) if up.size else n - 1
-    down = np.nonzero(np.diff(v) >= 0.0)[0]
+    down = np.nonzero(np.diff(v) > 0.0)[0]
     last = int(down[-1]) + 1 if down.size else 0
     out[:first] = True
     out[last + 1:] = True
@@ -445,7 +445,9 @@ def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], 
             j += 1
         seg = slice(i, j + 1)
         k = i + int(np.argmin(vlim[seg]))
-        spd = min(stretch_speed(v[seg], ramp[seg]), float(v[k]))
+        spd = stretch_speed(v[seg], ramp[seg])
+        if not ramp[k]:
+            spd = min(spd, float(v[k]))
         out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), spd, float(vlim[k]), label[k]))
         i = j + 1
     return out

@@ -18,17 +18,22 @@ from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.interpolate import CubicSpline
 
-from .._validate import check_array, check_positive
+from .._validate import check_array, check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from .engine import PathTiming, plan_path_timing
 
-__all__ = ["BlendedJointPath", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
+__all__ = ["BlendedJointPath", "SplineJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
            "MAX_WAYPOINTS", "REVERSAL_ANGLE"]
 
 #: Most waypoints of one call.
 MAX_WAYPOINTS = 10_000
+
+#: Path shapes of :func:`plan_waypoints`.
+SHAPES = ("spline", "lines")
 
 #: A corner turning by more than this [rad] is a reversal: the motion stops there.
 REVERSAL_ANGLE = math.pi - 1e-3
@@ -135,6 +140,122 @@ class BlendedJointPath:
         return tuple(out)
 
 
+class SplineJointPath:
+    """A natural cubic spline through points in joint space (a :class:`JointPath`).
+
+    The parameter ``s`` is the chord length of the given knot points
+    (``knots[i]`` at point i); the path has continuous first and second
+    derivatives, a piecewise constant third derivative (its pieces meet at the
+    inner knots, the :attr:`breakpoints`) and zero curvature at both ends.
+
+    Parameters
+    ----------
+    points : ndarray, shape (k, m)
+        Points the spline passes, k >= 2.
+    knots : ndarray, shape (k,)
+        Strictly increasing parameter values of the points, ``knots[0] = 0``.
+    """
+
+    #: Exact derivatives are cheap: the timing engine checks its limits with them.
+    cheap_derivatives = True
+
+    def __init__(self, points: np.ndarray, knots: np.ndarray) -> None:
+        self.points = points
+        self.knots = knots
+        self.n_joints = points.shape[1]
+        self.length = float(knots[-1])
+        self.breakpoints = knots[1:-1].copy()
+        self._spline = CubicSpline(knots, points, bc_type="natural")
+
+    def derivatives(self, s: np.ndarray):
+        s = np.clip(np.atleast_1d(np.asarray(s, dtype=float)), 0.0, self.length)
+        return tuple(self._spline(s, order) for order in range(4))
+
+    def joint_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lowest and highest position of every joint on every piece, each (k - 1, m)."""
+        c = self._spline.c  # (4, k - 1, m): c0 x^3 + c1 x^2 + c2 x + c3 on [0, h]
+        h = np.diff(self.knots)[:, None]
+        a, b, cc = 3.0 * c[0], 2.0 * c[1], c[2]
+        disc = np.maximum(b * b - 4.0 * a * cc, 0.0)
+        root = np.sqrt(disc)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x1 = np.where(a != 0.0, (-b - root) / (2.0 * a), np.where(b != 0.0, -cc / b, 0.0))
+            x2 = np.where(a != 0.0, (-b + root) / (2.0 * a), 0.0)
+        cand = [np.zeros_like(h + a), np.broadcast_to(h, a.shape)]
+        cand += [np.clip(np.nan_to_num(x), 0.0, h) for x in (x1, x2)]
+        vals = np.stack([((c[0] * x + c[1]) * x + c[2]) * x + c[3] for x in cand])
+        return vals.min(axis=0), vals.max(axis=0)
+
+
+def _least_bending(points: np.ndarray, knots: np.ndarray, tol: float) -> np.ndarray:
+    """Inner points moved by at most ``tol`` so that the natural spline through them
+    bends least (minimum integral of ``|d2q/ds2|^2``; a second-order cone program).
+
+    Returns the moved points (the ends stay); the given points where the solver
+    does not succeed.
+    """
+    import clarabel
+
+    k, m = points.shape
+    if k < 3 or tol <= 0.0:
+        return points.copy()
+    h = np.diff(knots)
+    nv = k * m
+    pi = np.arange(nv).reshape(k, m)  # index of P[i, j]
+    mi = nv + pi                      # index of M[i, j] (second derivative at knot i)
+    # energy: sum_i h_i / 3 (M_i^2 + M_i M_i+1 + M_i+1^2) per joint, as 1/2 x^T Q x
+    rows, cols, vals = [], [], []
+    for j in range(m):
+        for i in range(k - 1):
+            a, b = mi[i, j], mi[i + 1, j]
+            rows += [a, b, a]
+            cols += [a, b, b]
+            vals += [2.0 * h[i] / 3.0, 2.0 * h[i] / 3.0, h[i] / 3.0]
+    Q = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nv, 2 * nv))
+    # equalities: fixed ends, natural ends, the spline's continuity relations
+    er, ec, ev, eb = [], [], [], []
+    r = 0
+    for j in range(m):
+        for i, want in ((0, points[0, j]), (k - 1, points[-1, j])):
+            er.append(r), ec.append(pi[i, j]), ev.append(1.0), eb.append(want)
+            r += 1
+            er.append(r), ec.append(mi[i, j]), ev.append(1.0), eb.append(0.0)
+            r += 1
+        for i in range(1, k - 1):
+            h0, h1 = h[i - 1], h[i]
+            for col, val in ((mi[i - 1, j], h0), (mi[i, j], 2.0 * (h0 + h1)), (mi[i + 1, j], h1),
+                             (pi[i + 1, j], -6.0 / h1), (pi[i, j], 6.0 / h1 + 6.0 / h0),
+                             (pi[i - 1, j], -6.0 / h0)):
+                er.append(r), ec.append(col), ev.append(val)
+            eb.append(0.0)
+            r += 1
+    n_eq = r
+    # cones: (tol, P_i - W_i) for every inner point
+    for i in range(1, k - 1):
+        eb.append(tol)
+        r += 1
+        for j in range(m):
+            er.append(r), ec.append(pi[i, j]), ev.append(-1.0), eb.append(-points[i, j])
+            r += 1
+    A = sp.csc_matrix((ev, (er, ec)), shape=(r, 2 * nv))
+    cones = [clarabel.ZeroConeT(n_eq)] + [clarabel.SecondOrderConeT(m + 1)] * (k - 2)
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    sol = clarabel.DefaultSolver(Q, np.zeros(2 * nv), A, np.asarray(eb, dtype=float), cones,
+                                 settings).solve()
+    if str(sol.status).split(".")[-1] not in ("Solved", "AlmostSolved"):
+        return points.copy()
+    moved = np.asarray(sol.x)[:nv].reshape(k, m)
+    d = moved - points
+    d[0] = d[-1] = 0.0
+    dist = np.linalg.norm(d, axis=1)
+    over = dist > tol
+    d[over] *= (tol / dist[over])[:, None]
+    out = points + d
+    out[0], out[-1] = points[0], points[-1]
+    return out
+
+
 def _unit_deviation(d_in: np.ndarray, d_out: np.ndarray) -> float:
     """Distance of the corner from its blend for radius 1 (the blend's middle point)."""
     ctrl = _corner_ctrl(np.zeros(d_in.size), d_in, d_out, 1.0)
@@ -209,8 +330,29 @@ class WaypointTrajectory:
 
 
 def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
-                   blend: float) -> WaypointTrajectory:
+                   blend: float = 0.0, shape: str = "spline") -> WaypointTrajectory:
     """Move through joint-space waypoints without stopping, in minimum time.
+
+    Two path shapes join the waypoints; the path-timing engine
+    (:func:`plan_path_timing`) then times the path in minimum time under every
+    joint's velocity, acceleration and jerk limits. The motion stops at the
+    ends and where the waypoints reverse (a corner within 1e-3 rad of 180
+    degrees), and nowhere else.
+
+    ``"spline"`` (default)
+        A natural cubic spline (continuous velocity and acceleration) through
+        the waypoints, parameterised by their chord length. With ``blend > 0``
+        every inner waypoint may be passed up to ``blend`` away: the spline is
+        then the one of least bending (minimum integral of the squared second
+        derivative) among all that pass within the tolerance, which lowers
+        the curvature the timing has to respect. Where the spline would leave a
+        joint's position range between two waypoints, the motion stops at
+        both (and runs straight between them if needed).
+    ``"lines"``
+        Straight lines between the waypoints, every inner corner rounded by a
+        quintic blend that passes the waypoint at most ``blend`` away (``blend >
+        0``; a blend spans at most half of each adjacent line). The path never
+        leaves the straight lines outside the blends.
 
     Parameters
     ----------
@@ -219,12 +361,12 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
         the goal (both at rest). Consecutive duplicates are dropped.
     limits : AxisLimits or sequence of m AxisLimits
         Velocity, acceleration and jerk limits of every joint (finite
-        acceleration and jerk; both legs).
-    blend : float
-        Blend tolerance [joint-space distance, rad or m], > 0: every inner
-        waypoint lies within this distance of the path (the Euclidean norm
-        over the joints). A blend is also at most half of each adjacent
-        segment.
+        acceleration and jerk; both legs) and its position range.
+    blend : float, optional
+        Tolerance [joint-space distance, rad or m; the Euclidean norm over the
+        joints], >= 0 (``"spline"``) or > 0 (``"lines"``): how far from every
+        inner waypoint the path may pass. Default 0: through every waypoint.
+    shape : {"spline", "lines"}, optional
 
     Returns
     -------
@@ -234,7 +376,8 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     ------
     InvalidInputError
         Bad shapes, fewer than 2 distinct waypoints, more than
-        :data:`MAX_WAYPOINTS`, a waypoint outside a joint's range, or bad limits.
+        :data:`MAX_WAYPOINTS`, a waypoint outside a joint's range, an unknown
+        ``shape``, a bad ``blend`` or bad limits.
     """
     pts = check_array(waypoints, "waypoints", ndim=2)
     if pts.shape[0] > MAX_WAYPOINTS:
@@ -248,7 +391,14 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
             raise InvalidInputError(f"limits[{k}] must be an AxisLimits, got {type(lm).__name__}")
         for i in range(pts.shape[0]):
             lm.check_position(pts[i, k], f"waypoints[{i}]")
-    tol = check_positive(blend, "blend")
+    if shape not in SHAPES:
+        raise InvalidInputError(f"shape must be one of {', '.join(map(repr, SHAPES))}, got {shape!r}")
+    if shape == "lines":
+        tol = check_positive(blend, "blend")
+    else:
+        tol = check_finite(blend, "blend")
+        if tol < 0.0:
+            raise InvalidInputError(f"blend must be >= 0, got {tol!r}")
     keep = np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0.0, axis=1)])
     pts = pts[keep]
     if pts.shape[0] < 2:
@@ -260,18 +410,50 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     turn = np.arccos(np.clip(np.sum(dirs[:-1] * dirs[1:], axis=1), -1.0, 1.0))
     stops = [0] + [i + 1 for i, a in enumerate(turn) if a > REVERSAL_ANGLE] + [pts.shape[0] - 1]
     deviation = np.zeros(pts.shape[0])
-    segments: list[PathTiming] = []
+    if shape == "spline":
+        paths, stops = _spline_paths(pts, stops, tol, lims, deviation)
+    else:
+        paths = _line_paths(pts, stops, tol, turn, dirs, seglen, deviation)
+    segments = [plan_path_timing(path, lims) for path in paths]
+    return WaypointTrajectory(pts, tol, deviation, stops, segments, lims)
+
+
+def _line_paths(pts, stops, tol, turn, dirs, seglen, deviation) -> list[BlendedJointPath]:
+    paths = []
     for a, b in zip(stops[:-1], stops[1:]):
         sub = pts[a:b + 1]
         radii = np.zeros(max(sub.shape[0] - 2, 0))
         for c in range(1, sub.shape[0] - 1):
             i = a + c - 1  # the segment into the corner
-            ang = turn[i]
-            if ang < STRAIGHT_ANGLE:
+            if turn[i] < STRAIGHT_ANGLE:
                 continue
             unit = _unit_deviation(dirs[i], dirs[i + 1])
             radii[c - 1] = min(tol / unit if unit > 0 else np.inf, 0.5 * seglen[i], 0.5 * seglen[i + 1])
             deviation[a + c] = radii[c - 1] * unit
-        path = BlendedJointPath(sub, radii)
-        segments.append(plan_path_timing(path, lims))
-    return WaypointTrajectory(pts, tol, deviation, stops, segments, lims)
+        paths.append(BlendedJointPath(sub, radii))
+    return paths
+
+
+def _spline_paths(pts, stops, tol, lims, deviation) -> tuple[list[SplineJointPath], list[int]]:
+    lo = np.array([lm.position_min for lm in lims])
+    hi = np.array([lm.position_max for lm in lims])
+    bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
+    stops = list(stops)
+    while True:
+        paths: list[SplineJointPath] = []
+        added: set[int] = set()
+        for a, b in zip(stops[:-1], stops[1:]):
+            sub = pts[a:b + 1]
+            knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(sub, axis=0), axis=1))])
+            moved = _least_bending(sub, knots, tol)
+            path = SplineJointPath(moved, knots)
+            if bounded and sub.shape[0] > 2:
+                pmin, pmax = path.joint_range()
+                out = np.nonzero(((pmin < lo) | (pmax > hi)).any(axis=1))[0]
+                for piece in out:
+                    added.update({a + int(piece), a + int(piece) + 1} - {a, b})
+            deviation[a:b + 1] = np.linalg.norm(moved - sub, axis=1)
+            paths.append(path)
+        if not added:
+            return paths, stops
+        stops = sorted(set(stops) | added)
