@@ -49,7 +49,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {sg['kind']:4s} t0={sg['t0_s']:7.3f} s  {sg['duration_s']:6.3f} s  "
               f"{'; '.join(sg['instructions'])}")
     for sd in summary["slowdowns"]:
-        print(f"  slow-down in {sd['instruction']}: {sd['speed_mm_s']:.1f} of "
+        a, b = (", ".join(f"{c:.0f}" for c in sd[k]) for k in ("start_xyz_mm", "end_xyz_mm"))
+        print(f"  slow-down in {sd['instruction']}: ({a}) to ({b}) mm at {sd['speed_mm_s']:.1f} of "
               f"{sd['programmed_mm_s']:.0f} mm/s ({sd['reason']})")
     for lm in summary["limits"]:
         print(f"  joint {lm['joint']}: |v|/v_max {lm['velocity_ratio']:.3f}, "

@@ -123,7 +123,7 @@ class SaddlePlan:
     check : AxisCheck
         Verification on the fine grid.
     budget_scale : float
-        Final scale of the speed-limit budgets (1 unless replanning shrank them).
+        Final scale of the axis limits (1 unless a replanning round lowered them).
     rounds : int
         Planning rounds used.
     """

@@ -496,8 +496,10 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
     (``sqrt(a / |d2q/ds2|)``) and jerk (``cbrt(j / |d3q/ds3|)``) limits at constant
     speed, the orientation rate and the tool's centripetal acceleration. Nodes
     whose planned speed is below the programmed one where such a limit is
-    below it too form the reported stretches, split wherever the reason
-    changes; each reports the slowest planned speed inside it.
+    below it too form the reported stretches, split wherever the limit's level
+    changes by more than :data:`SLOWDOWN_BAND` (neighbours of the same reason
+    whose speeds stay within that band are one stretch again); each reports
+    the slowest planned speed inside it, off the ramps from and to rest.
     """
     tm = chain.timing
     robot = chain.robot
@@ -541,7 +543,7 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
         return f"{('velocity', 'acceleration', 'jerk')[c - 1]} of joint {robot.joint_names[j]}"
 
     pos, _, _, _ = chain.geometry(s)
-    out: list[Slowdown] = []
+    out: list[tuple[int, int, Slowdown]] = []
     i = 0
     while i < s.size:
         if not limited[i]:
@@ -564,6 +566,17 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
         mi = chain.motion_ids[chain.pieces[k[i]].motion]
         lab = chain.labels[chain.pieces[k[i]].motion]
         if speed < SLOWDOWN_FRACTION * float(prog[i]):
-            out.append(Slowdown(mi, lab, pos[i].copy(), pos[j].copy(), speed, float(prog[i]), reason))
+            prev = out[-1] if out else None
+            # a neighbouring stretch of the same instruction and reason whose speed is
+            # within one band of this one's: one stretch (its cap changed, the speed not)
+            if (prev is not None and prev[1] == i - 1 and prev[2].motion == mi
+                    and prev[2].reason == reason
+                    and max(prev[2].speed, speed) <= SLOWDOWN_BAND * min(prev[2].speed, speed)):
+                z = prev[2]
+                out[-1] = (prev[0], j, Slowdown(mi, lab, z.start_xyz, pos[j].copy(), min(z.speed, speed),
+                                                z.programmed, reason))
+            else:
+                out.append((i, j, Slowdown(mi, lab, pos[i].copy(), pos[j].copy(), speed, float(prog[i]),
+                                           reason)))
         i = j + 1
-    return out
+    return [z for _, _, z in out]
