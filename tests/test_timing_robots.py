@@ -96,12 +96,13 @@ def test_raising_the_programmed_speed_never_lengthens_a_lin():
     q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
     p0 = arm.fk(q0)
     goal = Pose(p0.position + np.array([0.05, 0.30, -0.12]), rot_z(0.4) @ p0.rotation)
-    speeds = [0.1, 0.2, 0.4, 0.7, 1.0, 1.5, 2.0, 3.0]
+    speeds = [0.1, 0.2, 0.4, 0.7, 1.0, 1.2, 1.5, 2.0, 2.5, 3.0]
     durations = [run_motions(arm, [Lin(CartesianTarget(goal), v, label="L")], q0).duration
                  for v in speeds]
-    # never longer than at a lower speed, within the engine's stated optimality (0.1 %)
+    # never longer than at a lower speed (up to the cone solver's tolerance where the
+    # joints, not the programmed speed, limit both)
     for lo, hi in zip(durations, durations[1:]):
-        assert hi <= lo * (1 + 1e-3), durations
+        assert hi <= lo * (1 + 1e-6), durations
     assert durations[-1] < 0.5 * durations[0]
 
 
