@@ -1,4 +1,4 @@
-"""Speed of the state-to-state planner (issue 8): time per call, typical and worst.
+"""Speed of the state-to-state planner: time per call, typical and worst.
 
 Seeded random non-zero states over the hard corners (the generator of
 ``tests/state_reference.py``), symmetric and asymmetric limits. For each case:

@@ -1,4 +1,4 @@
-"""Example 07: robot motion programs (seed 002): PTP, LIN, CIRC, blending, singularities.
+"""Example 07: robot motion programs (Jiang, 1987): PTP, LIN, CIRC, blending, singularities.
 
 1. Loads the shipped weld program for the 6-axis arm (``examples/data/arm6_weld.yaml``),
    plans it, samples it at a 4 ms period (inverse kinematics at every

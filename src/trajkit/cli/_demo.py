@@ -1,7 +1,7 @@
 """Sub-command ``trajkit demo``: the project's main job in one command.
 
-Runs the seed 000 palletizing scenario in its cell (conveyor, guides, end
-stop, pallet) with the classic, merged and optimal planners and the cell
+Runs the palletizing job of Cao et al. (2012) in its cell (conveyor, guides,
+end stop, pallet) with the classic, merged and optimal planners and the cell
 planner, prints the table beside the paper's table 1 and what each plan does
 in the cell, and writes the figures (B-axis velocity, cycle time against
 Zmax, 3-D gripper path in the cell, one 4-axis transfer move) into a folder
@@ -27,10 +27,10 @@ TRANSFER_PLOT = "ptp_transfer_4axis.png"
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "demo",
-        help="run the seed palletizing scenario in its cell (classic PTP, merged, optimal, cell) "
-             "and write its plots",
-        description="Plan seed 000's palletizing job (25 boxes) with the classic PTP, the "
-                    "paper's merged planner, trajkit's optimal planner (B passes its "
+        help="run the palletizing job of Cao et al. (2012) in its cell (classic PTP, merged, "
+             "optimal, cell) and write its plots",
+        description="Plan the palletizing job of Cao et al. (2012) (25 boxes) with the classic "
+                    "PTP, the paper's merged planner, trajkit's optimal planner (B passes its "
                     "clearance heights without stopping) and the cell planner (around the "
                     "real cell's obstacles and the growing stack), verify all four, print the "
                     "table beside the paper's table 1, check every plan against the cell and "
@@ -93,7 +93,7 @@ def _demo(out: Path) -> int:
     summary = summarize(plans, reports=reports)
     print_table(
         f"trajkit demo - {scenario.name}: {summary['boxes']} boxes, planned cycle time "
-        "(paper: seed 000 table 1)",
+        "(paper: Cao et al., 2012, table 1)",
         TABLE_COLUMNS, table_rows(summary),
     )
     print_table(f"{scenario.name}: in the cell (clearance, stack, gripper volume)",

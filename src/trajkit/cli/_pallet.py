@@ -1,12 +1,13 @@
 """Sub-command ``trajkit pallet [JOB.yaml]``: plan a palletizing job, print table 1.
 
-Thin shell over :mod:`trajkit.palletizing`: load the job (the shipped seed
-scenario by default), run every planner, verify each plan, then print a
-table beside seed 000's table 1 (or JSON with ``--json``) and optionally
+Thin shell over :mod:`trajkit.palletizing`: load the job (by default the
+shipped job ``seed``, the experiment of Cao et al., 2012), run every planner,
+verify each plan, then print a table beside the paper's table 1 (or JSON
+with ``--json``) and optionally
 write the figures (``--plot DIR``) and one plan's cycle as CSV (``--csv FILE
 --period DT``). A job with a cell also gets the ``cell`` planner, and every
-plan is checked against the cell (a plan under the seed rule that collides
-is reported, not an error).
+plan is checked against the cell (a plan under the paper's clearance rule
+that collides is reported, not an error).
 """
 
 from __future__ import annotations
@@ -43,14 +44,15 @@ MAX_CSV_ROWS = 10_000_000
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "pallet",
-        help="plan a palletizing job (classic PTP, merged, optimal), table like seed 000's table 1",
+        help="plan a palletizing job (classic PTP, merged, optimal), table like table 1 of "
+             "Cao et al. (2012)",
         description="Plan a palletizing job with each planner, verify the plans, and print the "
-                    "total planned time, time per box and reduction beside seed 000's table 1. "
-                    "Without JOB the shipped seed scenario (25 boxes) is used.",
+                    "total planned time, time per box and reduction beside table 1 of Cao et "
+                    "al. (2012). Without JOB the shipped job 'seed' (the paper's 25 boxes) is used.",
     )
     p.add_argument("job", nargs="?", metavar="JOB.yaml",
-                   help="job file (YAML; mm and deg), or a shipped job: seed (the default), "
-                        "seed_cell (the seed scenario in its cell)")
+                   help="job file (YAML; mm and deg), or a shipped job: seed (the default; the "
+                        "job of Cao et al. (2012)), seed_cell (that job in its cell)")
     p.add_argument("--json", action="store_true",
                    help='print {"boxes": N, "plans": {name: {"total_s", "per_box_s", ...}}}')
     p.add_argument("--plot", metavar="DIR", help="write the figures (PNG) into DIR")
@@ -101,7 +103,7 @@ def run_pallet(job: str | None, planners=None, verify: bool = True,
     ----------
     job : str or None
         Job file, or the name of a shipped job (``"seed"``, ``"seed_cell"``);
-        the seed scenario when ``None``.
+        ``"seed"`` when ``None``.
     planners : sequence of str, optional
         Default :data:`DEFAULT_PLANNERS`, plus :data:`CELL_PLANNER` for a
         job with a cell.
@@ -117,8 +119,8 @@ def run_pallet(job: str | None, planners=None, verify: bool = True,
     InvalidInputError
         Bad job file or unknown planner; a plan that fails verification
         raises :class:`~trajkit.palletizing.PlanVerificationError` (for a
-        plan under the seed rule, breaking the cell's rules is reported in
-        its report, not raised).
+        plan under the clearance rule of Cao et al. (2012), breaking the
+        cell's rules is reported in its report, not raised).
     """
     from ..io.pallet_job import load_job, seed_cell_job_path, seed_job_path
     from ..palletizing import PLANNERS, plan_cycle, verify_plan
@@ -238,7 +240,7 @@ def _cmd_pallet(args: argparse.Namespace) -> int:
         return 0
     print_table(
         f"{scenario.name}: {summary['boxes']} boxes, planned cycle time "
-        "(paper: seed 000 table 1, 25 boxes)",
+        "(paper: Cao et al., 2012, table 1, 25 boxes)",
         TABLE_COLUMNS, table_rows(summary),
     )
     if summary.get("cell"):

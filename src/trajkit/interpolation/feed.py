@@ -30,7 +30,7 @@ from ._pieces import JerkPieces
 
 __all__ = ["Slowdown", "FeedSample", "FeedPlan", "plan_feed", "MIN_PERIOD", "MAX_PERIOD", "setpoint_times"]
 
-#: Shortest and longest control period accepted [s] (0.1 ms ... seed 003's 100 ms).
+#: Shortest and longest control period accepted [s] (0.1 ms ... the 100 ms step of Jiang, 1987).
 MIN_PERIOD = 1e-4
 MAX_PERIOD = 0.1
 
@@ -212,11 +212,11 @@ class FeedPlan:
 # ---------------------------------------------------------------- planning
 def chord_speed_limit(path: Path, tolerance: float, period: float) -> SpeedLimitFn:
     """Speed limit so that the straight line between consecutive setpoints
-    stays within ``tolerance`` of the path (seed 002: too high a speed for the
-    period leaves the path).
+    stays within ``tolerance`` of the path (Jiang, 1987: too high a speed for
+    the period leaves the path).
 
     ``v_lim(s) = arc(K, E) / period`` where ``arc`` is the arc length whose
-    chord has sagitta E on a circle of radius K (seed 003, eq. 11) and K the
+    chord has sagitta E on a circle of radius K (Chen et al., 2013, eq. 11) and K the
     smallest radius of curvature within one grid cell either side.
     """
     E = check_positive(tolerance, "tolerance")

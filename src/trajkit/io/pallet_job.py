@@ -3,8 +3,9 @@
 A job file gives lengths in millimetres and angles in degrees (the names
 say so: ``x_mm``, ``yaw_deg``); :func:`scenario_from_job` converts to SI and
 builds a :class:`~trajkit.palletizing.PalletScenario`. Every error names the
-field (``pallet.length_mm``) and the offending value. The seed scenario ships
-as ``trajkit/data/seed_pallet.yaml`` (:func:`seed_job_path`).
+field (``pallet.length_mm``) and the offending value. The palletizing job of
+Cao et al. (2012) ships as ``trajkit/data/seed_pallet.yaml``
+(:func:`seed_job_path`).
 
 Example::
 
@@ -21,7 +22,7 @@ Example::
       obstacles:
         - {name: conveyor belt, x_mm: [600, 1500], y_mm: [-300, 300], z_mm: [0, 200]}
 
-The seed scenario in its cell ships as ``trajkit/data/seed_cell.yaml``
+The same job in its cell ships as ``trajkit/data/seed_cell.yaml``
 (:func:`seed_cell_job_path`).
 """
 
@@ -284,11 +285,11 @@ def load_job(path: str | os.PathLike) -> PalletScenario:
 
 
 def seed_job_path() -> Path:
-    """Path of the shipped seed-scenario job file ``trajkit/data/seed_pallet.yaml``."""
+    """Path of the shipped job of Cao et al. (2012), ``trajkit/data/seed_pallet.yaml``."""
     return Path(str(resources.files("trajkit") / "data" / "seed_pallet.yaml"))
 
 
 def seed_cell_job_path() -> Path:
-    """Path of the seed scenario in its cell, ``trajkit/data/seed_cell.yaml``
+    """Path of the job of Cao et al. (2012) in its cell, ``trajkit/data/seed_cell.yaml``
     (conveyor, guides, end stop, pallet; 10 mm clearance, 20 mm settle)."""
     return Path(str(resources.files("trajkit") / "data" / "seed_cell.yaml"))

@@ -1,6 +1,6 @@
 """The ``cell`` palletizing planner: every trip planned around the cell's geometry.
 
-The clearance heights of seed 000 (``Z1``, ``Z2``) stand in for geometry;
+The clearance heights of Cao et al. (2012) (``Z1``, ``Z2``) stand in for geometry;
 this planner uses the geometry itself (:mod:`trajkit.palletizing.cell`): the
 conveyor, guides and end stop, the pallet, the stack as it grows, and the
 gripper with the box hanging below it.

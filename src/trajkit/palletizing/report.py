@@ -1,4 +1,4 @@
-"""Summaries of planned jobs beside seed 000's table 1."""
+"""Summaries of planned jobs beside table 1 of Cao et al. (2012)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from .planners import CyclePlan
 __all__ = ["PAPER_TABLE1", "PAPER_BOXES", "summarize", "table_rows", "bound_lines", "TABLE_COLUMNS",
            "CELL_COLUMNS", "cell_rows", "cell_lines", "cycle_rows"]
 
-#: Seed 000, table 1 (25 boxes): planned and measured times [s]; per box is
+#: Cao et al. (2012), table 1 (25 boxes): planned and measured times [s]; per box is
 #: the measured time / 25 as printed in the paper.
 PAPER_TABLE1 = {
     "ptp": {"planned_s": 107.854, "measured_s": 112.997, "per_box_measured_s": 4.520},

@@ -1,7 +1,7 @@
 """A palletizing scenario: robot, pick point, pallet, pattern, and its trips.
 
-All quantities in SI (m, rad, s). :func:`seed_scenario` is the scenario of
-seed 000 / issue 4.
+All quantities in SI (m, rad, s). :func:`seed_scenario` is the palletizing
+experiment of Cao et al. (2012) with the default palletizer.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ class TripSpec:
 
     @property
     def z_levels(self) -> tuple[float, float, float, float]:
-        """``(Z0, Z1, Z2, Z3)`` of seed 000 [m]."""
+        """``(Z0, Z1, Z2, Z3)`` as named by Cao et al. (2012) [m]."""
         return (float(self.q_start[1]), self.z_clear_start, self.z_clear_goal,
                 float(self.q_goal[1]))
 
@@ -247,13 +247,14 @@ class PalletScenario:
 
 
 def seed_scenario(robot: CylindricalPalletizer | None = None, **overrides: Any) -> PalletScenario:
-    """The scenario of seed 000 / issue 4 (25 boxes, 5 layers, 180-degree interlock).
+    """The palletizing experiment of Cao et al. (2012): 25 boxes, 5 layers, 180-degree interlock.
 
     Pick (1200, 0, 400) mm, yaw 0; pallet centre (0, 1400, 400) mm on a
-    1200 x 1000 mm pallet; boxes 600 x 400 x 200 mm in the seed layer, the
+    1200 x 1000 mm pallet; boxes 600 x 400 x 200 mm in the ``seed`` layer, the
     2nd and 4th layers turned 180 degrees; lift 400 mm, approach 200 mm;
-    gripper times zero. Keyword arguments override fields of
-    :class:`PalletScenario`.
+    gripper times zero. The paper gives no joint limits: the robot is
+    :func:`~trajkit.kinematics.default_palletizer` unless given. Keyword
+    arguments override fields of :class:`PalletScenario`.
     """
     box = BoxSize(0.6, 0.4, 0.2)
     kw: dict[str, Any] = dict(
@@ -265,7 +266,7 @@ def seed_scenario(robot: CylindricalPalletizer | None = None, **overrides: Any) 
         layers=5,
         lift=0.4,
         approach=0.2,
-        name="seed 000",
+        name="Cao et al. (2012) job",
     )
     kw.update(overrides)
     return PalletScenario(**kw)

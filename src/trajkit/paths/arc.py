@@ -1,4 +1,4 @@
-"""Spatial circular arc through three points (seed 002)."""
+"""Spatial circular arc through three points (Jiang, 1987)."""
 
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ def circle_through(p1: Any, p2: Any, p3: Any) -> tuple[np.ndarray, float, np.nda
 
 
 class Arc3(Path):
-    """Circular arc from ``p1`` via ``p2`` to ``p3`` (seed 002), or the full circle.
+    """Circular arc from ``p1`` via ``p2`` to ``p3`` (Jiang, 1987), or the full circle.
 
     Parameters
     ----------

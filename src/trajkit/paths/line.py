@@ -1,4 +1,4 @@
-"""Straight line segment (seed 002: CP control along a line)."""
+"""Straight line segment (continuous-path control along a line, Jiang 1987)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Saddle curves: the seam where a branch pipe meets a main pipe (seed 003).
+"""Saddle curves: the seam where a branch pipe meets a main pipe (Chen et al., 2013).
 
-Convention (issue 3): the branch axis is the z axis, the seam is
+Convention: the branch axis is the z axis, the seam is
 parameterised by the angle theta around it, measured from the +y axis
 towards +x. The main pipe's axis passes through ``(offset, 0, 0)`` with
 direction ``m = (0, sin(angle), cos(angle))``: ``angle`` is the angle between
@@ -16,7 +16,7 @@ root is exact:
 
     z(theta) = r cos(theta) cot(angle) + sqrt(R^2 - (r sin(theta) - offset)^2) / sin(angle)
 
-For ``angle = pi/2, offset = 0`` this is the seed's equation
+For ``angle = pi/2, offset = 0`` this is the equation of Chen et al. (2013)
 ``z = sqrt(R^2 - r^2 sin^2 theta)``. The branch meets the main pipe all the
 way round iff ``|offset| + r < R``.
 """
@@ -64,7 +64,7 @@ class SaddleCurve(Path):
         r [m], > 0.
     angle : float
         Angle between the branch axis and the main axis [rad], in (0, pi);
-        ``pi/2`` (default) is the orthogonal tee of seed 003.
+        ``pi/2`` (default) is the orthogonal tee of Chen et al. (2013).
     offset : float
         Distance [m] along x between the main axis and the branch axis
         (0: the axes meet).
@@ -314,7 +314,7 @@ class SaddleCurve(Path):
         return self.s_of_theta(th), self.curvature_theta(th)
 
     def uniform_nodes(self, n: int) -> np.ndarray:
-        """Arc lengths of ``n`` equal theta steps (seed 003's "points per turn")."""
+        """Arc lengths of ``n`` equal theta steps (the "points per turn" of Chen et al., 2013)."""
         th = self.theta_start + np.linspace(0.0, _TWO_PI, int(n) + 1)
         out = self.s_of_theta(th)
         out[0], out[-1] = 0.0, self.length

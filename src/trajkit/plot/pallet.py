@@ -1,4 +1,4 @@
-"""Figures for palletizing plans (seed 000 figures 6, 8, 12 and a 3-D path view).
+"""Figures for palletizing plans (Cao et al., 2012, figures 6, 8, 12, and a 3-D path view).
 
 Every function takes planned objects, returns a matplotlib Figure, and writes
 it (atomically) when given ``path``. Units on the axes: mm, mm/s, s.
@@ -49,7 +49,7 @@ def _cycle_window(plan, box: int):
 def plot_b_velocity(plans: Mapping[str, object], box: int = 0, path=None):
     """B-axis velocity and height over one cycle (load + return) of ``box``, per plan.
 
-    One column per plan (seed 000 figure 6 for ``ptp``, figure 8 for
+    One column per plan (Cao et al., 2012, figure 6 for ``ptp``, figure 8 for
     ``merged``); the shaded spans are the windows where A, C, D move.
     """
     plt = require_matplotlib()
@@ -87,7 +87,7 @@ def plot_b_velocity(plans: Mapping[str, object], box: int = 0, path=None):
 
 
 def plot_zmax_curve(scenario, box: int = 0, kind: str = "load", n: int = 201, path=None):
-    """Trip time against B's highest point ``Zmax`` for one trip (seed 000 figure 12).
+    """Trip time against B's highest point ``Zmax`` for one trip (Cao et al., 2012, figure 12).
 
     Shows ``f' + g'`` (B alone), ``t1 + tH + t3`` (horizontal window) and
     their maximum (the trip time), with the optimum found by the planner.

@@ -1,5 +1,5 @@
 """Figures for paths and seams: the 3-D curve with its coarse chords, and the
-axis positions and speeds against time (seed 003, figures 6 and 7)."""
+axis positions and speeds against time (Chen et al., 2013, figures 6 and 7)."""
 
 from __future__ import annotations
 
