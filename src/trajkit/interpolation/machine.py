@@ -19,7 +19,7 @@ tangential limits, the feed and the chord tolerance at the period.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -159,8 +159,10 @@ class SaddlePlan:
                   max_samples: int | None = MAX_SAMPLES) -> tuple[FeedSample, np.ndarray]:
         """Fixed-period setpoints: the feed samples and the axis states (2, 4, n);
         at most ``max_samples`` (see :func:`~trajkit.interpolation.setpoint_times`)."""
-        fs = self.feed_plan.sample(setpoint_times(self.duration, period, max_samples))
-        return fs, axis_states(self.curve, fs)
+        fs = self.feed_plan.sample(setpoint_times(self.duration, period, max_samples), points=False)
+        theta = self.curve.theta_of_s(fs.s)  # once, for the points and the axes
+        fs = replace(fs, points=self.curve.point_theta(theta))
+        return fs, axis_states(self.curve, fs, theta)
 
     def report(self) -> list[dict]:
         """Where and why the feed is lowered: s range [m], theta range [deg], speed, reason."""
@@ -175,14 +177,16 @@ class SaddlePlan:
         return out
 
 
-def axis_states(curve: SaddleCurve, fs: FeedSample) -> np.ndarray:
-    """Axis position/velocity/acceleration/jerk from feed samples (exact chain rule).
+def axis_states(curve: SaddleCurve, fs: FeedSample, theta: np.ndarray | None = None) -> np.ndarray:
+    """Axis position/velocity/acceleration/jerk from feed samples (exact chain rule);
+    ``theta``: the seam angles at ``fs.s`` when already known.
 
     Returns
     -------
     ndarray, shape (2, 4, n)
     """
-    q = curve.machine_axes(fs.s)  # (2, 4, n): value, q', q'', q'''
+    # (2, 4, n): value, q', q'', q'''
+    q = curve.machine_axes(fs.s) if theta is None else curve.machine_axes_theta(theta)
     v, a, j = fs.v, fs.a, fs.j
     out = np.empty_like(q)
     out[:, 0] = q[:, 0]

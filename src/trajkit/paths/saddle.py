@@ -52,6 +52,10 @@ _TABLE_MAX = 1 << 16
 #: Intervals of the inverse table theta(s) (first guesses for Newton).
 _INVERSE_TABLE = 4096
 
+#: Points evaluated at once by the arc-length inversions (bounds their memory:
+#: the quadrature holds GAUSS_ORDER values per point).
+_CHUNK = 1 << 15
+
 
 class SaddleCurve(Path):
     """Intersection of a branch pipe (radius r) with a main pipe (radius R).
@@ -244,8 +248,12 @@ class SaddleCurve(Path):
                 f"[{float(np.min(th))!r}, {float(np.max(th))!r}]"
             )
         th = np.clip(th, lo, hi)
-        k = np.clip(np.searchsorted(self._edges, th, side="right") - 1, 0, len(self._edges) - 2)
-        return self._partial(k, th)
+        out = np.empty_like(th)
+        for i in range(0, th.size, _CHUNK):
+            part = th[i:i + _CHUNK]
+            k = np.clip(np.searchsorted(self._edges, part, side="right") - 1, 0, len(self._edges) - 2)
+            out[i:i + _CHUNK] = self._partial(k, part)
+        return out
 
     def _partial(self, k: np.ndarray, th: np.ndarray) -> np.ndarray:
         a = self._edges[k]
@@ -261,7 +269,11 @@ class SaddleCurve(Path):
         ndarray, shape (n,)
         """
         ss, _ = self._prep(s)
-        return self._newton(ss, self._guess(ss))
+        out = np.empty_like(ss)
+        for i in range(0, ss.size, _CHUNK):
+            part = ss[i:i + _CHUNK]
+            out[i:i + _CHUNK] = self._newton(part, self._guess(part))
+        return out
 
     def _guess(self, ss: np.ndarray) -> np.ndarray:
         g = getattr(self, "_inv", None)
@@ -340,7 +352,11 @@ class SaddleCurve(Path):
             value, d/ds, d2/ds2, d3/ds3 (per metre of seam, exact).
         """
         ss, _ = self._prep(s)
-        th = self.theta_of_s(ss)
+        return self.machine_axes_theta(self.theta_of_s(ss))
+
+    def machine_axes_theta(self, theta: Any) -> np.ndarray:
+        """:meth:`machine_axes` at the angles ``theta`` [rad] (n,) instead of arc lengths."""
+        th = np.asarray(theta, dtype=float)
         z = self.z_derivatives(th)
         r2 = self.branch_radius ** 2
         sig = np.sqrt(r2 + z[1] ** 2)
