@@ -527,12 +527,23 @@ def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_pat
     A = np.append(A, st[-1, 2])
     jk = np.append(jk, jerk[-1] if k else 0.0)
     S = np.clip(S, s_grid[0], s_grid[-1])
-    cell = np.clip(np.searchsorted(s_grid, S, side="right") - 1, 0, s_grid.size - 2)
+    # the end of a piece belongs to that piece: where it ends on a grid node (a
+    # breakpoint of the path, where q''' may step), the derivatives are the limits
+    # from below (the value from above is the next piece's start sample)
+    S_eval = S.copy()
+    if k:
+        npp = frac.size
+        ends = np.arange(npp - 1, k * npp, npp)
+        c0 = np.clip(np.searchsorted(s_grid, st[:-1, 0], side="right") - 1, 0, s_grid.size - 2)
+        S_eval[ends] = np.minimum(S[ends], np.nextafter(s_grid[c0 + 1], -np.inf))
+        S_eval[-1] = np.nextafter(S[-1], -np.inf)
+        S_eval = np.maximum(S_eval, s_grid[0])
+    cell = np.clip(np.searchsorted(s_grid, S_eval, side="right") - 1, 0, s_grid.size - 2)
     if path is not None:  # a path whose derivatives are cheap: the exact ones
-        _, f1, f2, f3 = path.derivatives(S)
+        _, f1, f2, f3 = path.derivatives(S_eval)
     else:
-        f1, f2, f3 = _interp_derivatives(s_grid, der, S)
-    w = ((S - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell]))[:, None]
+        f1, f2, f3 = _interp_derivatives(s_grid, der, S_eval)
+    w = ((S_eval - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell]))[:, None]
     qd = f1 * V[:, None]
     qdd = f2 * (V * V)[:, None] + f1 * A[:, None]
     qddd = f3 * (V**3)[:, None] + 3.0 * f2 * (V * A)[:, None] + f1 * jk[:, None]
