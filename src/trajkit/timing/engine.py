@@ -119,6 +119,12 @@ ZOOM_LEVELS = 4
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
 
+#: An excess above this fraction means the grid is too coarse where it happens:
+#: the cells around it are split in two and the problem solved again (at most
+#: MAX_SPLITS times) before any limit is lowered.
+SPLIT_ABOVE = 1e-2
+MAX_SPLITS = 3
+
 #: The check's largest excess above which a limit is lowered locally and the
 #: problem solved again (below it the uniform slow-down is cheaper).
 TIGHTEN_ABOVE = 1e-6
@@ -500,6 +506,17 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
     return np.asarray(prof.phase_durations)[keep], np.asarray(prof.jerks)[keep]
 
 
+def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Node values on a refined grid: kept at the old nodes, the smaller neighbour's
+    at a new node (lowered limits stay lowered around where they were)."""
+    idx = np.clip(np.searchsorted(s_old, s_new, side="right") - 1, 0, s_old.size - 1)
+    nxt = np.minimum(idx + 1, s_old.size - 1)
+    on_old = s_old[idx] == s_new
+    out = np.minimum(values[idx], values[nxt])
+    out[on_old] = values[idx[on_old]]
+    return out
+
+
 def _uniform_scale(use: LimitUse) -> float:
     """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3)."""
     k = max(1.0, float(use.velocity.max(initial=0.0)), use.path_speed,
@@ -799,9 +816,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             scale_a = np.ones((n, m))
             scale_j = np.ones((n, m))
         tightened = 0
+        splits = 0
         best = None
         xmid_scale = np.ones(s.size - 1)
-        for attempt in range(MAX_TIGHTEN + 1):
+        attempt = 0
+        while attempt <= MAX_TIGHTEN:
             prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                                j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
@@ -809,7 +828,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
-            sol = first if (attempt == 0 and not add.size) else solve_grid(
+            sol = first if (attempt == 0 and not add.size and not splits) else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init)
             init = (sol.x, sol.u)  # a tightened attempt starts from this one
             try:
@@ -827,10 +846,38 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             # preferred unless a slowed one is clearly faster
             score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
             if best is None or score < best[0]:
-                best = (score, sol, dur, jk, use, k, piv)
+                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap))
             if use.worst <= 1.0 + TIGHTEN_ABOVE:
                 break  # a small excess costs less as a uniform slow-down than as another round
+            if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
+                # a large excess: the grid is too coarse for the motion there (the
+                # pieces' jerks differ from the interval's mean): split the cells
+                # around it and solve again from this solution
+                bad = np.zeros(s.size - 1, dtype=bool)
+                for ratio in (rv, ra, rj):
+                    bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
+                bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
+                bad[:-1] |= bad[1:].copy()
+                bad[1:] |= bad[:-1].copy()
+                cells = np.nonzero(bad)[0][:max(GRID_MAX - s.size, 0)]
+                s_new = np.unique(np.concatenate([s, 0.5 * (s[cells] + s[cells + 1])]))
+                init = (np.interp(s_new, s, sol.x), np.interp(s_new, s, sol.u))
+                scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
+                                                    (scale_v, scale_a, scale_j, x_cap))
+                xmid_scale = np.ones(s_new.size - 1)
+                s, der = s_new, path.derivatives(s_new)
+                q, d1, d2, d3 = der
+                cap = cap_fn(s)
+                x_cap = np.minimum(x_cap, cap ** 2)
+                with np.errstate(divide="ignore"):
+                    vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf),
+                                             axis=1), cap)
+                if kappa is not None:
+                    kappa = np.abs(np.asarray(curvature(s), dtype=float))
+                splits += 1
+                continue
             tightened += 1
+            attempt += 1
             for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
                 over = ratio > 1.0 + CHECK_RTOL
                 if not over.any():
@@ -857,7 +904,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         sol, piv, k_scale, tightened = None, None, 1.0, 0
         jerk_free_time = math.nan
     else:
-        _, sol, dur0, jk0, use, k_scale, piv = best
+        _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap) = best
     for _final in range(4):
         if k_scale > 1.0 and not (rest0 and restN):
             raise InfeasibleError(
