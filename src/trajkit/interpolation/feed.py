@@ -446,9 +446,10 @@ def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], 
         seg = slice(i, j + 1)
         # the binding limit off the ramps from and to rest (where the speed is the
         # start or the stop, not the limit's), like the speed reported
+        # (a stretch all on a ramp reports its fastest speed and the limit there)
         off = ~ramp[seg]
-        lim_seg = np.where(off, vlim[seg], np.inf) if off.any() else vlim[seg]
-        k = i + int(np.argmin(lim_seg))
+        k = i + (int(np.argmin(np.where(off, vlim[seg], np.inf))) if off.any()
+                 else int(np.argmax(v[seg])))
         spd = stretch_speed(v[seg], ramp[seg])
         out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), spd, float(vlim[k]), label[k]))
         i = j + 1
