@@ -1,0 +1,311 @@
+"""The brake pre-phase: returning a state into the limits (kernel).
+
+A state ``(v, a)`` is *inside the limits* when a motion from it can keep
+every limit from now on:
+
+* ``|v| <= v_max``;
+* speeding up (``v a > 0``, or ``v = 0``): ``|a| <= a_max`` and the velocity
+  reached by ramping the acceleration to zero at ``j_max`` stays within
+  ``v_max`` (``|v| + a^2 / (2 j_max) <= v_max``);
+* slowing down (``v a < 0``): ``|a| <= a_max_decel``; if the velocity would
+  reverse before the acceleration can come back to zero (ramping it at
+  ``j_max_decel``), the acceleration at the reversal is within ``a_max`` and
+  the velocity then reached in the new direction within ``v_max``.
+
+From a state outside, every motion breaks a limit for a while; the planner
+brakes first and plans the time-optimal motion from where the brake ends.
+Brake candidates (each with the jerk at the limit of its leg, no limit
+checked while outside):
+
+* ``path(s)``, ``s = +1, -1``: the jerk ``-s j``, the acceleration held once
+  it reaches ``-s a_max_decel`` (ruckig's brake rule, for both signs), up to
+  the **first instant inside the limits** -- found exactly: the boundary of
+  the inside set along a constant-jerk phase is where ``v``, ``a`` or the
+  natural velocity reach a bound, all roots of quadratics;
+* ``bump``: the fastest velocity change to ``(+-v_max, 0)`` in the
+  direction of the velocity (it always ends inside).
+
+The planner (:mod:`._kernel`) plans from the end of each candidate that
+ends inside and keeps the fastest total: the brake is part of the
+minimum-time solution. The rules are mirror-symmetric. Limits as in
+:mod:`._check`: ``V, A1, K1, A2, K2`` (``K = 1/j_max``).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ._compile import jit
+from ._phase import phase_end
+
+__all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump"]
+
+#: Largest number of phases of one brake candidate.
+BRAKE_PHASES = 10
+
+#: Relative slack of the "inside the limits" test.
+INSIDE_RTOL = 1e-12
+
+
+@jit
+def inside(v, a, V, A1, K1, A2, K2):
+    """True when ``(v, a)`` lies inside the limits (see the module text)."""
+    if v < 0.0 or (v == 0.0 and a < 0.0):
+        v = -v
+        a = -a
+    tol = 1.0 + INSIDE_RTOL
+    if v > V * tol:
+        return False
+    if a > 0.0 or (v == 0.0 and a != 0.0):
+        if a > A1 * tol:
+            return False
+        if v + 0.5 * a * a * K1 > V * tol + 1e-300:
+            return False
+        return True
+    if a < 0.0:
+        if -a > A2 * tol:
+            return False
+        rem = v - 0.5 * a * a * K2
+        if rem < 0.0:
+            # the velocity reverses at a_z^2 = a^2 - 2 v / K2, then speeds up
+            az2 = a * a - 2.0 * v / K2
+            if az2 > A1 * A1 * tol * tol:
+                return False
+            if 0.5 * az2 * K1 > V * tol + 1e-300:
+                return False
+    return True
+
+
+@jit
+def _add(buf, t, x):
+    """Append ``x`` to the candidate times if in (0, t_max = buf[0]]."""
+    if 0.0 < x <= buf[0]:
+        n = int(buf[1])
+        if n < buf.shape[0] - 2:
+            buf[2 + n] = x
+            buf[1] = n + 1
+
+
+@jit
+def _quad(buf, qa, qb, qc):
+    """Add the real roots of qa t^2 + qb t + qc."""
+    if qa == 0.0:
+        if qb != 0.0:
+            _add(buf, 0.0, -qc / qb)
+        return
+    disc = qb * qb - 4.0 * qa * qc
+    if disc < 0.0:
+        return
+    sq = math.sqrt(disc)
+    q = -0.5 * (qb + math.copysign(sq, qb))
+    if q != 0.0:
+        _add(buf, 0.0, q / qa)
+        _add(buf, 0.0, qc / q)
+    else:
+        _add(buf, 0.0, 0.0)
+
+
+@jit
+def _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, buf):
+    """First t in [0, tmax] where the state of the phase (v, a, j) is inside, or inf.
+
+    The inside set changes only where v, a or a natural velocity meet a bound:
+    every such instant is a root of a quadratic in t (computed here); the
+    state is tested at each, in order.
+    """
+    if inside(v, a, V, A1, K1, A2, K2):
+        return 0.0
+    buf[0] = tmax
+    buf[1] = 0.0
+    h = 0.5 * j
+    # v(t) = v + a t + h t^2 ;  a(t) = a + j t
+    for sv in (-1.0, 1.0):
+        _quad(buf, h, a, v - sv * V)           # |v| = V
+    _quad(buf, h, a, v)                         # v = 0
+    if j != 0.0:
+        for x in (0.0, A1, -A1, A2, -A2):      # a = bounds, a = 0
+            _add(buf, 0.0, (x - a) / j)
+    for K in (K1, K2):
+        if K > 0.0:
+            # v + s a^2 K / 2 = c  (natural velocities, both signs):
+            # (h + s j^2 K/2) t^2 + (a + s a j K) t + (v + s a^2 K/2 - c) = 0
+            for s in (-1.0, 1.0):
+                for c in (-V, 0.0, V):
+                    _quad(buf, h + s * 0.5 * j * j * K, a + s * a * j * K,
+                          v + s * 0.5 * a * a * K - c)
+            # reversal acceleration a^2 - 2 v / K = A1^2
+            _quad(buf, j * j - 2.0 * h / K, 2.0 * a * j - 2.0 * a / K, a * a - 2.0 * v / K - A1 * A1)
+    n = int(buf[1])
+    # ascending
+    for i in range(1, n):
+        x = buf[2 + i]
+        k = i - 1
+        while k >= 0 and buf[2 + k] > x:
+            buf[3 + k] = buf[2 + k]
+            k -= 1
+        buf[3 + k] = x
+    for i in range(n):
+        t = buf[2 + i]
+        _, vt, at = phase_end(0.0, v, a, j, t)
+        if inside(vt, at, V, A1, K1, A2, K2):
+            return t
+    if tmax < math.inf:
+        _, vt, at = phase_end(0.0, v, a, j, tmax)
+        if inside(vt, at, V, A1, K1, A2, K2):
+            return tmax
+    return math.inf
+
+
+@jit
+def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
+    """Brake candidate ``path(s)``: phases ``out[k] = (dt, j, a_start)``.
+
+    Returns the number of phases (0 when already inside) or -1 when the path
+    does not reach the inside set within :data:`BRAKE_PHASES` phases.
+    """
+    n = 0
+    clamp = -s * A2
+    for _ in range(BRAKE_PHASES):
+        if inside(v, a, V, A1, K1, A2, K2):
+            return n
+        an = a - s * 1e-300
+        beyond = (a > 0.0 and v >= 0.0 and a > A1) or (a < 0.0 and v <= 0.0 and -a > A1) or \
+            (v * a < 0.0 and abs(a) > A2)
+        holding = (a - clamp) * s <= 0.0 and not beyond
+        if beyond:
+            # the acceleration beyond its leg's bound: ramp it back towards zero first
+            slowing = v * a < 0.0
+            K = K2 if slowing else K1
+            lim_a = A2 if slowing else A1
+            tgt = lim_a if a > 0.0 else -lim_a
+            if K == 0.0:
+                a = tgt
+                continue
+            j = (-1.0 if a > 0.0 else 1.0) / K
+            tmax = (tgt - a) / j
+            disc = a * a - 2.0 * j * v
+            if disc >= 0.0 and v != 0.0:
+                sq = math.sqrt(disc)
+                for t in ((-a - sq) / j, (-a + sq) / j):
+                    if 0.0 < t < tmax:
+                        tmax = t
+        elif holding:
+            j = 0.0
+            tmax = math.inf
+            # leave the hold when the leg changes (v crosses 0: the clamp may change)
+            if a != 0.0 and v * a < 0.0:
+                tmax = -v / a
+        else:
+            # the jerk of the current leg (the next instant's leg at a = 0 or v = 0)
+            slowing = v * an < 0.0
+            K = K2 if slowing else K1
+            if K == 0.0:
+                # infinite jerk: the acceleration jumps to zero (leg change) or the clamp
+                a = 0.0 if a * s > 0.0 else clamp
+                continue
+            j = -s / K
+            # phase end: a reaches 0 (leg change), v reaches 0 (leg change) or the clamp
+            tmax = (clamp - a) / j
+            if a * s > 0.0:
+                tmax = min(tmax, -a / j)
+            disc = a * a - 2.0 * j * v
+            if disc >= 0.0 and v != 0.0:
+                sq = math.sqrt(disc)
+                for t in ((-a - sq) / j, (-a + sq) / j):
+                    if 0.0 < t < tmax:
+                        tmax = t
+        t = _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, buf)
+        if t < math.inf:
+            if t > 0.0:
+                out[n, 0] = t
+                out[n, 1] = j
+                out[n, 2] = a
+                n += 1
+            return n
+        if not (tmax < math.inf):
+            return -1
+        out[n, 0] = tmax
+        out[n, 1] = j
+        out[n, 2] = a
+        n += 1
+        _, v, a = phase_end(0.0, v, a, j, tmax)
+        if j != 0.0 and abs(a - clamp) <= 1e-12 * A2:
+            a = clamp
+    return -1
+
+
+@jit
+def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
+    """Brake candidate ``bump(vt)``: the fastest velocity change to ``(vt, 0)``
+    (``vt = +-V``) at the smaller of both jerk limits (valid in either leg),
+    held at ``-+a_max_decel`` when its peak would exceed it, cut at the first
+    instant inside the limits. Returns the phase count or -1."""
+    Km = max(K1, K2)
+    if Km == 0.0:
+        return -1
+    Am = A2
+    # natural velocity (acceleration ramped to zero at once)
+    vnat = v + 0.5 * a * abs(a) * Km
+    s = -1.0 if vnat > vt else 1.0   # direction of the bump's peak
+    # mirror so that the peak is negative: vm + (am^2 - 2 c^2) Km/2 = vtm
+    vm = -s * v
+    am = -s * a
+    vtm = -s * vt
+    c2 = 0.5 * am * am + (vm - vtm) / Km
+    if c2 < 0.0:
+        return -1
+    c = -math.sqrt(c2)
+    if c > min(am, 0.0):
+        return -1
+    n = 0
+    ph = 0
+    seq_t = buf[80:84]
+    seq_j = buf[84:88]
+    seq_a = buf[88:92]
+    fb = buf[:78]
+    if c >= -Am:
+        seq_t[0] = (am - c) * Km
+        seq_j[0] = -1.0 / Km
+        seq_a[0] = am
+        seq_t[1] = -c * Km
+        seq_j[1] = 1.0 / Km
+        seq_a[1] = c
+        ph = 2
+    else:
+        c = -Am
+        if am < c:
+            return -1
+        vr = vm + 0.5 * (am * am - c * c) * Km - 0.5 * c * c * Km
+        th = (vtm - vr) / c
+        if th < 0.0:
+            return -1
+        seq_t[0] = (am - c) * Km
+        seq_j[0] = -1.0 / Km
+        seq_a[0] = am
+        seq_t[1] = th
+        seq_j[1] = 0.0
+        seq_a[1] = c
+        seq_t[2] = -c * Km
+        seq_j[2] = 1.0 / Km
+        seq_a[2] = c
+        ph = 3
+    # walk it back in the caller's frame, cut at the first instant inside
+    for k in range(ph):
+        jj = -s * seq_j[k]
+        aa = -s * seq_a[k]
+        t = _first_inside(v, aa, jj, seq_t[k], V, A1, K1, A2, K2, fb)
+        if t < math.inf:
+            if t > 0.0:
+                out[n, 0] = t
+                out[n, 1] = jj
+                out[n, 2] = aa
+                n += 1
+            return n
+        out[n, 0] = seq_t[k]
+        out[n, 1] = jj
+        out[n, 2] = aa
+        n += 1
+        _, v, a = phase_end(0.0, v, aa, jj, seq_t[k])
+    return n
+
+

@@ -1,0 +1,228 @@
+"""Entry point of the one-axis state-to-state kernel: one flat workspace array.
+
+The public planners (:mod:`trajkit.profiles.state`) write the problem into a
+float64 workspace (:func:`workspace`), call :func:`solve` once (one numba
+dispatch) and read the result back. Layout (indices are module constants):
+
+``IN_*``
+    start state, goal state (a NaN goal position: velocity interface), the
+    limits ``v_max, a_max, j_max, a_max_decel, j_max_decel`` (``inf`` allowed
+    where :class:`~trajkit.limits.AxisLimits` allows it), the task and the
+    requested duration.
+``OUT_*``
+    status, duration, minimum duration, phase count, brake phase count, the
+    blocked intervals and the phase table ``(duration, jerk, start
+    acceleration)`` in the caller's units.
+
+Inside, the problem is scaled by powers of two (exact) so that the
+reference jerk and acceleration are of order one, positions are taken
+relative to the start, the brake (:mod:`._brake`) brings the start state
+inside the limits, and step 1 (:mod:`._shapes`) / step 2 (:mod:`._step2`)
+plan the rest.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._brake import brake_bump, brake_path, inside
+from ._compile import jit
+from ._phase import phase_end
+from ._shapes import NCFG, NPH, NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
+
+__all__ = [
+    "NWS", "workspace", "solve",
+    "TASK_MIN", "TASK_BLOCK", "TASK_FIXED", "TASK_VELOCITY",
+    "ST_OK", "ST_NONE", "ST_BRAKE", "ST_BLOCKED", "ST_SHORT",
+]
+
+# tasks
+TASK_MIN = 0       # minimum time
+TASK_BLOCK = 1     # minimum time and the blocked intervals
+TASK_FIXED = 2     # exactly IN_T
+TASK_VELOCITY = 3  # velocity interface, minimum time
+
+# status
+ST_OK = 0
+ST_NONE = 1      # no profile found (a gap of the shape set: reported, never silent)
+ST_BRAKE = 2     # the start state cannot be brought inside the limits
+ST_BLOCKED = 3   # the requested duration lies in a blocked interval
+ST_SHORT = 4     # the requested duration is below the minimum
+
+#: Largest number of blocked intervals reported.
+NBLK = 4
+
+# layout
+IN_P0, IN_V0, IN_A0, IN_PF, IN_VF, IN_AF = 0, 1, 2, 3, 4, 5
+IN_V, IN_A1, IN_J1, IN_A2, IN_J2 = 6, 7, 8, 9, 10
+IN_TASK, IN_T = 11, 12
+OUT_STATUS, OUT_T, OUT_TMIN, OUT_N, OUT_NB, OUT_NBLK, OUT_SHAPE = 13, 14, 15, 16, 17, 18, 19
+OUT_BLK = 20
+OUT_PH = OUT_BLK + 2 * NBLK
+_W = OUT_PH + 3 * NPH           # W: 5 x NPH x 3
+_VEC = _W + 5 * NPH * 3         # vec: 3 x 16
+_IVL = _VEC + 48                # ivl: 8 x 2
+_CFG = _IVL + 16
+_ST = _CFG + NCFG
+_BEST = _ST + 6
+_RES = _BEST + 3 * NPH
+_LIM = _RES + R_V0 + NVALID
+_ST0 = _LIM + 5
+_BRK = _ST0 + 6
+_S1 = _BRK + 3 * 16
+_BBUF = _S1 + 6
+_KEEP = _BBUF + 96
+NWS = _KEEP + 3 * NPH
+
+
+def workspace() -> np.ndarray:
+    """A new workspace array for :func:`solve`."""
+    return np.zeros(NWS)
+
+
+@jit
+def _pow2(x):
+    """The power of two nearest to ``x > 0`` (in log scale)."""
+    if not (x > 0.0) or not (x < math.inf):
+        return 1.0
+    e = math.floor(math.log2(x) + 0.5)
+    e = min(max(e, -1000.0), 1000.0)
+    return 2.0 ** e
+
+
+@jit
+def _scales(ws):
+    """(time, length) scales, powers of two, so that the reference jerk and
+    acceleration (or velocity) are about one."""
+    V = ws[IN_V]
+    A = min(ws[IN_A1], ws[IN_A2])
+    J = min(ws[IN_J1], ws[IN_J2])
+    if J < math.inf and A < math.inf:
+        ts = A / J
+        ls = A * ts * ts
+    elif J < math.inf and V < math.inf:
+        ts = math.sqrt(V / J)
+        ls = V * ts
+    elif A < math.inf and V < math.inf:
+        ts = V / A
+        ls = V * ts
+    elif A < math.inf:
+        d = abs(ws[IN_PF] - ws[IN_P0]) if ws[IN_PF] == ws[IN_PF] else 0.0
+        ls = max(d, ws[IN_V0] * ws[IN_V0] / A, ws[IN_VF] * ws[IN_VF] / A, 1e-300)
+        ts = math.sqrt(ls / A)
+    else:
+        d = abs(ws[IN_PF] - ws[IN_P0]) if ws[IN_PF] == ws[IN_PF] else 0.0
+        ls = max(d, 1e-300)
+        ts = (ls / J) ** (1.0 / 3.0)
+    ts = _pow2(ts)
+    ls = _pow2(ls)
+    return ts, ls
+
+
+@jit
+def solve(ws):
+    """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
+    task = int(ws[IN_TASK])
+    ts, ls = _scales(ws)
+    vs = ls / ts
+    as_ = vs / ts
+    js = as_ / ts
+    lim = ws[_LIM:_LIM + 5]
+    lim[0] = ws[IN_V] / vs
+    lim[1] = ws[IN_A1] / as_
+    lim[2] = js / ws[IN_J1] if ws[IN_J1] < math.inf else 0.0
+    lim[3] = ws[IN_A2] / as_
+    lim[4] = js / ws[IN_J2] if ws[IN_J2] < math.inf else 0.0
+    st0 = ws[_ST0:_ST0 + 6]
+    st0[0] = 0.0
+    st0[1] = ws[IN_V0] / vs
+    st0[2] = ws[IN_A0] / as_
+    if task == TASK_VELOCITY:
+        st0[3] = math.nan
+    else:
+        st0[3] = (ws[IN_PF] - ws[IN_P0]) / ls
+    st0[4] = ws[IN_VF] / vs
+    st0[5] = ws[IN_AF] / as_
+    W = ws[_W:_W + 5 * NPH * 3].reshape((5, NPH, 3))
+    vec = ws[_VEC:_VEC + 48].reshape((3, 16))
+    ivl = ws[_IVL:_IVL + 16].reshape((8, 2))
+    cfg = ws[_CFG:_CFG + NCFG]
+    st = ws[_ST:_ST + 6]
+    best = ws[_BEST:_BEST + 3 * NPH].reshape((NPH, 3))
+    res = ws[_RES:_RES + R_V0 + NVALID]
+    brk = ws[_BRK:_BRK + 48].reshape((16, 3))
+    out = ws[OUT_PH:OUT_PH + 3 * NPH].reshape((NPH, 3))
+    ws[OUT_STATUS] = ST_OK
+    ws[OUT_N] = 0.0
+    ws[OUT_NB] = 0.0
+    ws[OUT_NBLK] = 0.0
+    # ---- the brake pre-phase (candidates) and step 1 from where each ends
+    s1 = ws[_S1:_S1 + 6]
+    bbuf = ws[_BBUF:_BBUF + 96]
+    keep = ws[_KEEP:_KEEP + 3 * NPH].reshape((NPH, 3))
+    start_inside = inside(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4])
+    best_total = math.inf
+    nb_best = 0
+    n_best = 0
+    for cand in range(4):
+        if start_inside:
+            if cand > 0:
+                break
+            nb = 0
+        elif cand < 2:
+            nb = brake_path(1.0 if cand == 0 else -1.0, st0[1], st0[2], lim[0], lim[1], lim[2],
+                            lim[3], lim[4], brk, bbuf[:78])
+        else:
+            nb = brake_bump(lim[0] if cand == 2 else -lim[0], st0[1], st0[2], lim[0], lim[1],
+                            lim[2], lim[3], lim[4], brk, bbuf)
+        if nb < 0:
+            continue
+        p = 0.0
+        v = st0[1]
+        a = st0[2]
+        tb = 0.0
+        for k in range(nb):
+            dt = brk[k, 0]
+            j = brk[k, 1]
+            p, v, a = phase_end(p, v, brk[k, 2], j, dt)
+            tb += dt
+        if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
+            continue
+        s1[0] = p
+        s1[1] = v
+        s1[2] = a
+        s1[3] = st0[3] if st0[3] != st0[3] else st0[3]
+        s1[4] = st0[4]
+        s1[5] = st0[5]
+        step1(s1, lim, best, res, W, vec, ivl, cfg, st)
+        if not (res[R_T] < math.inf):
+            continue
+        n = int(res[R_N])
+        if nb + n > NPH or not (tb + res[R_T] < best_total):
+            continue
+        best_total = tb + res[R_T]
+        ws[OUT_SHAPE] = res[R_SHAPE]
+        nb_best = nb
+        n_best = n
+        for k in range(nb):
+            keep[k, 0] = brk[k, 0]
+            keep[k, 1] = brk[k, 1]
+            keep[k, 2] = brk[k, 2]
+        for k in range(n):
+            keep[nb + k, 0] = best[k, 0]
+            keep[nb + k, 1] = best[k, 1]
+            keep[nb + k, 2] = best[k, 2]
+    if not (best_total < math.inf):
+        ws[OUT_STATUS] = ST_NONE if start_inside else ST_BRAKE
+        return
+    for k in range(nb_best + n_best):
+        out[k, 0] = keep[k, 0] * ts
+        out[k, 1] = keep[k, 1] * js
+        out[k, 2] = keep[k, 2] * as_
+    ws[OUT_N] = nb_best + n_best
+    ws[OUT_NB] = nb_best
+    T = best_total * ts
+    ws[OUT_T] = T
+    ws[OUT_TMIN] = T
