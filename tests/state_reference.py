@@ -207,7 +207,10 @@ def exact_check(prof, limits, rtol=1e-9):
         p, v, a = b[k]
         dt, j = prof.phase_durations[k], prof.jerks[k]
         cuts = [0.0, dt]
-        if j != 0.0 and 0.0 < -a / j < dt:
+        # a root within round-off of a phase end is that end (no sliver piece
+        # whose leg would be decided by the sign of round-off)
+        edge = 1e-9 * dt
+        if j != 0.0 and edge < -a / j < dt - edge:
             cuts.append(-a / j)
         if j != 0.0:
             roots = np.roots([0.5 * j, a, v])
@@ -216,7 +219,7 @@ def exact_check(prof, limits, rtol=1e-9):
         else:
             roots = np.array([])
         cuts += [float(r.real) for r in np.atleast_1d(roots)
-                 if abs(r.imag) == 0.0 and 0.0 < r.real < dt]
+                 if abs(r.imag) == 0.0 and edge < r.real < dt - edge]
         cuts.sort()
         for t in cuts:
             vt = v + a * t + 0.5 * j * t * t
@@ -261,8 +264,9 @@ def goal_error(prof):
     pg, vg, ag = prof.goal_state
     T = prof.duration
     b = prof.boundary_states()
-    vs = max(np.abs(b[:, 1]).max(), 1e-300)
     as_ = max(np.abs(b[:, 2]).max(), 1e-300)
+    # the velocity scale counts what the accelerations do inside the phases
+    vs = max(np.abs(b[:, 1]).max(), as_ * T, 1e-300)
     ps = max(abs(pg - prof.start_state[0]), vs * T, as_ * T * T, 1e-300)
     floor = 64 * 2.2e-16 * max(abs(pg), abs(prof.start_state[0]))
     return max(max(abs(pe - pg) - floor, 0.0) / ps, abs(ve - vg) / vs, abs(ae - ag) / as_)

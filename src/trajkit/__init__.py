@@ -18,10 +18,13 @@ from .limits import AxisLimits
 from .profiles import (
     PHASE_NAMES,
     BlockedDurationError,
+    DurationSet,
+    JerkMotion,
     MoveBatch,
     Profile,
     ProfileSample,
     StateProfile,
+    feasible_durations,
     min_duration,
     min_state_duration,
     plan_move,
@@ -29,14 +32,16 @@ from .profiles import (
     plan_state_to_state,
     plan_velocity,
 )
-from .sync_states import plan_ptp_states
-from .trajectory import SYNC_MODES, Trajectory, TrajectorySample, plan_ptp
+from .sync import plan_ptp, plan_ptp_states
+from .trajectory import SYNC_MODES, Trajectory, TrajectorySample
 from .verify import (
     TrajectoryReport,
     VerificationError,
     VerificationReport,
     Violation,
+    verify_motion,
     verify_profile,
+    verify_state_profile,
     verify_trajectory,
 )
 
@@ -69,7 +74,12 @@ __all__ = [
     "plan_velocity",
     "min_state_duration",
     "plan_ptp_states",
+    "JerkMotion",
+    "DurationSet",
+    "feasible_durations",
     "verify_profile",
+    "verify_state_profile",
+    "verify_motion",
     "verify_trajectory",
     "VerificationReport",
     "TrajectoryReport",

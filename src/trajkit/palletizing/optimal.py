@@ -54,7 +54,7 @@ from scipy.optimize import brentq, minimize_scalar
 from ..errors import InfeasibleError, InvalidInputError, TrajkitError
 from ..limits import AxisLimits
 from ..profiles.state import StateProfile, min_state_duration, plan_state_to_state
-from ..trajectory import plan_ptp
+from ..sync import plan_ptp
 from ._crossing import _solve_phase, clearance_crossings, position_peak
 from .planners import HORIZONTAL_JOINTS, TripPlan, _assemble, _horizontal_time, register_planner
 from .scenario import PalletScenario, TripSpec

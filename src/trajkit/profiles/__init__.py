@@ -1,10 +1,14 @@
-"""One-axis profiles: closed-form time-optimal and fixed-duration S-curves."""
+"""One axis: closed-form time-optimal and fixed-duration S-curves, at rest or
+between moving states, all of one motion type (:class:`JerkMotion`)."""
 
 from .batch import MoveBatch, plan_moves
-from .profile import PHASE_NAMES, Profile, ProfileSample, min_duration, plan_move
+from .motion import JerkMotion, MotionExtrema, ProfileSample
+from .profile import PHASE_NAMES, Profile, min_duration, plan_move
 from .state import (
     BlockedDurationError,
+    DurationSet,
     StateProfile,
+    feasible_durations,
     min_state_duration,
     plan_state_to_state,
     plan_velocity,
@@ -12,6 +16,10 @@ from .state import (
 
 __all__ = [
     "PHASE_NAMES",
+    "JerkMotion",
+    "MotionExtrema",
+    "DurationSet",
+    "feasible_durations",
     "Profile",
     "ProfileSample",
     "plan_move",

@@ -22,8 +22,14 @@ checked while outside):
   the **first instant inside the limits** -- found exactly: the boundary of
   the inside set along a constant-jerk phase is where ``v``, ``a`` or the
   natural velocity reach a bound, all roots of quadratics;
-* ``bump``: the fastest velocity change to ``(+-v_max, 0)`` in the
-  direction of the velocity (it always ends inside).
+* ``bump(+-v_max)``: the fastest velocity change to ``(+-v_max, 0)``, cut
+  at the first instant inside;
+* ``natural``: the acceleration ramped to zero at each leg's jerk limit
+  (through a reversal), then the bump to ``(sign(v) v_max, 0)``.
+
+A candidate whose velocity exceeds what the start state forces (the
+velocity reached by ramping its acceleration to zero, :func:`forced_speed`)
+is not used.
 
 The planner (:mod:`._kernel`) plans from the end of each candidate that
 ends inside and keeps the fastest total: the brake is part of the
@@ -38,7 +44,8 @@ import math
 from ._compile import jit
 from ._phase import phase_end
 
-__all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump"]
+__all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump", "brake_natural", "forced_speed",
+           "peak_speed"]
 
 #: Largest number of phases of one brake candidate.
 BRAKE_PHASES = 10
@@ -235,65 +242,94 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
 
 
 @jit
+def _seq(buf, k, t, j, a):
+    buf[80 + k] = t
+    buf[84 + k] = j
+    buf[88 + k] = a
+    return k + 1
+
+
+@jit
 def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``bump(vt)``: the fastest velocity change to ``(vt, 0)``
-    (``vt = +-V``) at the smaller of both jerk limits (valid in either leg),
-    held at ``-+a_max_decel`` when its peak would exceed it, cut at the first
-    instant inside the limits. Returns the phase count or -1."""
-    Km = max(K1, K2)
-    if Km == 0.0:
-        return -1
-    Am = A2
-    # natural velocity (acceleration ramped to zero at once)
-    vnat = v + 0.5 * a * abs(a) * Km
-    s = -1.0 if vnat > vt else 1.0   # direction of the bump's peak
-    # mirror so that the peak is negative: vm + (am^2 - 2 c^2) Km/2 = vtm
-    vm = -s * v
-    am = -s * a
-    vtm = -s * vt
-    c2 = 0.5 * am * am + (vm - vtm) / Km
-    if c2 < 0.0:
-        return -1
-    c = -math.sqrt(c2)
-    if c > min(am, 0.0):
-        return -1
-    n = 0
-    ph = 0
-    seq_t = buf[80:84]
-    seq_j = buf[84:88]
-    seq_a = buf[88:92]
+    (``vt = +-V``), held at ``-+a_max_decel`` when its peak would exceed it,
+    cut at the first instant inside the limits. Towards ``sign(v) V`` from an
+    overspeed each ramp has the jerk of its leg; through a reversal (``vt``
+    of the other sign) the smaller of both. Returns the phase count or -1."""
     fb = buf[:78]
-    if c >= -Am:
-        seq_t[0] = (am - c) * Km
-        seq_j[0] = -1.0 / Km
-        seq_a[0] = am
-        seq_t[1] = -c * Km
-        seq_j[1] = 1.0 / Km
-        seq_a[1] = c
-        ph = 2
+    k = 0
+    sv = 1.0 if v > 0.0 else -1.0
+    if vt * sv > 0.0 and abs(v) > V:
+        if K2 == 0.0:
+            return -1
+        # frame with v > V > 0: down to a valley c <= min(a, 0), back up to 0
+        vm = sv * v
+        am = sv * a
+        if am > 0.0:
+            c2 = (vm - V + 0.5 * am * am * K1) / K2
+        else:
+            c2 = (vm - V) / K2 + 0.5 * am * am
+        if c2 < 0.0:
+            return -1
+        c = -math.sqrt(c2)
+        th = 0.0
+        if c < -A2:
+            c = -A2
+            if am > 0.0:
+                vr = vm + 0.5 * am * am * K1 - c * c * K2
+            else:
+                vr = vm + 0.5 * am * am * K2 - c * c * K2
+            th = (V - vr) / c
+            if th < 0.0:
+                return -1
+        if c > min(am, 0.0):
+            return -1
+        if am > 0.0:
+            if K1 > 0.0:
+                k = _seq(buf, k, am * K1, -sv / K1, sv * am)
+            k = _seq(buf, k, -c * K2, -sv / K2, 0.0)
+        else:
+            k = _seq(buf, k, (am - c) * K2, -sv / K2, sv * am)
+        if th > 0.0:
+            k = _seq(buf, k, th, 0.0, sv * c)
+        k = _seq(buf, k, -c * K2, sv / K2, sv * c)
     else:
-        c = -Am
-        if am < c:
+        Km = max(K1, K2)
+        if Km == 0.0:
             return -1
-        vr = vm + 0.5 * (am * am - c * c) * Km - 0.5 * c * c * Km
-        th = (vtm - vr) / c
-        if th < 0.0:
+        vnat = v + 0.5 * a * abs(a) * Km
+        s = -1.0 if vnat > vt else 1.0   # direction of the bump's peak
+        # mirror so that the peak is negative: vm + (am^2 - 2 c^2) Km/2 = vtm
+        vm = -s * v
+        am = -s * a
+        vtm = -s * vt
+        c2 = 0.5 * am * am + (vm - vtm) / Km
+        if c2 < 0.0:
             return -1
-        seq_t[0] = (am - c) * Km
-        seq_j[0] = -1.0 / Km
-        seq_a[0] = am
-        seq_t[1] = th
-        seq_j[1] = 0.0
-        seq_a[1] = c
-        seq_t[2] = -c * Km
-        seq_j[2] = 1.0 / Km
-        seq_a[2] = c
-        ph = 3
-    # walk it back in the caller's frame, cut at the first instant inside
-    for k in range(ph):
-        jj = -s * seq_j[k]
-        aa = -s * seq_a[k]
-        t = _first_inside(v, aa, jj, seq_t[k], V, A1, K1, A2, K2, fb)
+        c = -math.sqrt(c2)
+        if c > min(am, 0.0):
+            return -1
+        if c >= -A2:
+            k = _seq(buf, k, (am - c) * Km, s / Km, -s * am)
+            k = _seq(buf, k, -c * Km, -s / Km, -s * c)
+        else:
+            c = -A2
+            if am < c:
+                return -1
+            vr = vm + 0.5 * (am * am - c * c) * Km - 0.5 * c * c * Km
+            th = (vtm - vr) / c
+            if th < 0.0:
+                return -1
+            k = _seq(buf, k, (am - c) * Km, s / Km, -s * am)
+            k = _seq(buf, k, th, 0.0, -s * c)
+            k = _seq(buf, k, -c * Km, -s / Km, -s * c)
+    # walk it, cut at the first instant inside
+    n = 0
+    for i in range(k):
+        tt = buf[80 + i]
+        jj = buf[84 + i]
+        aa = buf[88 + i]
+        t = _first_inside(v, aa, jj, tt, V, A1, K1, A2, K2, fb)
         if t < math.inf:
             if t > 0.0:
                 out[n, 0] = t
@@ -301,11 +337,102 @@ def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
                 out[n, 2] = aa
                 n += 1
             return n
-        out[n, 0] = seq_t[k]
+        out[n, 0] = tt
         out[n, 1] = jj
         out[n, 2] = aa
         n += 1
-        _, v, a = phase_end(0.0, v, aa, jj, seq_t[k])
+        _, v, a = phase_end(0.0, v, aa, jj, tt)
     return n
 
 
+@jit
+def brake_natural(v, a, V, A1, K1, A2, K2, out, buf):
+    """Brake candidate ``natural``: the acceleration ramped to zero at the jerk
+    limit of each leg (through a reversal), then, when the velocity is still
+    above ``v_max``, the bump to ``(sign(v) V, 0)``; cut at the first instant
+    inside the limits. Returns the phase count or -1."""
+    fb = buf[:78]
+    n = 0
+    for _ in range(3):
+        if a == 0.0:
+            break
+        if inside(v, a, V, A1, K1, A2, K2):
+            return n
+        an = a
+        slowing = v * an < 0.0
+        K = K2 if slowing else K1
+        if K == 0.0:
+            a = 0.0
+            break
+        j = (-1.0 if a > 0.0 else 1.0) / K
+        tmax = -a / j
+        crossing = False
+        disc = a * a - 2.0 * j * v
+        if disc >= 0.0 and v != 0.0:
+            sq = math.sqrt(disc)
+            for t in ((-a - sq) / j, (-a + sq) / j):
+                if 0.0 < t < tmax:
+                    tmax = t
+                    crossing = True
+        t = _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, fb)
+        if t < math.inf:
+            if t > 0.0:
+                out[n, 0] = t
+                out[n, 1] = j
+                out[n, 2] = a
+                n += 1
+            return n
+        out[n, 0] = tmax
+        out[n, 1] = j
+        out[n, 2] = a
+        n += 1
+        _, v, a = phase_end(0.0, v, a, j, tmax)
+        if crossing:
+            v = 0.0  # the reversal: speeding up from here (the leg changes)
+        else:
+            a = 0.0
+    if inside(v, a, V, A1, K1, A2, K2):
+        return n
+    if not (abs(v) > V):
+        return -1
+    m = brake_bump(V if v > 0.0 else -V, v, a, V, A1, K1, A2, K2, out[n:], buf)
+    if m < 0:
+        return -1
+    return n + m
+
+
+@jit
+def forced_speed(v, a, V, A1, K1, A2, K2):
+    """The largest |v| a brake from (v, a) may reach: the start's own velocity or
+    the peak its acceleration forces (ramped to zero at the leg's jerk limit,
+    through a reversal when it comes), at least ``V``."""
+    if v < 0.0 or (v == 0.0 and a < 0.0):
+        v = -v
+        a = -a
+    out = max(V, v)
+    if a > 0.0:
+        out = max(out, v + 0.5 * a * a * K1)
+    elif a < 0.0:
+        rem = v - 0.5 * a * a * K2
+        if rem < 0.0 and K2 > 0.0:
+            az2 = a * a - 2.0 * v / K2
+            out = max(out, 0.5 * az2 * K1)
+    return out
+
+
+@jit
+def peak_speed(ph, n, v, a):
+    """Exact max |v| along phases ``ph[:n]`` from (v, a) (phase ends and a = 0)."""
+    out = abs(v)
+    for k in range(n):
+        dt = ph[k, 0]
+        j = ph[k, 1]
+        a = ph[k, 2]
+        if j != 0.0:
+            ta = -a / j
+            if 0.0 < ta < dt:
+                _, vv, _ = phase_end(0.0, v, a, j, ta)
+                out = max(out, abs(vv))
+        _, v, a = phase_end(0.0, v, a, j, dt)
+        out = max(out, abs(v))
+    return out

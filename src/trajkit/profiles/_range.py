@@ -10,8 +10,9 @@ profiles):
   ``[MAGNITUDE_MIN, MAGNITUDE_MAX]`` (``inf`` where :class:`AxisLimits`
   allows it);
 * the decel leg within a factor :data:`LEG_RATIO_MAX` of the accel leg;
-* the shape number ``v_max j_max / a_max^2`` (how the velocity limit
-  compares with a full jerk ramp) in ``[1/SHAPE_RATIO_MAX, SHAPE_RATIO_MAX]``;
+* between moving states, the shape number ``v_max j_max / a_max^2`` (how the
+  velocity limit compares with a full jerk ramp) in
+  ``[1/SHAPE_RATIO_MAX, SHAPE_RATIO_MAX]``;
 * positions within ``+-POSITION_MAX``; a distance of at least
   ``DISTANCE_MIN`` times the largest position moved, else zero (a smaller
   one is below the resolution of the positions themselves);
@@ -64,9 +65,14 @@ def _bad(field, value, bound, name, why):
     )
 
 
-def check_limits_range(limits) -> None:
-    """Raise unless ``limits`` lie in the supported range (result cached on the object)."""
-    if limits.__dict__.get("_range_ok", False):
+def check_limits_range(limits, states: bool = False) -> None:
+    """Raise unless ``limits`` lie in the supported range (result cached on the object).
+
+    ``states=True`` adds the bound on the shape number (the planners between
+    moving states); the rest-to-rest closed forms do not need it.
+    """
+    key = "_range_ok_states" if states else "_range_ok"
+    if limits.__dict__.get(key, False):
         return
     name = limits.name
     fields = (("v_max", limits.v_max), ("a_max", limits.a_max), ("j_max", limits.j_max),
@@ -81,12 +87,12 @@ def check_limits_range(limits) -> None:
                  f"the decel leg must be within a factor of the accel leg ({y!r}):")
     V = limits.v_max
     for A, J in ((limits.a_max, limits.j_max), (limits.a_max_decel, limits.j_max_decel)):
-        if V < math.inf and A < math.inf and J < math.inf:
+        if states and V < math.inf and A < math.inf and J < math.inf:
             r = V * J / (A * A)
             if not (1.0 / SHAPE_RATIO_MAX <= r <= SHAPE_RATIO_MAX):
                 _bad("v_max j_max / a_max^2", r, (1.0 / SHAPE_RATIO_MAX, SHAPE_RATIO_MAX), name,
                      "the velocity limit compared with a full jerk ramp must lie in")
-    object.__setattr__(limits, "_range_ok", True)
+    object.__setattr__(limits, key, True)
 
 
 def check_position_range(x: float, field: str, name) -> None:

@@ -76,8 +76,8 @@ POLISH_STEPS = 4
 
 # configuration vector (one template instance)
 (PS, VS, AS, PE, VE, AE, K1, K2P, K2N, K2Q, K4, MODE, L1, L3, VM, C1LO, C1HI, C3LO, C3HI, S3,
- SZ, K2R) = range(22)
-NCFG = 22
+ SZ, K2R, TT, SG2) = range(24)
+NCFG = 24
 
 # ramp-2 modes: where the ramp c1 -> c3 is split (at a = 0 and/or at a reversal z)
 M_SINGLE = 0  # c1 -> c3 (K2P)
@@ -86,9 +86,17 @@ M_ZFIRST = 2  # c1 -> z (K2P), z -> 0 (K2Q), cruise, 0 -> c3 (K2N); v(z) = 0
 M_ZSECOND = 3 # c1 -> 0 (K2P), cruise, 0 -> z (K2N), z -> c3 (K2Q); v(z) = 0
 M_ZSINGLE = 4 # c1 -> z (K2P), z -> c3 (K2Q); v(z) = 0
 M_ZBOTH = 5   # c1 -> z (K2P), z -> 0 (K2Q), cruise, 0 -> z2 (K2N), z2 -> c3 (K2R); v(z) = v(z2) = 0
+M_MID = 6     # c1 -> z (K2P), hold tc at z, z -> c3 (K2N): a hold at a free level z
 
-# shapes (which unknowns the velocity equation leaves)
+# shapes (which unknowns the velocity equation leaves); step 1 (minimum time):
 S_NONE, S_ACC0, S_ACC1, S_ACC01 = 0, 1, 2, 3
+# step 2 (duration T): a cruise at a free velocity with both halves NONE/ACC, or a
+# hold at a free acceleration at c1 / c3
+S2_NN, S2_AN, S2_NA, S2_AA, S2_H1, S2_H3 = 4, 5, 6, 7, 8, 9
+# step 2, equal jerk on every ramp: a hold at a free level h between two ramps
+# down (ruckig's a3 != 0 profiles): c3 = ae (MH1: c1 free, MH2: hold at c1 = L1)
+# or c1 = a0 (MH3: c3 free, MH4: hold at c3 = L3); and every ramp at a reduced jerk
+S2_MH1, S2_MH2, S2_MH3, S2_MH4, S2_JF = 10, 11, 12, 13, 14
 
 # result vector: best duration, best phase count, number of valid durations, the
 # shape of the best (code, see SHAPE_NAMES; +16 when mirrored), valid durations...
@@ -132,7 +140,7 @@ def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
     if t1 != 0.0:
         n = _hold(ph, n, c1, t1)
     mode = int(cfg[MODE])
-    if (final and mode == M_ZERO and tc == 0.0 and cfg[K2P] == cfg[K2N]
+    if (final and mode == M_ZERO and tc == 0.0 and cfg[K2P] == cfg[K2N] and cfg[SG2] > 0.0
             and not (c1 >= 0.0 >= c3)):
         mode = M_SINGLE
     if mode == M_SINGLE:
@@ -141,7 +149,7 @@ def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
         n = _ramp(ph, n, c1, 0.0, cfg[K2P], -1.0)
         if tc != 0.0:
             n = _hold(ph, n, 0.0, tc)
-        n = _ramp(ph, n, 0.0, c3, cfg[K2N], -1.0)
+        n = _ramp(ph, n, 0.0, c3, cfg[K2N], -cfg[SG2])
     elif mode == M_ZFIRST:
         n = _ramp(ph, n, c1, z, cfg[K2P], -1.0)
         n = _ramp(ph, n, z, 0.0, cfg[K2Q], -1.0)
@@ -154,6 +162,11 @@ def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
             n = _hold(ph, n, 0.0, tc)
         n = _ramp(ph, n, 0.0, z, cfg[K2N], -1.0)
         n = _ramp(ph, n, z, c3, cfg[K2Q], -1.0)
+    elif mode == M_MID:
+        n = _ramp(ph, n, c1, z, cfg[K2P], -1.0)
+        if tc != 0.0:
+            n = _hold(ph, n, z, tc)
+        n = _ramp(ph, n, z, c3, cfg[K2N], -1.0)
     elif mode == M_ZBOTH:
         z2 = -z * math.sqrt(cfg[K2Q] / cfg[K2N]) if cfg[K2N] > 0.0 else 0.0
         n = _ramp(ph, n, c1, z, cfg[K2P], -1.0)
@@ -167,7 +180,7 @@ def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
         n = _ramp(ph, n, z, c3, cfg[K2Q], -1.0)
     if t3 != 0.0:
         n = _hold(ph, n, c3, t3)
-    n = _ramp(ph, n, c3, cfg[AE], cfg[K4], 1.0)
+    n = _ramp(ph, n, c3, cfg[AE], cfg[K4], cfg[SG2])
     if cfg[K4] == 0.0:
         n = _hold(ph, n, cfg[AE], 0.0)
     return n
@@ -218,7 +231,7 @@ def _kze(cfg):
 
 @jit
 def _E(cfg, c3, t3):
-    return -c3 * c3 * _kc3(cfg) + c3 * t3 + 0.5 * cfg[AE] * cfg[AE] * cfg[K4]
+    return cfg[SG2] * (0.5 * cfg[AE] * cfg[AE] * cfg[K4] - c3 * c3 * _kc3(cfg)) + c3 * t3
 
 
 @jit
@@ -234,28 +247,61 @@ def _sqrt_s(x, s):
 
 
 @jit
-def _unknowns(cfg, shape, u, sz, s3):
-    """(c1, t1, z, c3, t3, rad_z, rad_3) of ``shape`` at parameter ``u``.
+def _rho1(cfg):
+    """vc = rho1 F: the cruise velocity from the first half's top velocity."""
+    mode = int(cfg[MODE])
+    if mode == M_ZFIRST or mode == M_ZBOTH:
+        return cfg[K2Q] / cfg[K2P] if cfg[K2P] > 0.0 else 0.0
+    return 1.0
 
-    ``rad_*`` are the radicands of ``z`` and ``c3`` (1 when not a radical);
-    ``sz``, ``s3`` the signs of the square roots.
+
+@jit
+def _g(cfg):
+    """ve = g vc + E(c3, t3)."""
+    mode = int(cfg[MODE])
+    if mode == M_ZSECOND:
+        return cfg[K2Q] / cfg[K2N] if cfg[K2N] > 0.0 else 0.0
+    if mode == M_ZBOTH:
+        return cfg[K2R] / cfg[K2N] if cfg[K2N] > 0.0 else 0.0
+    return 1.0
+
+
+@jit
+def _durations(cfg, work, c1, t1, z, c3, t3):
+    """Sum of the template's phase durations without a cruise."""
+    n = template(work, 0, cfg, c1, t1, z, c3, t3, 0.0, False)
+    T = 0.0
+    for k in range(n):
+        T += work[k, 0]
+    return T
+
+
+@jit
+def _unknowns(cfg, work, shape, u, sz, s3):
+    """(c1, t1, z, c3, t3, tc, rad_z, rad_3) of ``shape`` at parameter ``u``.
+
+    ``rad_*`` are the radicands of the reversal acceleration ``z`` and of the
+    second radical (``c3``, or ``c3 - u`` / ``c1 - u`` of the hold shapes), 1
+    when not a radical; ``sz``, ``s3`` the signs of their square roots.
     """
-    cross = int(cfg[MODE]) >= M_ZFIRST
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
     c1 = 0.0
     t1 = 0.0
     z = 0.0
     c3 = 0.0
     t3 = 0.0
+    tc = 0.0
     rz = 1.0
     r3 = 1.0
+    aek = 0.5 * cfg[AE] * cfg[AE] * cfg[K4]
     if shape == S_NONE:
         c1 = u
         if cross:
             rz = _F(cfg, c1, 0.0) / _kz(cfg)
             z = _sqrt_s(rz, sz)
-            r3 = (rz * _kze(cfg) + 0.5 * cfg[AE] * cfg[AE] * cfg[K4] - cfg[VE]) / _kc3(cfg)
+            r3 = (rz * _kze(cfg) + aek - cfg[VE]) / _kc3(cfg)
         else:
-            r3 = (_F(cfg, c1, 0.0) + 0.5 * cfg[AE] * cfg[AE] * cfg[K4] - cfg[VE]) / _kc3(cfg)
+            r3 = (_F(cfg, c1, 0.0) + aek - cfg[VE]) / _kc3(cfg)
         c3 = _sqrt_s(r3, s3)
     elif shape == S_ACC0 or shape == S_ACC01:
         c1 = cfg[L1]
@@ -272,7 +318,7 @@ def _unknowns(cfg, shape, u, sz, s3):
             t1 = (rz * _kz(cfg) - base) / c1
         else:
             t1 = (cfg[VE] - _E(cfg, c3, t3) - base) / c1
-    else:  # S_ACC1
+    elif shape == S_ACC1:
         c1 = u
         c3 = cfg[L3]
         e0 = _E(cfg, c3, 0.0)
@@ -282,13 +328,111 @@ def _unknowns(cfg, shape, u, sz, s3):
             t3 = (cfg[VE] - rz * _kze(cfg) - e0) / c3
         else:
             t3 = (cfg[VE] - _F(cfg, c1, 0.0) - e0) / c3
-    return c1, t1, z, c3, t3, rz, r3
+    elif shape <= S2_AA:
+        # a cruise at vc = rho1 F (the velocity at the a = 0 point), ve = g vc + E
+        T = cfg[TT]
+        rho = _rho1(cfg)
+        g = _g(cfg)
+        if shape == S2_NN or shape == S2_NA:
+            c1 = u
+            F = _F(cfg, c1, 0.0)
+            vc = rho * F
+            if shape == S2_NN:
+                sg = cfg[SG2]
+                r3 = (g * vc + sg * aek - cfg[VE]) / (sg * _kc3(cfg))
+                c3 = _sqrt_s(r3, s3)
+            else:
+                c3 = cfg[L3]
+                t3 = (cfg[VE] - g * vc - _E(cfg, c3, 0.0)) / c3
+        elif shape == S2_AN:
+            c1 = cfg[L1]
+            c3 = u
+            vc = (cfg[VE] - _E(cfg, c3, 0.0)) / g if g != 0.0 else 0.0
+            F = vc / rho if rho != 0.0 else 0.0
+            t1 = (F - _F(cfg, c1, 0.0)) / c1
+        else:
+            c1 = cfg[L1]
+            c3 = cfg[L3]
+            t1 = u
+            F = _F(cfg, c1, t1)
+            vc = rho * F
+            t3 = (cfg[VE] - g * vc - _E(cfg, c3, 0.0)) / c3
+        if cross:
+            rz = F / _kz(cfg)
+            z = _sqrt_s(rz, sz)
+        tc = T - _durations(cfg, work, c1, t1, z, c3, t3)
+    elif shape == S2_H1:
+        # hold t1 at a free c1 = u; c3 = u + s r from the velocity equation
+        T = cfg[TT]
+        kc3 = _kc3(cfg)
+        c1 = u
+        T0 = _durations(cfg, work, c1, 0.0, 0.0, 0.0, 0.0)
+        G = _F(cfg, c1, 0.0) + c1 * (T - T0) + aek - cfg[VE]
+        r3 = c1 * c1 + G / kc3
+        c3 = c1 + _sqrt_s(r3, s3)
+        t1 = T - T0 + 2.0 * kc3 * c3
+    elif shape >= S2_MH1:
+        # equal jerk 1/k on every ramp (set by the caller; JF: k is the unknown)
+        T = cfg[TT]
+        k = cfg[K1]
+        a0 = cfg[AS]
+        ae = cfg[AE]
+        dv = cfg[VE] - cfg[VS]
+        if shape == S2_MH1:
+            z = u
+            G = z * T + z * k * (a0 + ae) - 0.5 * k * (a0 * a0 + ae * ae) - dv
+            r3 = z * z - G / k
+            c1 = z + _sqrt_s(r3, s3)
+            c3 = ae
+            tc = T - k * (2.0 * c1 - a0 - ae)
+        elif shape == S2_MH2:
+            z = u
+            c1 = cfg[L1]
+            c3 = ae
+            base = k * (2.0 * c1 - a0 - ae)
+            t1 = (dv - 0.5 * k * (2.0 * c1 * c1 - a0 * a0 - ae * ae) - z * (T - base)) / (c1 - z)
+            tc = T - t1 - base
+        elif shape == S2_MH3:
+            z = u
+            c1 = a0
+            G = 0.5 * k * (a0 * a0 + ae * ae) + z * T - z * k * (a0 + ae) - dv
+            r3 = z * z + G / k
+            c3 = z + _sqrt_s(r3, s3)
+            tc = T - k * (a0 - 2.0 * c3 + ae)
+        elif shape == S2_MH4:
+            z = u
+            c1 = a0
+            c3 = cfg[L3]
+            base = k * (a0 - 2.0 * c3 + ae)
+            t3 = (dv - 0.5 * k * (a0 * a0 - 2.0 * c3 * c3 + ae * ae) - z * (T - base)) / (c3 - z)
+            tc = T - t3 - base
+        else:  # S2_JF: every ramp at the jerk 1/k of the duration
+            w = dv / T
+            c1 = u
+            r3 = (c1 - w) * (c1 - w) - 0.5 * ((a0 - w) * (a0 - w) - (ae - w) * (ae - w))
+            c3 = w + _sqrt_s(r3, s3)
+            dA = 2.0 * c1 - 2.0 * c3 - a0 + ae
+            kk = T / dA if dA != 0.0 else 0.0
+            cfg[K1] = kk
+            cfg[K2P] = kk
+            cfg[K2N] = kk
+            cfg[K4] = kk
+    else:  # S2_H3: hold t3 at a free c3 = u; c1 = u + s r
+        T = cfg[TT]
+        alpha = 0.5 * (cfg[K1] + cfg[K2P])
+        c3 = u
+        T0 = _durations(cfg, work, 0.0, 0.0, 0.0, c3, 0.0)
+        H = _F(cfg, 0.0, 0.0) + _E(cfg, c3, 0.0) + c3 * (T - T0) - cfg[VE]
+        r3 = c3 * c3 - H / alpha
+        c1 = c3 + _sqrt_s(r3, s3)
+        t3 = T - T0 - 2.0 * alpha * c1
+    return c1, t1, z, c3, t3, tc, rz, r3
 
 
 @jit
 def _resid(cfg, work, shape, u, sz, s3):
-    c1, t1, z, c3, t3, _, _ = _unknowns(cfg, shape, u, sz, s3)
-    n = template(work, 0, cfg, c1, t1, z, c3, t3, 0.0, False)
+    c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
+    n = template(work, 0, cfg, c1, t1, z, c3, t3, tc, False)
     p, _, _ = integrate(work, 0, n, cfg[PS], cfg[VS], cfg[AS])
     return p - cfg[PE]
 
@@ -341,19 +485,42 @@ def offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, 
 @jit
 def _nrad(cfg, shape):
     """Number of square roots in the shape's parameterisation."""
-    cross = int(cfg[MODE]) >= M_ZFIRST
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
     n = 1 if cross else 0
-    if shape == S_NONE:
+    if (shape == S_NONE or shape == S2_NN or shape == S2_H1 or shape == S2_H3
+            or shape == S2_MH1 or shape == S2_MH3 or shape == S2_JF):
         n += 1
     return n
 
 
 @jit
+def _den(cfg, work, shape, u, s3):
+    """Denominator of a rational shape (its residual times den^p is a polynomial)."""
+    if shape == S2_MH2:
+        return cfg[L1] - u
+    if shape == S2_MH4:
+        return cfg[L3] - u
+    if shape == S2_JF:
+        c1, _, _, c3, _, _, _, _ = _unknowns(cfg, work, shape, u, 1.0, s3)
+        return 2.0 * c1 - 2.0 * c3 - cfg[AS] + cfg[AE]
+    return 1.0
+
+
+@jit
 def _norm(cfg, work, shape, u, nrad):
     """Product of the residual over every sign of the square roots (a polynomial in u)."""
+    if shape == S2_MH2 or shape == S2_MH4:
+        d = _den(cfg, work, shape, u, 1.0)
+        return _resid(cfg, work, shape, u, 1.0, 1.0) * d * d * d
+    if shape == S2_JF:
+        out = 1.0
+        for s3 in (1.0, -1.0):
+            d = _den(cfg, work, shape, u, s3)
+            out *= _resid(cfg, work, shape, u, 1.0, s3) * d * d
+        return out
     if nrad == 0:
         return _resid(cfg, work, shape, u, 1.0, 1.0)
-    cross = int(cfg[MODE]) >= M_ZFIRST
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
     if nrad == 1:
         if cross:
             return _resid(cfg, work, shape, u, 1.0, 1.0) * _resid(cfg, work, shape, u, -1.0, 1.0)
@@ -365,12 +532,48 @@ def _norm(cfg, work, shape, u, nrad):
 @jit
 def _domain(cfg, shape):
     """Interval of the shape parameter (before the radicands are considered)."""
-    if shape == S_NONE:
+    lo, hi = _domain0(cfg, shape)
+    T = cfg[TT]
+    if shape >= S2_NN and T == T:
+        # every ramp fits in the duration: bounds the corners by T / K
+        if shape == S2_NN or shape == S2_NA or shape == S2_H1:
+            if cfg[K1] > 0.0:
+                hi = min(hi, cfg[AS] + T / cfg[K1])
+            if cfg[K2P] > 0.0:
+                hi = min(hi, max(cfg[AS], 0.0) + T / cfg[K2P])
+        elif shape == S2_AN or shape == S2_H3:
+            k = cfg[K2N] if int(cfg[MODE]) != M_SINGLE else cfg[K2P]
+            if k > 0.0:
+                if cfg[SG2] > 0.0:
+                    lo = max(lo, min(cfg[AE], 0.0) - T / k)
+                else:
+                    hi = min(hi, max(cfg[AE], 0.0) + T / k)
+    return lo, hi
+
+
+@jit
+def _domain0(cfg, shape):
+    if shape == S_NONE or shape == S2_NN or shape == S2_H1:
         return cfg[C1LO], cfg[C1HI]
-    if shape == S_ACC0:
-        return cfg[C3LO], min(cfg[C3HI], cfg[L1])
-    if shape == S_ACC1:
-        return max(cfg[C1LO], cfg[L3]), cfg[C1HI]
+    inflect = cfg[SG2] < 0.0  # c3 after a cruise at an inflection: not bounded by c1
+    if shape == S_ACC0 or shape == S2_AN:
+        return cfg[C3LO], (cfg[C3HI] if inflect else min(cfg[C3HI], cfg[L1]))
+    if shape == S_ACC1 or shape == S2_NA:
+        return (cfg[C1LO] if inflect else max(cfg[C1LO], cfg[L3])), cfg[C1HI]
+    if shape == S2_H3:
+        return cfg[C3LO], cfg[C3HI]
+    if shape == S2_AA:
+        return 0.0, cfg[TT]
+    if shape == S2_MH1:
+        return cfg[AE], cfg[L1]
+    if shape == S2_MH2:
+        return cfg[AE], cfg[L1]
+    if shape == S2_MH3:
+        return cfg[L3], cfg[AS]
+    if shape == S2_MH4:
+        return cfg[L3], cfg[AS]
+    if shape == S2_JF:
+        return cfg[AS], cfg[L1]
     # ACC01: t3 >= 0 up to the hold that would take the velocity across 2 v_max
     c3 = abs(cfg[L3])
     V = cfg[VM]
@@ -415,9 +618,9 @@ def _intervals(cfg, work, shape, lo, hi, ivl):
     nb = 0
     mid = 0.5 * (lo + hi)
     for which in range(2):
-        _, _, _, _, _, a0, b0 = _unknowns(cfg, shape, lo, 1.0, 1.0)
-        _, _, _, _, _, a1, b1 = _unknowns(cfg, shape, mid, 1.0, 1.0)
-        _, _, _, _, _, a2, b2 = _unknowns(cfg, shape, hi, 1.0, 1.0)
+        _, _, _, _, _, _, a0, b0 = _unknowns(cfg, work, shape, lo, 1.0, 1.0)
+        _, _, _, _, _, _, a1, b1 = _unknowns(cfg, work, shape, mid, 1.0, 1.0)
+        _, _, _, _, _, _, a2, b2 = _unknowns(cfg, work, shape, hi, 1.0, 1.0)
         if which == 0:
             nb += _quad_fit_roots(a0, a1, a2, lo, hi, bp[nb:])
         else:
@@ -435,7 +638,7 @@ def _intervals(cfg, work, shape, lo, hi, ivl):
     for i in range(nb + 1):
         b = bp[i] if i < nb else hi
         if b > a or (b == a and nb == 0):
-            _, _, _, _, _, rz, r3 = _unknowns(cfg, shape, 0.5 * (a + b), 1.0, 1.0)
+            _, _, _, _, _, _, rz, r3 = _unknowns(cfg, work, shape, 0.5 * (a + b), 1.0, 1.0)
             if rz >= 0.0 and r3 >= 0.0:
                 if ni > 0 and ivl[ni - 1, 1] == a:
                     ivl[ni - 1, 1] = b
@@ -449,10 +652,16 @@ def _intervals(cfg, work, shape, lo, hi, ivl):
 
 @jit
 def _degree(cfg, shape):
-    cross = int(cfg[MODE]) >= M_ZFIRST
-    if shape == S_NONE:
+    if shape == S2_MH1 or shape == S2_MH3:
+        return 6
+    if shape == S2_MH2 or shape == S2_MH4:
+        return 8
+    if shape == S2_JF:
+        return 12
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
+    if shape == S_NONE or shape == S2_NN or shape == S2_H1 or shape == S2_H3:
         return 12 if cross else 6
-    if shape == S_ACC01:
+    if shape == S_ACC01 or shape == S2_AA:
         return 6 if cross else 2
     return 8 if cross else 4
 
@@ -485,18 +694,27 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                 vals, coef, roots, ivl):
     """Every root of one shape of one template, each offered as a candidate."""
     lo, hi = _domain(cfg, shape)
-    if shape != S_NONE:
-        lev = cfg[L1] if shape != S_ACC1 else cfg[L3]
-        if not (abs(lev) < math.inf) or lev == 0.0:
+    mode = int(cfg[MODE])
+    cross = M_ZFIRST <= mode <= M_ZBOTH
+    if S2_MH1 <= shape <= S2_JF:
+        pass
+    elif shape >= S2_NN:
+        if shape <= S2_AA and (mode == M_SINGLE or mode == M_ZSINGLE):
+            return  # a cruise needs ramp 2 through a = 0
+        if shape >= S2_H1 and cross:
             return
-        if shape == S_ACC01 and not (abs(cfg[L3]) < math.inf and cfg[L3] != 0.0):
+    if shape == S_ACC0 or shape == S_ACC01 or shape == S2_AN or shape == S2_AA:
+        if not (abs(cfg[L1]) < math.inf) or cfg[L1] == 0.0:
             return
-    if shape == S_NONE or shape == S_ACC1:
-        if _kc3(cfg) <= 0.0 and shape == S_NONE:
+    if shape == S_ACC1 or shape == S_ACC01 or shape == S2_NA or shape == S2_AA:
+        if not (abs(cfg[L3]) < math.inf) or cfg[L3] == 0.0:
             return
+    if (shape == S_NONE or shape == S2_NN or shape == S2_H1) and _kc3(cfg) <= 0.0:
+        return
+    if shape == S2_H3 and not (cfg[K1] + cfg[K2P] > 0.0):
+        return
     if not (hi >= lo) or not (abs(lo) < math.inf and abs(hi) < math.inf):
         return
-    cross = int(cfg[MODE]) >= M_ZFIRST
     nrad = _nrad(cfg, shape)
     deg = _degree(cfg, shape)
     ni = _intervals(cfg, work, shape, lo, hi, ivl)
@@ -530,15 +748,18 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                     continue
                 for is3 in range(2):
                     s3 = 1.0 if is3 == 0 else -1.0
-                    if shape == S_NONE:
+                    if shape == S_NONE or shape == S2_NN:
                         if s3s != 0.0 and s3 != s3s:
                             continue
-                    elif is3 == 1:
+                    elif not (shape == S2_H1 or shape == S2_H3 or shape == S2_MH1
+                              or shape == S2_MH3 or shape == S2_JF) and is3 == 1:
                         continue
                     u, _ = _polish(cfg, work, shape, u0, sz, s3, a, b)
-                    c1, t1, z, c3, t3, _, _ = _unknowns(cfg, shape, u, sz, s3)
-                    offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, 0.0, sgn, st, lim,
+                    c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
+                    offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim,
                           best, res, scratch, shape)
+                    if shape >= S2_NN and res[R_T] < math.inf:
+                        return
 
 
 @jit
@@ -652,7 +873,8 @@ def solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scr
             t1 = (ftgt - base - den * c1 * c1) / c1
             if t1 <= 0.0:
                 continue
-        if c1 < cfg[C1LO] or c1 > cfg[C1HI]:
+        tol = 1e-12 * max(abs(cfg[C1LO]), abs(cfg[C1HI]), abs(c1))
+        if c1 < cfg[C1LO] - tol or c1 > cfg[C1HI] + tol:
             continue
         offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, 0.0, 0.0, sgn, st, lim, best, res,
               scratch, 8 if h < 2 else 9)
@@ -667,6 +889,61 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     scratch = W[3]
     if st[3] != st[3]:  # velocity interface
         solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
+        return
+    if cfg[TT] == cfg[TT]:  # step 2: exactly T
+        for shape in range(S2_NN, S2_H3 + 1):
+            solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                        scratch, vec[0], vec[1], vec[2], ivl)
+            if res[R_T] < math.inf:
+                return
+        if int(cfg[MODE]) == M_ZERO:
+            # the cruise at an inflection (UDUD): the second half a bump up again,
+            # at the tighter of both legs' limits
+            save = cfg.copy()
+            cfg[SG2] = -1.0
+            Km = max(lim[2], lim[4])
+            Am = min(lim[1], lim[3])
+            cfg[K2N] = Km
+            cfg[K4] = Km
+            cfg[L3] = Am
+            cfg[C3LO] = max(cfg[AE], 0.0)
+            cfg[C3HI] = Am
+            cfg[S3] = 1.0
+            for shape in range(S2_NN, S2_AA + 1):
+                solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                            scratch, vec[0], vec[1], vec[2], ivl)
+                if res[R_T] < math.inf:
+                    break
+            for k in range(NCFG):
+                cfg[k] = save[k]
+            if res[R_T] < math.inf:
+                return
+        if int(cfg[MODE]) == M_ZERO and cfg[S3] == 0.0 or (int(cfg[MODE]) == M_ZERO
+                                                           and cfg[K1] == max(lim[2], lim[4])
+                                                           and cfg[K4] == cfg[K1]):
+            # equal jerk on every ramp, at the tighter of both legs' limits
+            save = cfg.copy()
+            Km = max(lim[2], lim[4])
+            Am = min(lim[1], lim[3])
+            cfg[K1] = Km
+            cfg[K2P] = Km
+            cfg[K2N] = Km
+            cfg[K4] = Km
+            cfg[L1] = Am
+            cfg[L3] = -Am
+            cfg[SG2] = 1.0
+            cfg[MODE] = M_MID
+            for shape in range(S2_MH1, S2_MH4 + 1):
+                solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                            scratch, vec[0], vec[1], vec[2], ivl)
+                if res[R_T] < math.inf:
+                    break
+            if not (res[R_T] < math.inf):
+                cfg[MODE] = M_SINGLE
+                solve_shape(cfg, work, S2_JF, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                            scratch, vec[0], vec[1], vec[2], ivl)
+            for k in range(NCFG):
+                cfg[k] = save[k]
         return
     solve_vel(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
     for shape in range(4):
@@ -793,6 +1070,7 @@ def _setcfg(cfg, ps, vs, as_, pe, ve, ae, k1, k2p, k2n, k2q, k4, mode, l1, l3, v
     cfg[S3] = s3
     cfg[SZ] = sz
     cfg[K2R] = k2r
+    cfg[SG2] = 1.0
 
 
 @jit
@@ -815,6 +1093,18 @@ def _c3_bound(V, ve, ae, k4):
 
 @jit
 def _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
+    T = st[6]
+    if T == T:
+        if res[R_T] < math.inf:
+            return  # step 2: one profile of the duration is enough
+        # the template lasts what the fixed prefix and suffix leave
+        for k in range(npre):
+            T -= W[1][k, 0]
+        for k in range(nsuf):
+            T -= W[2][k, 0]
+        if not (T >= 0.0):
+            return
+    cfg[TT] = T
     solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res)
 
 
@@ -1062,6 +1352,7 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
     st[3] = D
     st[4] = vf
     st[5] = af
+    st[6] = st0[6]
     V, A1, K1_, A2, K2_ = lim[0], lim[1], lim[2], lim[3], lim[4]
     if A1 == A2 and K1_ == K2_:
         # symmetric: one template, no split of the legs
@@ -1150,11 +1441,13 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
 
 @jit
 def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
-    """Minimum time from ``st0[:3]`` (within the limits) to ``st0[3:]``.
+    """Minimum time (``st0[6]`` NaN) or exactly ``st0[6]`` (step 2) from
+    ``st0[:3]`` (inside the limits) to ``st0[3:6]``.
 
-    Fills ``best`` (phase table of the fastest valid candidate) and ``res``
-    (``res[R_T]`` its duration (inf if none), ``res[R_N]`` its phase count,
-    ``res[R_NV]`` the number of valid candidates and their durations).
+    Fills ``best`` (phase table of the fastest valid candidate; for step 2
+    the first one found) and ``res`` (``res[R_T]`` its duration (inf if
+    none), ``res[R_N]`` its phase count, ``res[R_NV]`` the number of valid
+    candidates and their durations, ``res[R_SHAPE]`` its shape code).
     """
     res[R_T] = math.inf
     res[R_N] = 0.0

@@ -270,10 +270,12 @@ class JerkMotion:
         ps = [p0]
         vs = [self.start_state[1]]
         as_ = [self.start_state[2]]
-        for k in range(self.n_phases):
+        n = self.n_phases
+        for k in range(n):
             dt = self.phase_durations[k]
             a, j, v = A[k], J[k], Vv[k]
-            cand = [0.0, dt]
+            # the end of the last phase is the declared end state (added below)
+            cand = [0.0, dt] if k < n - 1 else [0.0]
             if j != 0.0 and 0.0 < -a / j < dt:
                 cand.append(-a / j)
             for r in _quad_roots(0.5 * j, a, v):

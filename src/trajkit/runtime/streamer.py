@@ -85,7 +85,7 @@ import numpy as np
 from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
-from ._brake import BrakeProfile, brake_phases
+from ._brake import brake_profile
 from .pulses import PulseAxis, check_pulse_equivalents, pulse_count
 from .safety import Monitors, RuntimeFault, SafetyConfig
 from .servo import ServoBank, ServoParams
@@ -735,7 +735,7 @@ class Streamer:
         qp, qdp, _ = self.source.sample(self.tau)
         off = np.abs(qp[0] - self._q)
         if np.any(off > REENTRY_ATOL * np.maximum(1.0, np.abs(qp[0]))):
-            from ..trajectory import plan_ptp
+            from ..sync import plan_ptp
 
             lims = [AxisLimits(lm.v_max, lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel,
                                name=lm.name) for lm in self.limits]
@@ -765,8 +765,7 @@ class Streamer:
         profs = []
         for k in range(n):
             lm = self.limits[k]
-            ph = brake_phases(self._v[k], self._a[k], lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel)
-            profs.append(BrakeProfile((self._q[k], self._v[k], self._a[k]), ph))
+            profs.append(brake_profile(self._q[k], self._v[k], self._a[k], lm))
         T = max(p.duration for p in profs)
         m = int(math.ceil(T / self.period - 1e-12)) + 1
         tt = np.arange(1, m + 1) * self.period
