@@ -259,7 +259,9 @@ def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
     fb = buf[:78]
     k = 0
     sv = 1.0 if v > 0.0 else -1.0
-    if vt * sv > 0.0 and abs(v) > V:
+    Kn = K1 if v * a > 0.0 else K2
+    down = sv * (v + 0.5 * a * abs(a) * Kn) > abs(vt)  # the natural motion ends above V
+    if vt * sv > 0.0 and abs(v) > V and down:
         if K2 == 0.0:
             return -1
         # frame with v > V > 0: down to a valley c <= min(a, 0), back up to 0

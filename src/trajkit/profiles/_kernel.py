@@ -30,7 +30,7 @@ import numpy as np
 from ._brake import brake_bump, brake_natural, brake_path, forced_speed, inside, peak_speed
 from ._compile import jit
 from ._phase import phase_end
-from ._shapes import NCFG, NPH, NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
+from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
 
 __all__ = [
     "NWS", "workspace", "solve",
@@ -71,8 +71,8 @@ OUT_STATUS, OUT_T, OUT_TMIN, OUT_N, OUT_NB, OUT_NBLK, OUT_SHAPE = 13, 14, 15, 16
 OUT_BLK = 20
 OUT_PH = OUT_BLK + 2 * NBLK
 _W = OUT_PH + 3 * NPH           # W: 5 x NPH x 3
-_VEC = _W + 5 * NPH * 3         # vec: 3 x 16
-_IVL = _VEC + 48                # ivl: 8 x 2
+_VEC = _W + 5 * NPH * 3         # vec: 19 x 16 (values, coefficients, roots, 16 x 16 scratch)
+_IVL = _VEC + 19 * 16           # ivl: 8 x 2
 _CFG = _IVL + 16
 _ST = _CFG + NCFG
 _BEST = _ST + 7
@@ -167,7 +167,7 @@ def solve(ws):
         lim[0] = 8.0 * (abs(st0[1]) + abs(st0[4]) + math.sqrt(am * d) + am * am * km
                         + abs(st0[2]) * abs(st0[2]) * km + abs(st0[5]) * abs(st0[5]) * km) + 1.0
     W = ws[_W:_W + 5 * NPH * 3].reshape((5, NPH, 3))
-    vec = ws[_VEC:_VEC + 48].reshape((3, 16))
+    vec = ws[_VEC:_VEC + 19 * 16].reshape((19, 16))
     ivl = ws[_IVL:_IVL + 16].reshape((8, 2))
     cfg = ws[_CFG:_CFG + NCFG]
     st = ws[_ST:_ST + 7]
@@ -190,6 +190,7 @@ def solve(ws):
     n_best = 0
     nvalid = 0
     tb_best = 0.0
+    res[R_ALL] = 1.0 if (task == TASK_BLOCK or task == TASK_FIXED) else 0.0
     for cand in range(NCAND):
         nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
         if nb < 0:
@@ -232,6 +233,7 @@ def solve(ws):
         if nb < 0 or not (T - tb > 0.0):
             continue
         s1[6] = T - tb
+        res[R_ALL] = 0.0
         step1(s1, lim, best, res, W, vec, ivl, cfg, st)
         if not (res[R_T] < math.inf):
             continue

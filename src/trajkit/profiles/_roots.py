@@ -90,11 +90,13 @@ def horner(c, deg, x):
 
 @jit
 def _refine(D, m, deg, a, b, fa, fb):
-    """Root of the monotone level-``m`` derivative in ``[a, b]`` (``fa fb < 0``)."""
-    den = fb - fa
-    x = a - fa * (b - a) / den if den != 0.0 else 0.5 * (a + b)
+    """Root of the monotone level-``m`` derivative in ``[a, b]`` (``fa fb < 0``):
+    Newton steps kept inside the shrinking bracket; a step that leaves it is
+    replaced by regula falsi (Illinois), then by bisection."""
+    x = a - fa * (b - a) / (fb - fa)
     if not (a < x < b):
         x = 0.5 * (a + b)
+    side = 0
     for _ in range(ROOT_MAX_ITER):
         fx = horner(D[m], deg, x)
         if fx == 0.0:
@@ -102,39 +104,99 @@ def _refine(D, m, deg, a, b, fa, fb):
         if (fx < 0.0) == (fa < 0.0):
             a = x
             fa = fx
+            if side == -1:
+                fb *= 0.5
+            side = -1
         else:
             b = x
-        d = horner(D[m + 1], deg - 1, x) if deg > 0 else 0.0
-        xn = x - fx / d if d != 0.0 else 0.5 * (a + b)
+            fb = fx
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        d = horner(D[m + 1], deg - 1, x)
+        xn = x - fx / d if d != 0.0 else a - 1.0
         if not (a < xn < b):
-            xn = 0.5 * (a + b)
-        if abs(xn - x) <= 2.2e-16 * max(abs(x), 1e-300) or b - a <= 4.5e-16 * max(abs(a), abs(b)):
+            xn = a - fa * (b - a) / (fb - fa)
+            if not (a < xn < b):
+                xn = 0.5 * (a + b)
+        # x lies in [-1, 1]: an absolute step of a few ulp of 1 is converged
+        if abs(xn - x) <= 4.4e-16 or b - a <= 8.8e-16:
             return xn
         x = xn
     return x
 
 
 @jit
-def real_roots_unit(c, deg, out):
+def _quadratic_in(c0, c1, c2, out):
+    """Real roots of ``c0 + c1 x + c2 x^2`` in ``[-1, 1]`` (ascending), count."""
+    n = 0
+    if c2 == 0.0:
+        if c1 != 0.0:
+            x = -c0 / c1
+            if -1.0 <= x <= 1.0:
+                out[0] = x
+                n = 1
+        return n
+    disc = c1 * c1 - 4.0 * c2 * c0
+    if disc < 0.0:
+        return 0
+    sq = math.sqrt(disc)
+    q = -0.5 * (c1 + math.copysign(sq, c1))
+    if q == 0.0:
+        out[0] = 0.0
+        return 1
+    x1 = q / c2
+    x2 = c0 / q
+    if x1 > x2:
+        x1, x2 = x2, x1
+    if -1.0 <= x1 <= 1.0:
+        out[n] = x1
+        n += 1
+    if -1.0 <= x2 <= 1.0 and (n == 0 or x2 != out[n - 1]):
+        out[n] = x2
+        n += 1
+    return n
+
+
+@jit
+def real_roots_unit(c, deg, out, D):
     """Every real root of ``sum_k c[k] x^k`` in ``[-1, 1]``, ascending, into ``out``.
 
-    Returns the number of roots. Double roots (a local extremum within
-    :data:`TOUCH_RTOL` of zero) are included once.
+    ``D`` is a scratch array of shape at least ``(deg + 3, deg + 1)`` (the
+    derivatives, then two rows for the break points). Returns the number of
+    roots. Double roots (a local extremum within :data:`TOUCH_RTOL` of zero)
+    are included once.
     """
     while deg > 0 and c[deg] == 0.0:
         deg -= 1
     if deg == 0:
         return 0
-    D = np.zeros((deg + 1, deg + 1))
     for k in range(deg + 1):
         D[0, k] = c[k]
     for m in range(1, deg + 1):
         for k in range(deg + 1 - m):
             D[m, k] = D[m - 1, k + 1] * (k + 1)
-    crit = np.empty(deg + 1)
-    nc = 0
-    roots = np.empty(deg + 1)
-    for m in range(deg - 1, -1, -1):
+    crit = D[deg + 1]
+    roots = D[deg + 2]
+    # the lowest derivatives of degree <= 2 in closed form
+    m = deg - 2 if deg >= 2 else 0
+    nc = _quadratic_in(D[m, 0], D[m, 1] if deg - m >= 1 else 0.0,
+                       D[m, 2] if deg - m >= 2 else 0.0, crit)
+    if m == 0:
+        nr = nc
+        for i in range(nr):
+            roots[i] = crit[i]
+        # a double root: the vertex within round-off of zero
+        if nr == 0 and deg == 2 and D[0, 2] != 0.0:
+            xv = -D[0, 1] / (2.0 * D[0, 2])
+            scale = abs(c[0]) + abs(c[1]) + abs(c[2])
+            if -1.0 <= xv <= 1.0 and abs(horner(D[0], 2, xv)) <= TOUCH_RTOL * scale:
+                roots[0] = xv
+                nr = 1
+        for i in range(nr):
+            out[i] = roots[i]
+        return nr
+    for m in range(deg - 3, -1, -1):
         dm = deg - m
         nr = 0
         a = -1.0

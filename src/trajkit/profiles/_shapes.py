@@ -71,8 +71,17 @@ NPH = 40
 #: Largest number of valid candidates kept for the block computation.
 NVALID = 64
 
-#: Newton steps polishing a root on the exact residual.
-POLISH_STEPS = 4
+#: Secant steps polishing a root on the exact residual.
+POLISH_STEPS = 6
+
+#: A residual below this fraction of the problem's scale is exact (no polishing).
+POLISH_RTOL = 1e-15
+
+#: Stop at the first valid profile for a rest goal (symmetric limits).
+EARLY = True
+
+#: Slack of the cheap pre-check of a root before it is polished (normalised units).
+PLAUSIBLE_RTOL = 1e-6
 
 # configuration vector (one template instance)
 (PS, VS, AS, PE, VE, AE, K1, K2P, K2N, K2Q, K4, MODE, L1, L3, VM, C1LO, C1HI, C3LO, C3HI, S3,
@@ -97,10 +106,15 @@ S2_NN, S2_AN, S2_NA, S2_AA, S2_H1, S2_H3 = 4, 5, 6, 7, 8, 9
 # down (ruckig's a3 != 0 profiles): c3 = ae (MH1: c1 free, MH2: hold at c1 = L1)
 # or c1 = a0 (MH3: c3 free, MH4: hold at c3 = L3); and every ramp at a reduced jerk
 S2_MH1, S2_MH2, S2_MH3, S2_MH4, S2_JF = 10, 11, 12, 13, 14
+# step 1, NONE with equal jerks everywhere: parameter w = c1 - c3 (c1^2 - c3^2 is
+# fixed by the velocity), w R(w) is a quartic (ruckig's NONE quartic)
+S_NONEW = 15
 
 # result vector: best duration, best phase count, number of valid durations, the
-# shape of the best (code, see SHAPE_NAMES; +16 when mirrored), valid durations...
-R_T, R_N, R_NV, R_SHAPE, R_V0 = 0, 1, 2, 3, 4
+# shape of the best (code, see SHAPE_NAMES; +16 when mirrored), whether every valid
+# duration is wanted (else candidates that cannot win are not checked), whether the
+# search may stop at the first valid profile (set when it did), valid durations...
+R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_V0 = 0, 1, 2, 3, 4, 5, 6
 
 #: Names of the shape codes (ruckig's names of the reached limits).
 SHAPE_NAMES = ("none", "acc0", "acc1", "acc0_acc1", "vel", "acc0_vel", "acc1_vel",
@@ -187,6 +201,75 @@ def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
 
 
 @jit
+def _rp(p, v, T, x, y, K, sgn):
+    """(p, v, T) after a ramp x -> y at jerk sgn/K (what :func:`_ramp` appends)."""
+    if K == 0.0:
+        return p, v, T
+    dt = (y - x) * sgn * K
+    p, v, _ = phase_end(p, v, x, sgn / K, dt)
+    return p, v, T + dt
+
+
+@jit
+def _hp(p, v, T, a, t):
+    """(p, v, T) after a hold at ``a`` for ``t``."""
+    p, v, _ = phase_end(p, v, a, 0.0, t)
+    return p, v, T + t
+
+
+@jit
+def walk(cfg, c1, t1, z, c3, t3, tc):
+    """End position and duration of :func:`template` (``final=False``), without
+    building the phase table (the same phases, integrated by the same formula)."""
+    p = cfg[PS]
+    v = cfg[VS]
+    T = 0.0
+    p, v, T = _rp(p, v, T, cfg[AS], c1, cfg[K1], 1.0)
+    if t1 != 0.0:
+        p, v, T = _hp(p, v, T, c1, t1)
+    mode = int(cfg[MODE])
+    if mode == M_SINGLE:
+        p, v, T = _rp(p, v, T, c1, c3, cfg[K2P], -1.0)
+    elif mode == M_ZERO:
+        p, v, T = _rp(p, v, T, c1, 0.0, cfg[K2P], -1.0)
+        if tc != 0.0:
+            p, v, T = _hp(p, v, T, 0.0, tc)
+        p, v, T = _rp(p, v, T, 0.0, c3, cfg[K2N], -cfg[SG2])
+    elif mode == M_ZFIRST:
+        p, v, T = _rp(p, v, T, c1, z, cfg[K2P], -1.0)
+        p, v, T = _rp(p, v, T, z, 0.0, cfg[K2Q], -1.0)
+        if tc != 0.0:
+            p, v, T = _hp(p, v, T, 0.0, tc)
+        p, v, T = _rp(p, v, T, 0.0, c3, cfg[K2N], -1.0)
+    elif mode == M_ZSECOND:
+        p, v, T = _rp(p, v, T, c1, 0.0, cfg[K2P], -1.0)
+        if tc != 0.0:
+            p, v, T = _hp(p, v, T, 0.0, tc)
+        p, v, T = _rp(p, v, T, 0.0, z, cfg[K2N], -1.0)
+        p, v, T = _rp(p, v, T, z, c3, cfg[K2Q], -1.0)
+    elif mode == M_MID:
+        p, v, T = _rp(p, v, T, c1, z, cfg[K2P], -1.0)
+        if tc != 0.0:
+            p, v, T = _hp(p, v, T, z, tc)
+        p, v, T = _rp(p, v, T, z, c3, cfg[K2N], -1.0)
+    elif mode == M_ZBOTH:
+        z2 = -z * math.sqrt(cfg[K2Q] / cfg[K2N]) if cfg[K2N] > 0.0 else 0.0
+        p, v, T = _rp(p, v, T, c1, z, cfg[K2P], -1.0)
+        p, v, T = _rp(p, v, T, z, 0.0, cfg[K2Q], -1.0)
+        if tc != 0.0:
+            p, v, T = _hp(p, v, T, 0.0, tc)
+        p, v, T = _rp(p, v, T, 0.0, z2, cfg[K2N], -1.0)
+        p, v, T = _rp(p, v, T, z2, c3, cfg[K2R], -1.0)
+    else:
+        p, v, T = _rp(p, v, T, c1, z, cfg[K2P], -1.0)
+        p, v, T = _rp(p, v, T, z, c3, cfg[K2Q], -1.0)
+    if t3 != 0.0:
+        p, v, T = _hp(p, v, T, c3, t3)
+    p, v, T = _rp(p, v, T, c3, cfg[AE], cfg[K4], cfg[SG2])
+    return p, T
+
+
+@jit
 def integrate(ph, n0, n, p, v, a):
     """End state of phases ``n0..n-1`` from ``(p, v, a)``."""
     for k in range(n0, n):
@@ -269,11 +352,7 @@ def _g(cfg):
 @jit
 def _durations(cfg, work, c1, t1, z, c3, t3):
     """Sum of the template's phase durations without a cruise."""
-    n = template(work, 0, cfg, c1, t1, z, c3, t3, 0.0, False)
-    T = 0.0
-    for k in range(n):
-        T += work[k, 0]
-    return T
+    return walk(cfg, c1, t1, z, c3, t3, 0.0)[1]
 
 
 @jit
@@ -294,7 +373,11 @@ def _unknowns(cfg, work, shape, u, sz, s3):
     rz = 1.0
     r3 = 1.0
     aek = 0.5 * cfg[AE] * cfg[AE] * cfg[K4]
-    if shape == S_NONE:
+    if shape == S_NONEW:
+        g = _gamma(cfg)
+        c1 = 0.5 * (u + g / u)
+        c3 = 0.5 * (g / u - u)
+    elif shape == S_NONE:
         c1 = u
         if cross:
             rz = _F(cfg, c1, 0.0) / _kz(cfg)
@@ -430,11 +513,38 @@ def _unknowns(cfg, work, shape, u, sz, s3):
 
 
 @jit
+def _gamma(cfg):
+    """c1^2 - c3^2 of NONE with equal jerks (from the end velocity)."""
+    return (cfg[VE] - _F(cfg, 0.0, 0.0) - _E(cfg, 0.0, 0.0)) / cfg[K1]
+
+
+@jit
+def _none_w_domain(cfg):
+    """Interval of w = c1 - c3 > 0 with c1 <= C1HI and c3 >= C3LO."""
+    g = _gamma(cfg)
+    h1 = cfg[C1HI]
+    d1 = h1 * h1 - g
+    if d1 < 0.0:
+        return 1.0, 0.0
+    s1 = math.sqrt(d1)
+    lo = h1 - s1
+    hi = h1 + s1
+    l3 = cfg[C3LO]
+    d3 = l3 * l3 + g
+    if d3 < 0.0:
+        return 1.0, 0.0
+    s3 = math.sqrt(d3)
+    lo = max(lo, -l3 - s3, 0.0)
+    hi = min(hi, -l3 + s3)
+    if lo == 0.0:
+        lo = 1e-12 * hi
+    return lo, hi
+
+
+@jit
 def _resid(cfg, work, shape, u, sz, s3):
     c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
-    n = template(work, 0, cfg, c1, t1, z, c3, t3, tc, False)
-    p, _, _ = integrate(work, 0, n, cfg[PS], cfg[VS], cfg[AS])
-    return p - cfg[PE]
+    return walk(cfg, c1, t1, z, c3, t3, tc)[0] - cfg[PE]
 
 
 # ------------------------------------------------------------------ recording
@@ -446,6 +556,15 @@ def offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, 
     ``st = (p0, v0, a0, pf, vf, af)`` is the step-1 problem in the mirrored
     frame (``sgn = -1``) or as given (``sgn = +1``).
     """
+    if res[R_ALL] == 0.0:
+        # only the fastest matters: a candidate that cannot beat it is not built
+        T = walk(cfg, c1, t1, z, c3, t3, tc)[1]
+        for k in range(npre):
+            T += pre[k, 0]
+        for k in range(nsuf):
+            T += suf[k, 0]
+        if not (T < res[R_T] * (1.0 + 1e-12)):
+            return False
     n = 0
     for k in range(npre):
         scratch[n, 0] = pre[k, 0]
@@ -460,12 +579,16 @@ def offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, 
         n += 1
     if not clean(scratch, n):
         return False
-    if not check(scratch, n, st[0], st[1], st[2], st[3], st[4], st[5],
-                 lim[0], lim[1], lim[2], lim[3], lim[4]):
-        return False
     T = 0.0
     for k in range(n):
         T += scratch[k, 0]
+    if res[R_ALL] == 0.0 and not (T < res[R_T]):
+        return False  # cannot be the fastest: not worth the exact check
+    if not check(scratch, n, st[0], st[1], st[2], st[3], st[4], st[5],
+                 lim[0], lim[1], lim[2], lim[3], lim[4]):
+        return False
+    if res[R_STOP] < 0.0:
+        res[R_STOP] = 1.0  # a rest goal: this is the one valid profile
     nv = int(res[R_NV])
     if nv < NVALID:
         res[R_V0 + nv] = T
@@ -509,6 +632,8 @@ def _den(cfg, work, shape, u, s3):
 @jit
 def _norm(cfg, work, shape, u, nrad):
     """Product of the residual over every sign of the square roots (a polynomial in u)."""
+    if shape == S_NONEW:
+        return _resid(cfg, work, shape, u, 1.0, 1.0) * u
     if shape == S2_MH2 or shape == S2_MH4:
         d = _den(cfg, work, shape, u, 1.0)
         return _resid(cfg, work, shape, u, 1.0, 1.0) * d * d * d
@@ -553,6 +678,8 @@ def _domain(cfg, shape):
 
 @jit
 def _domain0(cfg, shape):
+    if shape == S_NONEW:
+        return _none_w_domain(cfg)
     if shape == S_NONE or shape == S2_NN or shape == S2_H1:
         return cfg[C1LO], cfg[C1HI]
     inflect = cfg[SG2] < 0.0  # c3 after a cruise at an inflection: not bounded by c1
@@ -652,6 +779,8 @@ def _intervals(cfg, work, shape, lo, hi, ivl):
 
 @jit
 def _degree(cfg, shape):
+    if shape == S_NONEW:
+        return 4
     if shape == S2_MH1 or shape == S2_MH3:
         return 6
     if shape == S2_MH2 or shape == S2_MH4:
@@ -668,30 +797,50 @@ def _degree(cfg, shape):
 
 @jit
 def _polish(cfg, work, shape, u, sz, s3, lo, hi):
-    """Newton steps on the exact residual (secant derivative); returns (u, |R|)."""
+    """Secant steps on the exact residual from a polynomial root; returns (u, |R|).
+
+    Stops at once when the root is already exact to round-off (the usual case).
+    """
     R = _resid(cfg, work, shape, u, sz, s3)
+    tol = POLISH_RTOL * (1.0 + abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]))
+    if abs(R) <= tol:
+        return u, abs(R)
+    h = 1e-7 * max(abs(u), hi - lo, 1e-300)
+    if u + h > hi:
+        h = -h
+    uo = u + h
+    Ro = _resid(cfg, work, shape, uo, sz, s3)
     for _ in range(POLISH_STEPS):
-        if R == 0.0:
+        den = R - Ro
+        if den == 0.0:
             break
-        h = 1e-7 * max(abs(u), hi - lo, 1e-300)
-        if u + h > hi:
-            h = -h
-        R2 = _resid(cfg, work, shape, u + h, sz, s3)
-        d = (R2 - R) / h
-        if d == 0.0 or not (abs(d) < math.inf):
-            break
-        un = min(max(u - R / d, lo), hi)
+        un = min(max(u - R * (u - uo) / den, lo), hi)
         Rn = _resid(cfg, work, shape, un, sz, s3)
         if not (abs(Rn) < abs(R)):
             break
+        uo = u
+        Ro = R
         u = un
         R = Rn
+        if abs(R) <= tol:
+            break
     return u, abs(R)
 
 
 @jit
+def _plausible(cfg, c1, t1, c3, t3, tc):
+    """Cheap necessary conditions of a candidate (the exact check decides)."""
+    eps = -PLAUSIBLE_RTOL * (1.0 + abs(cfg[TT]) if cfg[TT] == cfg[TT] else 1.0)
+    if t1 < eps or t3 < eps or tc < eps:
+        return False
+    if cfg[K1] > 0.0 and (c1 - cfg[AS]) * cfg[K1] < eps:
+        return False
+    return True
+
+
+@jit
 def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
-                vals, coef, roots, ivl):
+                vals, coef, roots, ivl, dscr):
     """Every root of one shape of one template, each offered as a candidate."""
     lo, hi = _domain(cfg, shape)
     mode = int(cfg[MODE])
@@ -711,13 +860,20 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
             return
     if (shape == S_NONE or shape == S2_NN or shape == S2_H1) and _kc3(cfg) <= 0.0:
         return
+    if shape == S_NONEW and not (cfg[K1] > 0.0):
+        return
     if shape == S2_H3 and not (cfg[K1] + cfg[K2P] > 0.0):
         return
     if not (hi >= lo) or not (abs(lo) < math.inf and abs(hi) < math.inf):
         return
     nrad = _nrad(cfg, shape)
     deg = _degree(cfg, shape)
-    ni = _intervals(cfg, work, shape, lo, hi, ivl)
+    if nrad == 0 and not (shape == S2_MH2 or shape == S2_MH4):
+        ivl[0, 0] = lo
+        ivl[0, 1] = hi
+        ni = 1
+    else:
+        ni = _intervals(cfg, work, shape, lo, hi, ivl)
     szs = cfg[SZ]
     s3s = cfg[S3]
     for iv in range(ni):
@@ -737,7 +893,7 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
             for k in range(nn):
                 vals[k] = _norm(cfg, work, shape, mid + half * xs[k], nrad)
             interp_unit(vals, nn, coef)
-            nr = real_roots_unit(coef, deg, roots)
+            nr = real_roots_unit(coef, deg, roots, dscr)
         for i in range(nr):
             u0 = mid + half * roots[i]
             for isz in range(2):
@@ -754,10 +910,15 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                     elif not (shape == S2_H1 or shape == S2_H3 or shape == S2_MH1
                               or shape == S2_MH3 or shape == S2_JF) and is3 == 1:
                         continue
+                    c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u0, sz, s3)
+                    if not _plausible(cfg, c1, t1, c3, t3, tc):
+                        continue
                     u, _ = _polish(cfg, work, shape, u0, sz, s3, a, b)
                     c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
                     offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim,
                           best, res, scratch, shape)
+                    if res[R_STOP] > 0.0:
+                        return
                     if shape >= S2_NN and res[R_T] < math.inf:
                         return
 
@@ -824,8 +985,7 @@ def solve_vel(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
                 t3 = (etgt - e_af + c3 * c3 * kc3) / c3
                 if t3 < 0.0:
                     continue
-            n = template(work, 0, cfg, c1, t1, z, c3, t3, 0.0, False)
-            p, _, _ = integrate(work, 0, n, cfg[PS], cfg[VS], cfg[AS])
+            p, _ = walk(cfg, c1, t1, z, c3, t3, 0.0)
             tc = (cfg[PE] - p) / V
             if tc < 0.0:
                 continue
@@ -893,7 +1053,7 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     if cfg[TT] == cfg[TT]:  # step 2: exactly T
         for shape in range(S2_NN, S2_H3 + 1):
             solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
-                        scratch, vec[0], vec[1], vec[2], ivl)
+                        scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
             if res[R_T] < math.inf:
                 return
         if int(cfg[MODE]) == M_ZERO:
@@ -911,7 +1071,7 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
             cfg[S3] = 1.0
             for shape in range(S2_NN, S2_AA + 1):
                 solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
-                            scratch, vec[0], vec[1], vec[2], ivl)
+                            scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
                 if res[R_T] < math.inf:
                     break
             for k in range(NCFG):
@@ -935,20 +1095,25 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
             cfg[MODE] = M_MID
             for shape in range(S2_MH1, S2_MH4 + 1):
                 solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
-                            scratch, vec[0], vec[1], vec[2], ivl)
+                            scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
                 if res[R_T] < math.inf:
                     break
             if not (res[R_T] < math.inf):
                 cfg[MODE] = M_SINGLE
                 solve_shape(cfg, work, S2_JF, pre, npre, suf, nsuf, sgn, st, lim, best, res,
-                            scratch, vec[0], vec[1], vec[2], ivl)
+                            scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
             for k in range(NCFG):
                 cfg[k] = save[k]
         return
     solve_vel(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
+    equal = cfg[S3] == 0.0  # the template with equal jerks everywhere
     for shape in range(4):
+        if res[R_STOP] > 0.0:
+            return
+        if shape == S_NONE and equal:
+            shape = S_NONEW
         solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
-                    vec[0], vec[1], vec[2], ivl)
+                    vec[0], vec[1], vec[2], ivl, vec[3:])
 
 
 # ------------------------------------------------------------------ legs
@@ -1453,5 +1618,11 @@ def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     res[R_N] = 0.0
     res[R_NV] = 0.0
     res[R_SHAPE] = 0.0
+    # a rest goal with symmetric limits has exactly one valid profile (ruckig's
+    # observation, checked against ruckig by the tests): stop at the first
+    symmetric = lim[1] == lim[3] and lim[2] == lim[4]
+    rest_goal = st0[4] == 0.0 and st0[5] == 0.0 and st0[3] == st0[3] and st0[6] != st0[6]
+    res[R_STOP] = -1.0 if (symmetric and rest_goal and res[R_ALL] == 0.0 and EARLY) else 0.0
     direction(1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
-    direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
+    if res[R_STOP] <= 0.0:
+        direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)

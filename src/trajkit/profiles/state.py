@@ -34,6 +34,8 @@ from . import _kernel as K
 from ._brake import inside
 from ._compile import ENABLED as _COMPILED
 from ._range import (
+    POSITION_MAX,
+    STATE_RATIO_MAX,
     check_distance_range,
     check_limits_range,
     check_position_range,
@@ -238,6 +240,8 @@ def _ws():
 
 
 def _check_limits(limits: Any) -> AxisLimits:
+    if type(limits) is AxisLimits and limits.__dict__.get("_states_ok", False):
+        return limits
     if not isinstance(limits, AxisLimits):
         raise InvalidInputError(f"limits must be an AxisLimits, got {type(limits).__name__}")
     if limits.v_max == math.inf and limits.a_max == math.inf and limits.a_max_decel == math.inf:
@@ -245,10 +249,14 @@ def _check_limits(limits: Any) -> AxisLimits:
             f"limits{axis_label(limits.name)}: v_max and a_max cannot both be infinite for a "
             "profile between moving states")
     check_limits_range(limits, states=True)
+    object.__setattr__(limits, "_amax", max(limits.a_max, limits.a_max_decel))
+    object.__setattr__(limits, "_states_ok", True)
     return limits
 
 
 _NAMES3 = ("position", "velocity", "acceleration")
+_PMAX = POSITION_MAX
+_SMAX = STATE_RATIO_MAX
 
 
 def _num(x, field, name):
@@ -262,6 +270,18 @@ def _num(x, field, name):
 
 
 def _check_state(state: Any, field: str, limits: AxisLimits) -> tuple:
+    # fast path: three finite floats inside the ranges (the common call)
+    if type(state) is tuple and len(state) == 3:
+        p, v, a = state
+        if (type(p) is float and type(v) is float and type(a) is float
+                and -_PMAX <= p <= _PMAX and limits.position_min <= p <= limits.position_max
+                and abs(v) <= _SMAX * limits.v_max and abs(a) <= _SMAX * limits._amax
+                and math.isfinite(v) and math.isfinite(a)):
+            return state
+    return _check_state_slow(state, field, limits)
+
+
+def _check_state_slow(state: Any, field: str, limits: AxisLimits) -> tuple:
     name = limits.name
     try:
         vals = tuple(state)
@@ -290,6 +310,8 @@ def _goal_violation(v: float, a: float, limits: AxisLimits) -> str | None:
     Arriving at ``(v, a)`` is leaving ``(v, -a)`` backwards in time with the
     legs swapped: the goal is reachable when that state is inside the limits.
     """
+    if a == 0.0 and abs(v) <= limits.v_max:
+        return None
     V = limits.v_max
     tol = 1.0 + 1e-12
     if abs(v) > V * tol:
