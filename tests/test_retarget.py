@@ -43,8 +43,8 @@ def _run(lims, seed, n_targets):
 
     def spy(goal, sync):
         orig(goal, sync)
-        if st._target is not None and st._target[1] == 0:
-            plans.append((np.column_stack([st._q, st._v, st._a]), st._target[0]))
+        if st._online is not None and st._online[1] == 0:
+            plans.append((np.column_stack([st._q, st._v, st._a]), st._online[0]))
 
     st._apply_target = spy
     sps = []
@@ -104,7 +104,7 @@ def test_target_replans_within_the_same_cycle():
     q, v, a = st._q.copy(), st._v.copy(), st._a.copy()
     st.set_target([-1.0, 0.5], [0.2, 0.0])
     sp = st.step()
-    traj = st._target[0]
+    traj = st._online[0]
     np.testing.assert_array_equal(traj.start_states, np.column_stack([q, v, a]))
     s = traj.sample(PERIOD)
     np.testing.assert_array_equal(sp.position, s.position[0])

@@ -80,6 +80,14 @@ POLISH_RTOL = 1e-15
 #: Stop at the first valid profile for a rest goal (symmetric limits).
 EARLY = True
 
+#: Where the shape polynomial nearly vanishes at an end of its interval
+#: (``|N(end)| <= ZOOM_RTOL * sum |c_k|``), a root may hide within round-off of
+#: that end (tiny moves): the roots are searched again on ever smaller pieces
+#: at that end, each ``ZOOM_FACTOR`` of the interval, at most ``ZOOM_LEVELS``.
+ZOOM_RTOL = 1e-6
+ZOOM_FACTOR = 2.0 ** -4
+ZOOM_LEVELS = 10
+
 #: Slack of the cheap pre-check of a root before it is polished (normalised units).
 PLAUSIBLE_RTOL = 1e-6
 
@@ -659,7 +667,7 @@ def _domain(cfg, shape):
     """Interval of the shape parameter (before the radicands are considered)."""
     lo, hi = _domain0(cfg, shape)
     T = cfg[TT]
-    if shape >= S2_NN and T == T:
+    if S2_NN <= shape <= S2_JF and T == T:
         # every ramp fits in the duration: bounds the corners by T / K
         if shape == S2_NN or shape == S2_NA or shape == S2_H1:
             if cfg[K1] > 0.0:
@@ -802,7 +810,9 @@ def _polish(cfg, work, shape, u, sz, s3, lo, hi):
     Stops at once when the root is already exact to round-off (the usual case).
     """
     R = _resid(cfg, work, shape, u, sz, s3)
-    tol = POLISH_RTOL * (1.0 + abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]))
+    # the scale of the positions of this motion (a tiny rest-to-rest move is
+    # resolved relative to its own distance)
+    tol = POLISH_RTOL * (abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]) + 1e-300)
     if abs(R) <= tol:
         return u, abs(R)
     h = 1e-7 * max(abs(u), hi - lo, 1e-300)
@@ -847,7 +857,7 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
     cross = M_ZFIRST <= mode <= M_ZBOTH
     if S2_MH1 <= shape <= S2_JF:
         pass
-    elif shape >= S2_NN:
+    elif S2_NN <= shape <= S2_JF:
         if shape <= S2_AA and (mode == M_SINGLE or mode == M_ZSINGLE):
             return  # a cruise needs ramp 2 through a = 0
         if shape >= S2_H1 and cross:
@@ -874,53 +884,109 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
         ni = 1
     else:
         ni = _intervals(cfg, work, shape, lo, hi, ivl)
-    szs = cfg[SZ]
-    s3s = cfg[S3]
     for iv in range(ni):
         a = ivl[iv, 0]
         b = ivl[iv, 1]
-        nr = 0
         if b - a <= 1e-13 * max(abs(a), abs(b), 1e-300):
             roots[0] = 0.0
-            nr = 1
-            mid = 0.5 * (a + b)
-            half = 0.0
-        else:
-            mid = 0.5 * (a + b)
-            half = 0.5 * (b - a)
-            nn = deg + 1
-            xs = cheb_nodes(nn)
-            for k in range(nn):
-                vals[k] = _norm(cfg, work, shape, mid + half * xs[k], nrad)
-            interp_unit(vals, nn, coef)
-            nr = real_roots_unit(coef, deg, roots, dscr)
-        for i in range(nr):
-            u0 = mid + half * roots[i]
-            for isz in range(2):
-                sz = 1.0 if isz == 0 else -1.0
-                if cross and sz != szs:
+            _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                         scratch, roots, 1, 0.5 * (a + b), 0.0, a, b)
+            if res[R_STOP] > 0.0 or (S2_NN <= shape <= S2_JF and res[R_T] < math.inf):
+                return
+            continue
+        # the whole interval, then (where N nearly vanishes at an end, i.e. a
+        # root may sit within round-off of it) ever smaller pieces at that end
+        zoom_lo = False
+        zoom_hi = False
+        for side in range(3):
+            if (side == 1 and not zoom_lo) or (side == 2 and not zoom_hi):
+                continue
+            za = a
+            zb = b
+            for level in range(ZOOM_LEVELS + 1):
+                if side == 0 and level > 0:
+                    break
+                if side > 0 and level == 0:
                     continue
-                if not cross and isz == 1:
+                if side == 1:
+                    zb = za + (b - a) * ZOOM_FACTOR ** level
+                elif side == 2:
+                    za = zb - (b - a) * ZOOM_FACTOR ** level
+                mid = 0.5 * (za + zb)
+                half = 0.5 * (zb - za)
+                nn = deg + 1
+                xs = cheb_nodes(nn)
+                for k in range(nn):
+                    vals[k] = _norm(cfg, work, shape, mid + half * xs[k], nrad)
+                interp_unit(vals, nn, coef)
+                nr = real_roots_unit(coef, deg, roots, dscr)
+                _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                             scratch, roots, nr, mid, half, a, b)
+                if res[R_STOP] > 0.0 or (S2_NN <= shape <= S2_JF and res[R_T] < math.inf):
+                    return
+                if side == 0:
+                    # which ends need a closer look
+                    tot = 0.0
+                    e_lo = 0.0
+                    e_hi = 0.0
+                    sg = 1.0
+                    for k in range(nn):
+                        tot += abs(coef[k])
+                        e_hi += coef[k]
+                        e_lo += sg * coef[k]
+                        sg = -sg
+                    # (an exact zero at the end is a root there, found above)
+                    zoom_lo = (abs(e_lo) <= ZOOM_RTOL * tot
+                               and _norm(cfg, work, shape, a, nrad) != 0.0)
+                    zoom_hi = (abs(e_hi) <= ZOOM_RTOL * tot
+                               and _norm(cfg, work, shape, b, nrad) != 0.0)
+                else:
+                    tot = 0.0
+                    e = 0.0
+                    sg = 1.0
+                    for k in range(nn):
+                        tot += abs(coef[k])
+                        e += (sg if side == 1 else 1.0) * coef[k]
+                        sg = -sg
+                    if not (abs(e) <= ZOOM_RTOL * tot):
+                        break
+
+
+@jit
+def _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
+                 roots, nr, mid, half, a, b):
+    """Offer the candidate of every root ``mid + half * roots[i]`` (all sign branches)."""
+    mode = int(cfg[MODE])
+    cross = M_ZFIRST <= mode <= M_ZBOTH
+    szs = cfg[SZ]
+    s3s = cfg[S3]
+    for i in range(nr):
+        u0 = mid + half * roots[i]
+        for isz in range(2):
+            sz = 1.0 if isz == 0 else -1.0
+            if cross and sz != szs:
+                continue
+            if not cross and isz == 1:
+                continue
+            for is3 in range(2):
+                s3 = 1.0 if is3 == 0 else -1.0
+                if shape == S_NONE or shape == S2_NN:
+                    if s3s != 0.0 and s3 != s3s:
+                        continue
+                elif not (shape == S2_H1 or shape == S2_H3 or shape == S2_MH1
+                          or shape == S2_MH3 or shape == S2_JF) and is3 == 1:
                     continue
-                for is3 in range(2):
-                    s3 = 1.0 if is3 == 0 else -1.0
-                    if shape == S_NONE or shape == S2_NN:
-                        if s3s != 0.0 and s3 != s3s:
-                            continue
-                    elif not (shape == S2_H1 or shape == S2_H3 or shape == S2_MH1
-                              or shape == S2_MH3 or shape == S2_JF) and is3 == 1:
-                        continue
-                    c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u0, sz, s3)
-                    if not _plausible(cfg, c1, t1, c3, t3, tc):
-                        continue
-                    u, _ = _polish(cfg, work, shape, u0, sz, s3, a, b)
-                    c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
-                    offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim,
-                          best, res, scratch, shape)
-                    if res[R_STOP] > 0.0:
-                        return
-                    if shape >= S2_NN and res[R_T] < math.inf:
-                        return
+                c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u0, sz, s3)
+                if not _plausible(cfg, c1, t1, c3, t3, tc):
+                    continue
+                u, _ = _polish(cfg, work, shape, u0, sz, s3, a, b)
+                c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
+                offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim,
+                      best, res, scratch, shape)
+                if res[R_STOP] > 0.0:
+                    return
+                if S2_NN <= shape <= S2_JF and res[R_T] < math.inf:
+                    return
 
 
 @jit

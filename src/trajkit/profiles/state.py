@@ -56,7 +56,8 @@ __all__ = [
 ]
 
 #: Names of the fixed-duration (step 2) shapes, after the step-1 ones.
-STEP2_NAMES = ("cruise", "acc0_cruise", "cruise_acc1", "acc0_cruise_acc1", "hold1", "hold3")
+STEP2_NAMES = ("cruise", "acc0_cruise", "cruise_acc1", "acc0_cruise_acc1", "hold1", "hold3",
+               "hold_mid", "acc0_hold_mid", "hold_mid_3", "hold_mid_acc1", "reduced_jerk")
 
 #: A requested duration within this fraction of the minimum is the minimum.
 DURATION_RTOL = K.DURATION_RTOL
@@ -388,7 +389,9 @@ def _family(code: float) -> str:
     direction = "DUUD" if c & 16 else "UDDU"
     c &= 15
     if fixed:
-        return f"fixed {direction} {STEP2_NAMES[c - 4] if 4 <= c < 10 else '?'}"
+        return f"fixed {direction} {STEP2_NAMES[c - 4] if 4 <= c < 15 else '?'}"
+    if c == 15:  # NONE with equal jerks (solved in w = c1 - c3)
+        return f"{direction} none"
     if c >= 8:
         return f"velocity {direction}" + (" acc0" if c == 9 else "")
     return f"{direction} {SHAPE_NAMES[c]}"

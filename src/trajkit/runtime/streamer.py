@@ -587,7 +587,7 @@ class Streamer:
         self._blk = None
         self._brake = None
         self._detour = None
-        self._target = None
+        self._online = None
         self._stops = list(src.stop_points) if self.wait_in_position else []
         self._settle = 0
         self._waiting = False
@@ -828,7 +828,7 @@ class Streamer:
         except TrajkitError as err:
             self._event("rejected", f"target rejected: {err}")
             return
-        self._target = (traj, 0)
+        self._online = (traj, 0)
         self._mode = "target"
         self._blk = None
         self._path_stop = False
@@ -879,7 +879,7 @@ class Streamer:
             s = p.sample(tt)
             Q[:, k], V[:, k], A[:, k] = s.position, s.velocity, s.acceleration
         self._brake = (profs, Q, V, A, 0)
-        self._target = None
+        self._online = None
         self._mode = "brake"
         self._blk = None
 
@@ -890,7 +890,7 @@ class Streamer:
         self._a = np.zeros(self.n_axes)
         self._brake = None
         self._detour = None
-        self._target = None
+        self._online = None
         self.s = self.sd = 0.0
         self._path_stop = False
         self.paused = False
@@ -1037,10 +1037,10 @@ class Streamer:
             q, v, a = Q[i], V[i], A[i]
             self._brake = (profs, Q, V, A, i + 1)
         elif mode == "target":
-            traj, i = self._target
+            traj, i = self._online
             smp = traj.sample(np.array([(i + 1) * self.period]))
             q, v, a = smp.position[0], smp.velocity[0], smp.acceleration[0]
-            self._target = (traj, i + 1)
+            self._online = (traj, i + 1)
         elif mode == "detour":
             traj, i = self._detour
             smp = traj.sample(np.array([(i + 1) * self.period]))
@@ -1090,8 +1090,8 @@ class Streamer:
             self._path_bookkeeping(q, measured, tau_out)
         elif self._mode == "brake" and self._brake is not None and self._brake[4] >= self._brake[1].shape[0]:
             self._at_rest_after_stop()
-        elif self._mode == "target" and self._target is not None:
-            traj, i = self._target
+        elif self._mode == "target" and self._online is not None:
+            traj, i = self._online
             if i * self.period >= traj.duration:
                 gs = traj.goal_states
                 if not np.any(gs[:, 1:]):
@@ -1099,7 +1099,7 @@ class Streamer:
                     q = gs[:, 0].copy()
                     v = np.zeros(n)
                     a = np.zeros(n)
-                    self._target = None
+                    self._online = None
                     self._mode = "hold"
                     self.state = "idle"
                     self._event("target_reached", f"at rest on the target {q.tolist()}")
