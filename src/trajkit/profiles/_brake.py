@@ -25,7 +25,9 @@ checked while outside):
 * ``bump(+-v_max)``: the fastest velocity change to ``(+-v_max, 0)``, cut
   at the first instant inside;
 * ``natural``: the acceleration ramped to zero at each leg's jerk limit
-  (through a reversal), then the bump to ``(sign(v) v_max, 0)``.
+  (through a reversal), then the bump to ``(sign(v) v_max, 0)``;
+* ``hold``: slowing down, the acceleration held (jerk 0) up to the first
+  instant inside, before the velocity reverses.
 
 A candidate whose velocity exceeds what the start state forces (the
 velocity reached by ramping its acceleration to zero, :func:`forced_speed`)
@@ -44,8 +46,8 @@ import math
 from ._compile import jit
 from ._phase import phase_end
 
-__all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump", "brake_natural", "forced_speed",
-           "peak_speed"]
+__all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump", "brake_natural", "brake_hold",
+           "forced_speed", "peak_speed"]
 
 #: Largest number of phases of one brake candidate.
 BRAKE_PHASES = 10
@@ -176,6 +178,10 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
         if inside(v, a, V, A1, K1, A2, K2):
             return n
         an = a - s * 1e-300
+        # the phase ends where the velocity (or the acceleration) reaches zero:
+        # exactly zero there, so that the next phase is in the right leg
+        v_zero = False
+        a_zero = False
         beyond = (a > 0.0 and v >= 0.0 and a > A1) or (a < 0.0 and v <= 0.0 and -a > A1) or \
             (v * a < 0.0 and abs(a) > A2)
         holding = (a - clamp) * s <= 0.0 and not beyond
@@ -196,6 +202,7 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
                 for t in ((-a - sq) / j, (-a + sq) / j):
                     if 0.0 < t < tmax:
                         tmax = t
+                        v_zero = True
         elif holding:
             j = 0.0
             tmax = math.inf
@@ -213,14 +220,17 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
             j = -s / K
             # phase end: a reaches 0 (leg change), v reaches 0 (leg change) or the clamp
             tmax = (clamp - a) / j
-            if a * s > 0.0:
-                tmax = min(tmax, -a / j)
+            if a * s > 0.0 and -a / j < tmax:
+                tmax = -a / j
+                a_zero = True
             disc = a * a - 2.0 * j * v
             if disc >= 0.0 and v != 0.0:
                 sq = math.sqrt(disc)
                 for t in ((-a - sq) / j, (-a + sq) / j):
                     if 0.0 < t < tmax:
                         tmax = t
+                        v_zero = True
+                        a_zero = False
         t = _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, buf)
         if t < math.inf:
             if t > 0.0:
@@ -236,6 +246,10 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
         out[n, 2] = a
         n += 1
         _, v, a = phase_end(0.0, v, a, j, tmax)
+        if v_zero:
+            v = 0.0
+        if a_zero:
+            a = 0.0
         if j != 0.0 and abs(a - clamp) <= 1e-12 * A2:
             a = clamp
     return -1
@@ -401,6 +415,24 @@ def brake_natural(v, a, V, A1, K1, A2, K2, out, buf):
     if m < 0:
         return -1
     return n + m
+
+
+@jit
+def brake_hold(v, a, V, A1, K1, A2, K2, out, buf):
+    """Brake candidate ``hold``: slowing down (``v a < 0``), the acceleration
+    held up to the first instant inside the limits, before ``v`` reaches zero.
+    Returns the phase count or -1."""
+    if not (v * a < 0.0):
+        return -1
+    t = _first_inside(v, a, 0.0, -v / a, V, A1, K1, A2, K2, buf[:78])
+    if not (t < math.inf):
+        return -1
+    if t == 0.0:
+        return 0
+    out[0, 0] = t
+    out[0, 1] = 0.0
+    out[0, 2] = a
+    return 1
 
 
 @jit

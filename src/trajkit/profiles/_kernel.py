@@ -27,7 +27,8 @@ import math
 
 import numpy as np
 
-from ._brake import brake_bump, brake_natural, brake_path, forced_speed, inside, peak_speed
+from ._brake import (brake_bump, brake_hold, brake_natural, brake_path, forced_speed, inside,
+                     peak_speed)
 from ._compile import jit
 from ._phase import phase_end
 from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
@@ -55,7 +56,7 @@ ST_SHORT = 4     # the requested duration is below the minimum
 NBLK = 4
 
 #: Brake candidates (see :mod:`._brake`).
-NCAND = 5
+NCAND = 6
 
 #: Valid step-1 durations closer than this (relative) are one profile.
 BLOCK_MERGE_RTOL = 1e-10
@@ -191,7 +192,11 @@ def solve(ws):
     nvalid = 0
     tb_best = 0.0
     res[R_ALL] = 1.0 if (task == TASK_BLOCK or task == TASK_FIXED) else 0.0
-    for cand in range(NCAND):
+    # the goal is the start: the empty profile (duration 0) is the fastest
+    trivial = (task != TASK_VELOCITY and start_inside and st0[3] == 0.0
+               and st0[1] == st0[4] and st0[2] == st0[5])
+    for cand in range(1 if (task == TASK_BLOCK or task == TASK_FIXED) else
+                      (0 if trivial else NCAND)):
         nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
         if nb < 0:
             continue
@@ -212,6 +217,15 @@ def solve(ws):
             valid[k] = res[R_V0 + k] + tb
         _copy_rows(keep, 0, brk, nb)
         _copy_rows(keep, nb, best, n)
+    if trivial:
+        # (a moving start reaches itself again only after a loop: the
+        # durations in between are blocked, see _blocks)
+        valid[nvalid] = 0.0
+        nvalid += 1
+        best_total = 0.0
+        nb_best = 0
+        n_best = 0
+        ws[OUT_SHAPE] = 0.0
     if not (best_total < math.inf):
         ws[OUT_STATUS] = ST_NONE if start_inside else ST_BRAKE
         return
@@ -274,7 +288,7 @@ def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
 @jit
 def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     """Brake candidate ``cand`` (0, 1: paths; 2, 3: bumps to +-v_max; 4: natural;
-    only 0 = none when the start is inside): (phase count or -1, duration); ``s1[:6]`` gets the
+    5: hold; only 0 = none when the start is inside): (phase count or -1, duration); ``s1[:6]`` gets the
     problem from its end."""
     if start_inside:
         if cand > 0:
@@ -286,8 +300,10 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     elif cand < 4:
         nb = brake_bump(lim[0] if cand == 2 else -lim[0], st0[1], st0[2], lim[0], lim[1],
                         lim[2], lim[3], lim[4], brk, bbuf)
-    else:
+    elif cand == 4:
         nb = brake_natural(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
+    else:
+        nb = brake_hold(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
     if nb < 0:
         return -1, 0.0
     # a brake exceeds the velocity limit no more than the start state forces

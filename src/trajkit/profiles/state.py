@@ -455,8 +455,6 @@ def feasible_durations(start: Sequence[float], goal: Sequence[float],
         shape enumeration bound the feasible set (ruckig's *block*).
     """
     limits, s, g = _prepare(start, goal, limits)
-    if s == g:
-        return DurationSet(0.0, ())
     ws = _run(s, g, limits, K.TASK_BLOCK)
     if int(ws[K.OUT_STATUS]) != K.ST_OK:
         _fail(ws, s, g, limits, "")
