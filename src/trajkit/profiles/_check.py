@@ -29,8 +29,9 @@ __all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "clean"]
 #: than :data:`trajkit._constants.LIMIT_RTOL` of the public verifier).
 LIMIT_RTOL = 1e-10
 
-#: Relative tolerance of the end state (position relative to the travelled
-#: path scale, velocity and acceleration relative to theirs).
+#: Relative tolerance of the end state (position relative to the distance
+#: travelled, velocity relative to the velocity change along the path,
+#: acceleration relative to its scale).
 GOAL_RTOL = 1e-10
 
 #: Pieces whose |v| and |a| stay below this fraction of their scales have
@@ -73,9 +74,13 @@ def _leg(v, a, A1, K1, A2, K2):
 def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
     """True when the candidate keeps every limit and ends at the goal state."""
     # scales (for slivers and the end-state tolerances)
+    # (round-off of the end state accumulates along the path: the velocity
+    # change and the distance travelled, summed over the phases)
     T = 0.0
     vsc = max(abs(v0), abs(vf))
     asc = max(abs(a0), abs(af))
+    dv_path = 0.0
+    dp_path = 0.0
     p = p0
     v = v0
     for k in range(n):
@@ -83,9 +88,13 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
         j = ph[k, 1]
         a = ph[k, 2]
         asc = max(asc, abs(a))
+        vb = abs(v)
         p, v, ae = phase_end(p, v, a, j, dt)
         vsc = max(vsc, abs(v))
         asc = max(asc, abs(ae))
+        da = max(abs(a), abs(ae)) * dt
+        dv_path += da
+        dp_path += (max(vb, abs(v)) + da) * dt
         T += dt
     if not (T < 1e300):
         return False
@@ -168,10 +177,10 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
         p, v, a_prev = phase_end(p, v, a, j, dt)
     # end state (an acceleration jump onto the goal is a zero-length phase)
     if pf == pf:  # a NaN goal position: the position is free (velocity interface)
-        psc = max(abs(pf - p0), vsc * T, asc * T * T, 1e-300)
+        psc = max(abs(pf - p0), dp_path, 1e-300)
         if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
             return False
-    if abs(v - vf) > GOAL_RTOL * max(vsc, asc * T):
+    if abs(v - vf) > GOAL_RTOL * max(vsc, dv_path):
         return False
     if abs(a_prev - af) > GOAL_RTOL * asc:
         return False

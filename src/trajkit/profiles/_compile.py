@@ -16,20 +16,21 @@ them recompiles every kernel (no stale machine code).
 from __future__ import annotations
 
 import os
+import types
 
 try:  # pragma: no cover - depends on the install
     import numba
 except ImportError:  # pragma: no cover
     numba = None
 
-__all__ = ["ENABLED", "KERNEL_MODULES", "jit"]
+__all__ = ["ENABLED", "KERNEL_MODULES", "compiled_twins", "jit", "jit_parallel", "prange"]
 
 #: True when the decorated kernels are compiled by numba.
 ENABLED = numba is not None and os.environ.get("TRAJKIT_NO_JIT", "") in ("", "0")
 
 #: Source files of the compiled kernels (next to this file).
 KERNEL_MODULES = ("_phase.py", "_roots.py", "_check.py", "_brake.py", "_shapes.py", "_kernel.py",
-                  "_batch_states.py")
+                  "_batch_states.py", "_scalar.py", "_jit.py")
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _FILES = tuple(os.path.join(_HERE, f) for f in KERNEL_MODULES)
@@ -76,3 +77,39 @@ def jit(fn):
     if not ENABLED:
         return fn
     return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def jit_parallel(fn):
+    """:func:`jit` with numba's ``parallel=True`` (loops over :func:`prange`
+    run on every core); plain Python when not :data:`ENABLED`."""
+    if not ENABLED:
+        return fn
+    return numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")(fn)
+
+
+#: ``numba.prange`` when :data:`ENABLED`, else ``range``.
+prange = numba.prange if ENABLED else range
+
+
+def compiled_twins(namespace: dict, names) -> dict:
+    """Compiled twins of plain-Python functions that call each other.
+
+    ``namespace`` is a module's globals, ``names`` the functions to compile.
+    Each twin is the same code object with its globals pointing to the other
+    twins, so compiled calls stay compiled while Python callers keep the plain
+    functions (a call into compiled code costs more than these few
+    operations). Returns ``{name: twin}`` (the plain functions when not
+    :data:`ENABLED`).
+    """
+    if not ENABLED:
+        return {n: namespace[n] for n in names}
+    g = dict(namespace)
+    out = {}
+    for n in names:
+        f = namespace[n]
+        twin = types.FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__)
+        twin.__module__ = f.__module__
+        twin.__qualname__ = f.__qualname__
+        out[n] = numba.njit(cache=True, nogil=True, error_model="numpy")(twin)
+    g.update(out)  # compiled lazily: every call between twins resolves to a twin
+    return out

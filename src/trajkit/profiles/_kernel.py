@@ -58,6 +58,10 @@ NBLK = 4
 #: Brake candidates (see :mod:`._brake`).
 NCAND = 6
 
+#: A brake end state within this fraction of the brake's velocity (and
+#: acceleration) scale outside the limits is round-off and is moved onto them.
+BRAKE_SNAP_RTOL = 1e-9
+
 #: Valid step-1 durations closer than this (relative) are one profile.
 BLOCK_MERGE_RTOL = 1e-10
 
@@ -195,8 +199,11 @@ def solve(ws):
     # the goal is the start: the empty profile (duration 0) is the fastest
     trivial = (task != TASK_VELOCITY and start_inside and st0[3] == 0.0
                and st0[1] == st0[4] and st0[2] == st0[5])
-    for cand in range(1 if (task == TASK_BLOCK or task == TASK_FIXED) else
-                      (0 if trivial else NCAND)):
+    ncand = NCAND
+    if trivial:
+        # (the valid set of the loop still bounds the blocked durations)
+        ncand = 1 if (task == TASK_BLOCK or task == TASK_FIXED) else 0
+    for cand in range(ncand):
         nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
         if nb < 0:
             continue
@@ -308,17 +315,32 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
         return -1, 0.0
     # a brake exceeds the velocity limit no more than the start state forces
     if nb > 0 and peak_speed(brk, nb, st0[1], st0[2]) > forced_speed(
-            st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4]) * (1.0 + 1e-12):
+            st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4]) * (1.0 + BRAKE_SNAP_RTOL):
         return -1, 0.0
     p = 0.0
     v = st0[1]
     a = st0[2]
     tb = 0.0
+    vsc = abs(v)
+    asc = abs(a)
     for k in range(nb):
         p, v, a = phase_end(p, v, brk[k, 2], brk[k, 1], brk[k, 0])
         tb += brk[k, 0]
+        vsc = max(vsc, abs(v))
+        asc = max(asc, abs(a), abs(brk[k, 2]))
     if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
-        return -1, 0.0
+        # the brake ends on the boundary of the inside set; its end state carries
+        # the round-off of the brake's own velocity and acceleration scale
+        if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
+            v = lim[0] if v > 0.0 else -lim[0]
+        am = max(lim[1], lim[3])
+        if abs(a) > am and abs(a) - am <= BRAKE_SNAP_RTOL * asc:
+            a = am if a > 0.0 else -am
+        if abs(a) <= BRAKE_SNAP_RTOL * asc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
+                                                            lim[4]):
+            a = 0.0
+        if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
+            return -1, 0.0
     s1[0] = p
     s1[1] = v
     s1[2] = a

@@ -4,24 +4,39 @@ Like ruckig, trajkit documents the range of inputs its planners are made
 and tested for, and refuses anything outside it with an
 :class:`~trajkit.errors.InvalidInputError` naming the field, the axis, the
 value and the bound (instead of returning overflowed, NaN or meaningless
-profiles):
+profiles).
 
-* every finite limit (``v_max``, ``a_max``, ``j_max`` and the decel leg) in
-  ``[MAGNITUDE_MIN, MAGNITUDE_MAX]`` (``inf`` where :class:`AxisLimits`
-  allows it);
-* the decel leg within a factor :data:`LEG_RATIO_MAX` of the accel leg;
-* between moving states, the shape number ``v_max j_max / a_max^2`` (how the
-  velocity limit compares with a full jerk ramp) in
-  ``[1/SHAPE_RATIO_MAX, SHAPE_RATIO_MAX]``;
-* positions within ``+-POSITION_MAX``; a distance of at least
-  ``DISTANCE_MIN`` times the largest position moved, else zero (a smaller
-  one is below the resolution of the positions themselves);
-* state velocities and accelerations within :data:`STATE_RATIO_MAX` times
-  their limit (a start state outside the limits is braked first).
+=====================================  ========================  ========================
+input                                  rest to rest              between moving states
+                                       (``plan_move``,           (``plan_state_to_state``,
+                                       ``min_duration``,         ``plan_velocity``,
+                                       ``plan_moves``, ``plan_   ``feasible_durations``,
+                                       ptp`` at rest)            ``plan_ptp`` with states)
+=====================================  ========================  ========================
+finite limits (``v_max``, ``a_max``,   ``[1e-152, 1e152]``       ``[1e-30, 1e30]``
+``j_max``, decel leg; ``inf`` where
+:class:`AxisLimits` allows it)
+decel leg / accel leg (A and J)        ``[1e-6, 1e6]``           ``[1e-6, 1e6]``
+``v_max j_max / a_max^2`` (each leg,   --                        ``[1e-9, 1e9]``
+all finite)
+``|position|``                         ``<= 1e100``              ``<= 1e15``
+non-zero ``|distance|``                ``>= 1e-14 max|position|`` and ``>= 1e-100`` (both)
+requested duration [s]                 ``[0, 1e300]``, and       ``[0, 1e50]``
+                                       ``<= 1e100`` times the
+                                       move's minimum
+state ``|v| / v_max``, ``|a| / a_max``  --                       ``<= 1e6``
+speed a state forces,                  --                        ``<= 1e6 v_max``
+``|v| + a^2 / (2 min(j_max,
+j_max_decel))``
+=====================================  ========================  ========================
+
+(A start state outside the limits is braked first; the brake ends on the
+limits to round-off of the speed the state forces, hence that bound.)
 
 Inside the range the planners are exact to ``1e-9`` (relative) and every
 profile passes :mod:`trajkit.verify`; the fuzz sweep of the tests
-(exponents -300..300 of every input) checks both sides.
+(``tests/test_numeric_range.py``, exponents -300..300 of every input) and
+the extreme-magnitude grids check both sides.
 """
 
 from __future__ import annotations
@@ -33,15 +48,32 @@ from ..errors import InvalidInputError
 
 __all__ = [
     "MAGNITUDE_MIN", "MAGNITUDE_MAX", "LEG_RATIO_MAX", "SHAPE_RATIO_MAX", "POSITION_MAX",
-    "STATE_RATIO_MAX", "DISTANCE_MIN", "check_limits_range", "check_position_range",
-    "check_distance_range", "check_state_range",
+    "STATE_RATIO_MAX", "DISTANCE_MIN", "DISTANCE_ABS_MIN", "DURATION_MAX",
+    "REST_MAGNITUDE_MIN", "REST_MAGNITUDE_MAX", "REST_POSITION_MAX", "REST_DURATION_MAX",
+    "REST_DURATION_RATIO_MAX", "check_rest_duration_ratio",
+    "check_limits_range",
+    "check_position_range", "check_distance_range", "check_state_range", "check_duration_range",
 ]
 
-#: Smallest finite limit [unit/s, unit/s^2, unit/s^3].
+#: Smallest finite limit [unit/s, unit/s^2, unit/s^3] between moving states.
 MAGNITUDE_MIN = 1e-30
 
-#: Largest finite limit.
+#: Largest finite limit between moving states.
 MAGNITUDE_MAX = 1e30
+
+#: Smallest and largest finite limit of the rest-to-rest closed forms.
+REST_MAGNITUDE_MIN = 1e-152
+REST_MAGNITUDE_MAX = 1e152
+
+#: Largest |position| [unit] of the rest-to-rest planners.
+REST_POSITION_MAX = 1e100
+
+#: Largest requested duration [s] of the rest-to-rest planners.
+REST_DURATION_MAX = 1e300
+
+#: Largest requested duration of a rest-to-rest move relative to its minimum
+#: (a slower cruise would underflow).
+REST_DURATION_RATIO_MAX = 1e100
 
 #: Largest ratio between a decel-leg limit and the accel-leg one (either way).
 LEG_RATIO_MAX = 1e6
@@ -49,11 +81,17 @@ LEG_RATIO_MAX = 1e6
 #: Largest ``v_max j_max / a_max^2`` (and its inverse) with all three finite.
 SHAPE_RATIO_MAX = 1e9
 
-#: Largest |position| [unit].
+#: Largest |position| [unit] between moving states.
 POSITION_MAX = 1e15
 
 #: Smallest non-zero |distance| relative to the largest |position| involved.
 DISTANCE_MIN = 1e-14
+
+#: Smallest non-zero |distance| [unit] (absolute).
+DISTANCE_ABS_MIN = 1e-100
+
+#: Largest requested duration [s] between moving states.
+DURATION_MAX = 1e50
 
 #: Largest |velocity| / v_max and |acceleration| / a_max of a state.
 STATE_RATIO_MAX = 1e6
@@ -75,11 +113,12 @@ def check_limits_range(limits, states: bool = False) -> None:
     if limits.__dict__.get(key, False):
         return
     name = limits.name
+    lo, hi = (MAGNITUDE_MIN, MAGNITUDE_MAX) if states else (REST_MAGNITUDE_MIN, REST_MAGNITUDE_MAX)
     fields = (("v_max", limits.v_max), ("a_max", limits.a_max), ("j_max", limits.j_max),
               ("a_max_decel", limits.a_max_decel), ("j_max_decel", limits.j_max_decel))
     for f, x in fields:
-        if x != math.inf and not (MAGNITUDE_MIN <= x <= MAGNITUDE_MAX):
-            _bad(f, x, (MAGNITUDE_MIN, MAGNITUDE_MAX), name, "finite limits must lie in")
+        if x != math.inf and not (lo <= x <= hi):
+            _bad(f, x, (lo, hi), name, "finite limits must lie in")
     for f, x, y in (("a_max_decel", limits.a_max_decel, limits.a_max),
                     ("j_max_decel", limits.j_max_decel, limits.j_max)):
         if x < math.inf and y < math.inf and not (1.0 / LEG_RATIO_MAX <= x / y <= LEG_RATIO_MAX):
@@ -95,18 +134,30 @@ def check_limits_range(limits, states: bool = False) -> None:
     object.__setattr__(limits, key, True)
 
 
-def check_position_range(x: float, field: str, name) -> None:
-    """Raise unless ``|x| <= POSITION_MAX``."""
-    if not (-POSITION_MAX <= x <= POSITION_MAX):
-        _bad(field, x, POSITION_MAX, name, "|position| must be at most")
+def check_position_range(x: float, field: str, name, states: bool = True) -> None:
+    """Raise unless ``|x| <= POSITION_MAX`` (``REST_POSITION_MAX`` with ``states=False``)."""
+    pm = POSITION_MAX if states else REST_POSITION_MAX
+    if not (-pm <= x <= pm):
+        _bad(field, x, pm, name, "|position| must be at most")
 
 
 def check_distance_range(start: float, goal: float, name) -> None:
-    """Raise for a non-zero distance below the resolution of the positions."""
+    """Raise for a non-zero distance below the resolution of the positions
+    (or below :data:`DISTANCE_ABS_MIN`)."""
     d = abs(goal - start)
     if d != 0.0 and d < DISTANCE_MIN * max(abs(start), abs(goal)):
         _bad("distance", goal - start, DISTANCE_MIN, name,
              "a non-zero distance relative to the positions must be at least")
+    if d != 0.0 and d < DISTANCE_ABS_MIN:
+        _bad("distance", goal - start, DISTANCE_ABS_MIN, name, "a non-zero |distance| must be at least")
+
+
+def check_duration_range(T: float, name, states: bool = True) -> None:
+    """Raise for a requested duration above :data:`DURATION_MAX`
+    (``REST_DURATION_MAX`` with ``states=False``)."""
+    tm = DURATION_MAX if states else REST_DURATION_MAX
+    if T > tm:
+        _bad("duration", T, tm, name, "a requested duration [s] must be at most")
 
 
 def check_state_range(v: float, a: float, field: str, limits) -> None:
@@ -117,3 +168,19 @@ def check_state_range(v: float, a: float, field: str, limits) -> None:
     am = max(limits.a_max, limits.a_max_decel)
     if am < math.inf and abs(a) > STATE_RATIO_MAX * am:
         _bad(f"{field} acceleration", a, STATE_RATIO_MAX * am, name, "|acceleration| must be at most")
+    # the speed the state forces (its acceleration ramped to zero at the smaller
+    # jerk limit): a brake from far beyond v_max cannot end on it to 1e-9
+    jm = min(limits.j_max, limits.j_max_decel)
+    if limits.v_max < math.inf and jm < math.inf:
+        vn = abs(v) + 0.5 * a * a / jm
+        if vn > STATE_RATIO_MAX * limits.v_max:
+            _bad(f"{field} speed forced by the acceleration |v| + a^2 / (2 j)", vn,
+                 STATE_RATIO_MAX * limits.v_max, name, "must be at most")
+
+
+def check_rest_duration_ratio(T: float, tmin: float, name) -> None:
+    """Raise for a rest-to-rest duration above ``REST_DURATION_RATIO_MAX`` times its minimum."""
+    if T > REST_DURATION_RATIO_MAX * tmin:
+        _bad("duration", T, REST_DURATION_RATIO_MAX * tmin, name,
+             f"a requested duration [s] must be at most {REST_DURATION_RATIO_MAX!r} times the "
+             "minimum duration of the move,")

@@ -17,6 +17,7 @@ from .._constants import DURATION_RTOL, ROOT_MAX_ITER, ROOT_RTOL
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _jit
+from . import _range as R
 from .profile import Profile
 
 __all__ = ["MoveBatch", "plan_moves"]
@@ -262,6 +263,49 @@ def _limit_array(value, name, n, allow_inf=True):
     return np.ascontiguousarray(arr)
 
 
+def _check_range(s, g, vm, a1, j1, a2, j2, T) -> None:
+    """The supported numeric range (:mod:`._range`), vectorised; names the first bad move."""
+    def first(mask, field, vals, bound, why):
+        if mask.any():
+            i = int(np.flatnonzero(mask)[0])
+            raise InvalidInputError(
+                f"{field}[{i}] {float(vals[i])!r} is outside the supported range: {why} {bound!r}")
+
+    for name, x in (("starts", s), ("goals", g)):
+        first(np.abs(x) > R.REST_POSITION_MAX, name, x, R.REST_POSITION_MAX,
+              "|position| must be at most")
+    d = np.abs(g - s)
+    first((d != 0.0) & ((d < R.DISTANCE_MIN * np.maximum(np.abs(s), np.abs(g)))
+                        | (d < R.DISTANCE_ABS_MIN)), "distance", g - s,
+          (R.DISTANCE_MIN, R.DISTANCE_ABS_MIN), "a non-zero distance (relative, absolute) must be at least")
+    for name, x in (("v_max", vm), ("a_max", a1), ("j_max", j1), ("a_max_decel", a2),
+                    ("j_max_decel", j2)):
+        fin = np.isfinite(x)
+        first(fin & ((x < R.REST_MAGNITUDE_MIN) | (x > R.REST_MAGNITUDE_MAX)), name, x,
+              (R.REST_MAGNITUDE_MIN, R.REST_MAGNITUDE_MAX), "finite limits must lie in")
+    with np.errstate(all="ignore"):
+        for name, x, y in (("a_max_decel", a2, a1), ("j_max_decel", j2, j1)):
+            r = x / y
+            first(np.isfinite(x) & np.isfinite(y) & ((r < 1.0 / R.LEG_RATIO_MAX) | (r > R.LEG_RATIO_MAX)),
+                  name, x, R.LEG_RATIO_MAX, "the decel leg must be within a factor of the accel leg:")
+    if T is not None:
+        first(T > R.REST_DURATION_MAX, "durations", T, R.REST_DURATION_MAX,
+              "a requested duration [s] must be at most")
+
+
+def _check_ratio(T, tmin, moving) -> None:
+    """Requested durations at most ``REST_DURATION_RATIO_MAX`` times the minimum."""
+    if T is None:
+        return
+    bad = moving & (T > R.REST_DURATION_RATIO_MAX * tmin)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InvalidInputError(
+            f"durations[{i}] {float(T[i])!r} is outside the supported range: a requested "
+            f"duration [s] must be at most {R.REST_DURATION_RATIO_MAX!r} times the minimum "
+            f"duration of the move, {float(tmin[i]) * R.REST_DURATION_RATIO_MAX!r}")
+
+
 def plan_moves(
     starts: Any,
     goals: Any,
@@ -295,7 +339,8 @@ def plan_moves(
     Raises
     ------
     InvalidInputError
-        NaN/inf positions, bad limits, mismatched shapes.
+        NaN/inf positions, bad limits, mismatched shapes, values outside the
+        supported range (:mod:`trajkit.profiles._range`, as :func:`plan_move`).
     InfeasibleError
         A requested duration below its minimum (the first such move is named).
     """
@@ -332,6 +377,7 @@ def plan_moves(
             i = int(np.flatnonzero(bad)[0])
             raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s, got {float(T[i])!r}")
 
+    _check_range(s, g, vm, a1, j1, a2, j2, T)
     thr1 = _threshold(a1, j1)
     thr2 = _threshold(a2, j2)
     if n >= JIT_MIN_MOVES and _jit.AVAILABLE and not os.environ.get("TRAJKIT_NO_JIT"):
@@ -343,6 +389,7 @@ def plan_moves(
                 f"{tmin[bad]:.15g} s",
                 minimum=float(tmin[bad]),
             )
+        _check_ratio(T, tmin, g != s)
         return MoveBatch(
             start=s, goal=g, duration=dur, min_duration=tmin, phase_durations=phases,
             jerks=jerks, peak_velocity=vpk, peak_acceleration=ap1, peak_deceleration=ap2,
@@ -376,6 +423,7 @@ def plan_moves(
                 f"durations[{i}] = {float(T[i])!r} s is below the minimum duration {tmin[i]:.15g} s",
                 minimum=float(tmin[i]),
             )
+        _check_ratio(T, tmin, moving)
         fixed = moving & (T > tmin)
         if fixed.any():
             f = fixed

@@ -13,6 +13,8 @@ from .._validate import axis_label
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _scalar as K
+from ._range import (check_distance_range, check_duration_range, check_limits_range,
+                     check_position_range, check_rest_duration_ratio)
 from .motion import JerkMotion, ProfileSample
 
 __all__ = ["Profile", "ProfileSample", "plan_move", "PHASE_NAMES"]
@@ -217,11 +219,34 @@ def _build(start, goal, limits, d, vc, duration, min_duration, sign):
 
 
 def min_duration(distance: float, limits: AxisLimits) -> float:
-    """Minimum duration [s] of a rest-to-rest move over ``distance`` [unit]."""
-    d = abs(float(distance))
+    """Minimum duration [s] of a rest-to-rest move over ``distance`` [unit].
+
+    The same value as ``plan_move(0.0, distance, limits).duration``; inputs
+    outside the supported range (:mod:`trajkit.profiles._range`) raise
+    :class:`~trajkit.errors.InvalidInputError`.
+    """
+    _check_rest_limits(limits)
+    try:
+        d = float(distance)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"distance{axis_label(limits.name)} must be a number, got {distance!r}") from None
+    if not math.isfinite(d):
+        raise InvalidInputError(f"distance{axis_label(limits.name)} must be finite, got {d!r}")
+    check_position_range(0.5 * d, "distance / 2", limits.name, states=False)
+    check_distance_range(0.0, d, limits.name)
+    d = abs(d)
     if d == 0.0:
         return 0.0
     return _min_solution(d, limits)[1]
+
+
+def _check_rest_limits(limits: Any) -> None:
+    if not isinstance(limits, AxisLimits):
+        raise InvalidInputError(
+            f"limits must be an AxisLimits, got {type(limits).__name__}"
+        )
+    check_limits_range(limits)
 
 
 def plan_move(
@@ -267,12 +292,12 @@ def plan_move(
     >>> round(p.duration, 6)
     1.7
     """
-    if not isinstance(limits, AxisLimits):
-        raise InvalidInputError(
-            f"limits must be an AxisLimits, got {type(limits).__name__}"
-        )
+    _check_rest_limits(limits)
     s = limits.check_position(start, "start")
     g = limits.check_position(goal, "goal")
+    check_position_range(s, "start", limits.name, states=False)
+    check_position_range(g, "goal", limits.name, states=False)
+    check_distance_range(s, g, limits.name)
     if duration is not None:
         try:
             T = float(duration)
@@ -282,6 +307,7 @@ def plan_move(
             raise InvalidInputError(
                 f"duration{axis_label(limits.name)} must be finite and >= 0 s, got {T!r}"
             )
+        check_duration_range(T, limits.name, states=False)
     return _plan_unchecked(s, g, limits, duration if duration is None else T)
 
 
@@ -312,6 +338,7 @@ def _plan_solved(
                 minimum=tmin,
             )
         return _build(s, g, limits, d, vp, tmin, tmin, sign)
+    check_rest_duration_ratio(T, tmin, limits.name if axis is None else axis)
     a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
     thr1, thr2 = limits._thresholds
     vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2, thr1, thr2)

@@ -37,6 +37,7 @@ from ._range import (
     POSITION_MAX,
     STATE_RATIO_MAX,
     check_distance_range,
+    check_duration_range,
     check_limits_range,
     check_position_range,
     check_state_range,
@@ -251,6 +252,8 @@ def _check_limits(limits: Any) -> AxisLimits:
             "profile between moving states")
     check_limits_range(limits, states=True)
     object.__setattr__(limits, "_amax", max(limits.a_max, limits.a_max_decel))
+    jm = min(limits.j_max, limits.j_max_decel)
+    object.__setattr__(limits, "_kmin2", 0.5 / jm if jm < math.inf else 0.0)
     object.__setattr__(limits, "_states_ok", True)
     return limits
 
@@ -277,6 +280,7 @@ def _check_state(state: Any, field: str, limits: AxisLimits) -> tuple:
         if (type(p) is float and type(v) is float and type(a) is float
                 and -_PMAX <= p <= _PMAX and limits.position_min <= p <= limits.position_max
                 and abs(v) <= _SMAX * limits.v_max and abs(a) <= _SMAX * limits._amax
+                and abs(v) + a * a * limits._kmin2 <= _SMAX * limits.v_max
                 and math.isfinite(v) and math.isfinite(a)):
             return state
     return _check_state_slow(state, field, limits)
@@ -340,6 +344,7 @@ def _duration_arg(duration: Any, name) -> float | None:
         raise InvalidInputError(f"duration must be a number of seconds, got {duration!r}") from None
     if not math.isfinite(T) or T < 0.0:
         raise InvalidInputError(f"duration{axis_label(name)} must be finite and >= 0 s, got {T!r}")
+    check_duration_range(T, name)
     return T
 
 

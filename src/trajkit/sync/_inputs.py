@@ -10,8 +10,11 @@ import numpy as np
 from .._validate import check_array
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
+from ..profiles._range import (REST_POSITION_MAX, check_distance_range, check_duration_range,
+                               check_position_range)
 
-__all__ = ["coerce_limits", "float_list", "check_positions", "coerce_states", "check_duration"]
+__all__ = ["coerce_limits", "float_list", "check_positions", "check_distances", "coerce_states",
+           "check_duration"]
 
 
 def coerce_limits(
@@ -54,11 +57,21 @@ def float_list(value: Any, field: str) -> list[float]:
 
 
 def check_positions(values: list[float], lims: list[AxisLimits], field: str) -> list[float]:
-    """Finite and inside each axis' range; messages name the axis (its name or index)."""
+    """Finite, inside each axis' range and the supported range of the
+    rest-to-rest planners (:mod:`trajkit.profiles._range`); messages name the
+    axis (its name or index)."""
     for i, (x, lim) in enumerate(zip(values, lims)):
         if not (lim.position_min <= x <= lim.position_max) or not math.isfinite(x):
             (lim if lim.name is not None else lim.with_name(i)).check_position(x, field)
+        if not (-REST_POSITION_MAX <= x <= REST_POSITION_MAX):
+            check_position_range(x, field, lim.name if lim.name is not None else i, states=False)
     return values
+
+
+def check_distances(starts: list[float], goals: list[float], lims: list[AxisLimits]) -> None:
+    """Every non-zero distance resolvable (:func:`~trajkit.profiles._range.check_distance_range`)."""
+    for i, (a, b, lim) in enumerate(zip(starts, goals, lims)):
+        check_distance_range(a, b, lim.name if lim.name is not None else i)
 
 
 def coerce_states(x: Any, field: str) -> np.ndarray:
@@ -79,8 +92,9 @@ def coerce_states(x: Any, field: str) -> np.ndarray:
     return arr
 
 
-def check_duration(duration: Any, sync: str) -> float | None:
-    """The requested common duration [s] (None: minimum), validated."""
+def check_duration(duration: Any, sync: str, states: bool = False) -> float | None:
+    """The requested common duration [s] (None: minimum), validated (the range
+    of the rest-to-rest planners, or with ``states`` of the state planners)."""
     if duration is None:
         return None
     try:
@@ -91,4 +105,5 @@ def check_duration(duration: Any, sync: str) -> float | None:
         raise InvalidInputError(f"duration must be finite and >= 0 s, got {d!r}")
     if sync == "none":
         raise InvalidInputError('duration cannot be given with sync="none"')
+    check_duration_range(d, None, states=states)
     return d

@@ -23,7 +23,7 @@ from ..profiles.profile import (
     _rest_profile,
 )
 from ..trajectory import SYNC_MODES, Trajectory
-from ._inputs import check_duration, check_positions, coerce_limits, float_list
+from ._inputs import check_distances, check_duration, check_positions, coerce_limits, float_list
 
 __all__ = ["plan_ptp_rest"]
 
@@ -83,6 +83,7 @@ def plan_ptp_rest(
         check_limits_range(lim)
     check_positions(sl, lims, "start")
     check_positions(gl, lims, "goal")
+    check_distances(sl, gl, lims)
     duration = check_duration(duration, sync)
 
     if sync == "none":

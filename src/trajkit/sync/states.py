@@ -91,7 +91,7 @@ def plan_ptp_states(
     if n == 0:
         raise InvalidInputError("start and goal must have at least one axis")
     lims = coerce_limits(limits, n, named=True)
-    duration = check_duration(duration, sync)
+    duration = check_duration(duration, sync, states=True)
     S = [tuple(x) for x in s.tolist()]
     G = [tuple(x) for x in g.tolist()]
 
