@@ -41,6 +41,7 @@ import numpy as np
 
 from ._constants import GOAL_RTOL, LIMIT_RTOL
 from .errors import InvalidInputError, TrajkitError
+from .profiles._phase import phase_eval
 
 __all__ = [
     "QUANTITIES",
@@ -266,11 +267,9 @@ class TrajectoryReport:
 
 # --------------------------------------------------------------------- helpers
 def _poly_state(p0, v0, a0, j, t):
-    """State after time ``t`` of a constant-jerk phase (exact integration)."""
-    p = p0 + t * (v0 + t * (0.5 * a0 + t * j / 6.0))
-    v = v0 + t * (a0 + 0.5 * t * j)
-    a = a0 + t * j
-    return p, v, a
+    """State after time ``t`` of a constant-jerk phase (the one formula,
+    :func:`trajkit.profiles._phase.phase_eval`)."""
+    return phase_eval(p0, v0, a0, j, t)
 
 
 def _roots_in(dt: float, v0: float, a0: float, j: float) -> list[float]:

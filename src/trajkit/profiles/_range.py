@@ -20,10 +20,12 @@ decel leg / accel leg (A and J)        ``[1e-6, 1e6]``           ``[1e-6, 1e6]``
 ``v_max j_max / a_max^2`` (each leg,   --                        ``[1e-9, 1e9]``
 all finite)
 ``|position|``                         ``<= 1e100``              ``<= 1e15``
-non-zero ``|distance|``                ``>= 1e-14 max|position|`` and ``>= 1e-100`` (both)
-requested duration [s]                 ``[0, 1e300]``, and       ``[0, 1e50]``
-                                       ``<= 1e100`` times the
-                                       move's minimum
+non-zero ``|distance|``                ``>= 1e-100``              ``>= 1e-100``
+requested duration [s]                 ``[0, 1e300]``, at most   ``[0, 1e50]``
+                                       ``1e100`` times the move's
+                                       minimum, and a cruise
+                                       velocity ``v`` with ``v/a``,
+                                       ``v/j >= 1e-303``
 state ``|v| / v_max``, ``|a| / a_max``  --                       ``<= 1e6``
 speed a state forces,                  --                        ``<= 1e6 v_max``
 ``|v| + a^2 / (2 min(j_max,
@@ -48,9 +50,9 @@ from ..errors import InvalidInputError
 
 __all__ = [
     "MAGNITUDE_MIN", "MAGNITUDE_MAX", "LEG_RATIO_MAX", "SHAPE_RATIO_MAX", "POSITION_MAX",
-    "STATE_RATIO_MAX", "DISTANCE_MIN", "DISTANCE_ABS_MIN", "DURATION_MAX",
+    "STATE_RATIO_MAX", "DISTANCE_ABS_MIN", "DURATION_MAX",
     "REST_MAGNITUDE_MIN", "REST_MAGNITUDE_MAX", "REST_POSITION_MAX", "REST_DURATION_MAX",
-    "REST_DURATION_RATIO_MAX", "check_rest_duration_ratio",
+    "REST_DURATION_RATIO_MAX", "REST_CRUISE_MIN", "check_rest_duration_ratio", "check_rest_cruise",
     "check_limits_range",
     "check_position_range", "check_distance_range", "check_state_range", "check_duration_range",
 ]
@@ -75,6 +77,11 @@ REST_DURATION_MAX = 1e300
 #: (a slower cruise would underflow).
 REST_DURATION_RATIO_MAX = 1e100
 
+#: Smallest cruise velocity of a fixed-duration rest-to-rest move relative to
+#: each finite acceleration and jerk limit (``v / j`` and ``v / a`` [s^2, s]
+#: stay normal floats).
+REST_CRUISE_MIN = 1e-303
+
 #: Largest ratio between a decel-leg limit and the accel-leg one (either way).
 LEG_RATIO_MAX = 1e6
 
@@ -83,9 +90,6 @@ SHAPE_RATIO_MAX = 1e9
 
 #: Largest |position| [unit] between moving states.
 POSITION_MAX = 1e15
-
-#: Smallest non-zero |distance| relative to the largest |position| involved.
-DISTANCE_MIN = 1e-14
 
 #: Smallest non-zero |distance| [unit] (absolute).
 DISTANCE_ABS_MIN = 1e-100
@@ -142,12 +146,12 @@ def check_position_range(x: float, field: str, name, states: bool = True) -> Non
 
 
 def check_distance_range(start: float, goal: float, name) -> None:
-    """Raise for a non-zero distance below the resolution of the positions
-    (or below :data:`DISTANCE_ABS_MIN`)."""
+    """Raise for a non-zero distance below :data:`DISTANCE_ABS_MIN`.
+
+    (A distance of a few ulp of the positions is planned exactly: the motion
+    is planned relative to the start, where the distance is exact.)
+    """
     d = abs(goal - start)
-    if d != 0.0 and d < DISTANCE_MIN * max(abs(start), abs(goal)):
-        _bad("distance", goal - start, DISTANCE_MIN, name,
-             "a non-zero distance relative to the positions must be at least")
     if d != 0.0 and d < DISTANCE_ABS_MIN:
         _bad("distance", goal - start, DISTANCE_ABS_MIN, name, "a non-zero |distance| must be at least")
 
@@ -184,3 +188,13 @@ def check_rest_duration_ratio(T: float, tmin: float, name) -> None:
         _bad("duration", T, REST_DURATION_RATIO_MAX * tmin, name,
              f"a requested duration [s] must be at most {REST_DURATION_RATIO_MAX!r} times the "
              "minimum duration of the move,")
+
+
+def check_rest_cruise(vc: float, T: float, limits, name) -> None:
+    """Raise when the cruise velocity ``vc`` of a fixed-duration rest-to-rest
+    move is below ``REST_CRUISE_MIN`` times a finite acceleration or jerk limit."""
+    for x in (limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel):
+        if x < math.inf and vc < REST_CRUISE_MIN * x:
+            _bad("duration", T, REST_CRUISE_MIN, name,
+                 f"a requested duration [s] this long gives a cruise velocity {vc!r} whose "
+                 "ratio to every finite acceleration and jerk limit must be at least")

@@ -275,9 +275,8 @@ def _check_range(s, g, vm, a1, j1, a2, j2, T) -> None:
         first(np.abs(x) > R.REST_POSITION_MAX, name, x, R.REST_POSITION_MAX,
               "|position| must be at most")
     d = np.abs(g - s)
-    first((d != 0.0) & ((d < R.DISTANCE_MIN * np.maximum(np.abs(s), np.abs(g)))
-                        | (d < R.DISTANCE_ABS_MIN)), "distance", g - s,
-          (R.DISTANCE_MIN, R.DISTANCE_ABS_MIN), "a non-zero distance (relative, absolute) must be at least")
+    first((d != 0.0) & (d < R.DISTANCE_ABS_MIN), "distance", g - s, R.DISTANCE_ABS_MIN,
+          "a non-zero |distance| must be at least")
     for name, x in (("v_max", vm), ("a_max", a1), ("j_max", j1), ("a_max_decel", a2),
                     ("j_max_decel", j2)):
         fin = np.isfinite(x)
@@ -304,6 +303,20 @@ def _check_ratio(T, tmin, moving) -> None:
             f"durations[{i}] {float(T[i])!r} is outside the supported range: a requested "
             f"duration [s] must be at most {R.REST_DURATION_RATIO_MAX!r} times the minimum "
             f"duration of the move, {float(tmin[i]) * R.REST_DURATION_RATIO_MAX!r}")
+
+
+def _check_cruise(T, vc, fixed, a1, j1, a2, j2) -> None:
+    """Cruise velocities of fixed durations at least ``REST_CRUISE_MIN`` times every finite limit."""
+    bad = np.zeros(vc.shape, dtype=bool)
+    with np.errstate(all="ignore"):
+        for x in (a1, j1, a2, j2):
+            bad |= fixed & np.isfinite(x) & ~(vc >= R.REST_CRUISE_MIN * x)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InvalidInputError(
+            f"durations[{i}] {float(T[i])!r} is outside the supported range: a requested "
+            f"duration this long gives a cruise velocity {float(vc[i])!r} whose ratio to every "
+            f"finite acceleration and jerk limit must be at least {R.REST_CRUISE_MIN!r}")
 
 
 def plan_moves(
@@ -390,6 +403,7 @@ def plan_moves(
                 minimum=float(tmin[bad]),
             )
         _check_ratio(T, tmin, g != s)
+        _check_cruise(T, np.abs(vpk), dur > tmin, a1, j1, a2, j2)
         return MoveBatch(
             start=s, goal=g, duration=dur, min_duration=tmin, phase_durations=phases,
             jerks=jerks, peak_velocity=vpk, peak_acceleration=ap1, peak_deceleration=ap2,
@@ -428,6 +442,7 @@ def plan_moves(
         if fixed.any():
             f = fixed
             vc[f] = _cruise_velocity(dist[f], T[f], vp[f], a1[f], j1[f], a2[f], j2[f], thr1[f], thr2[f])
+            _check_cruise(T, vc, fixed, a1, j1, a2, j2)
         dur = np.where(fixed | ~moving, T, tmin)
 
     tj1, ta1, ap1 = _leg_phases(vc, a1, j1, thr1)

@@ -14,7 +14,7 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _scalar as K
 from ._range import (check_distance_range, check_duration_range, check_limits_range,
-                     check_position_range, check_rest_duration_ratio)
+                     check_position_range, check_rest_cruise, check_rest_duration_ratio)
 from .motion import JerkMotion, ProfileSample
 
 __all__ = ["Profile", "ProfileSample", "plan_move", "PHASE_NAMES"]
@@ -342,6 +342,7 @@ def _plan_solved(
     a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
     thr1, thr2 = limits._thresholds
     vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2, thr1, thr2)
+    check_rest_cruise(vc, T, limits, limits.name if axis is None else axis)
     return _build(s, g, limits, d, vc, T, tmin, sign)
 
 

@@ -30,10 +30,12 @@ _local = threading.local()
 
 
 def _stop_table(v0: float, a0: float, a_max: float, j_max: float, a_dec: float,
-                j_dec: float) -> list:
-    """Phases ``[(dt, j, a_start), ...]`` of the minimum-time stop (kernel)."""
+                j_dec: float, with_nb: bool = False):
+    """Phases ``[(dt, j, a_start), ...]`` of the minimum-time stop (kernel);
+    with ``with_nb`` also the number of its brake pre-phases (an acceleration
+    beyond its limit brought back first)."""
     if v0 == 0.0 and a0 == 0.0:
-        return []
+        return ([], 0) if with_nb else []
     ws = getattr(_local, "ws", None)
     if ws is None:
         ws = _local.ws = K.workspace()
@@ -60,7 +62,8 @@ def _stop_table(v0: float, a0: float, a_max: float, j_max: float, a_dec: float,
         raise ArithmeticError(f"internal: no stop from velocity {v0!r}, acceleration {a0!r}")
     n = int(ws[K.OUT_N])
     flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()
-    return list(zip(flat[0::3], flat[1::3], flat[2::3]))
+    out = list(zip(flat[0::3], flat[1::3], flat[2::3]))
+    return (out, int(ws[K.OUT_NB])) if with_nb else out
 
 
 def brake_phases(v0: float, a0: float, a_max: float, j_max: float,
@@ -102,17 +105,25 @@ class BrakeProfile(JerkMotion):
         Time to rest [s].
     stop_position : float
         Where the axis comes to rest [unit].
+    limits : AxisLimits or None
+        The limits it was planned for (checked by :func:`trajkit.verify.verify_motion`).
+    n_brake_phases : int
+        Leading phases that bring an acceleration beyond its limit back
+        within it (exempt from the limits, as in a StateProfile).
     """
 
-    __slots__ = ("stop_position",)
+    __slots__ = ("stop_position", "limits", "n_brake_phases")
 
-    def __init__(self, start_state: Any, phases: Any) -> None:
+    def __init__(self, start_state: Any, phases: Any, limits: AxisLimits | None = None,
+                 n_brake_phases: int = 0) -> None:
         ph = [tuple(p) for p in phases]
         acc = [p[2] for p in ph] if ph and len(ph[0]) > 2 else None
         m = JerkMotion(start_state, [p[0] for p in ph], [p[1] for p in ph], acc)
         super().__init__(start_state, m.phase_durations, m.jerks, m.phase_accelerations,
                          (m.end_state[0], 0.0, 0.0))
         self.stop_position = self.end_state[0]
+        self.limits = limits
+        self.n_brake_phases = int(n_brake_phases)
 
     def __repr__(self) -> str:
         return (f"BrakeProfile(start_state={self.start_state!r}, duration={self.duration!r}, "
@@ -147,8 +158,9 @@ def brake_profile(position: float, velocity: float, acceleration: float,
     p = check_finite(position, "position", limits.name)
     v = check_finite(velocity, "velocity", limits.name)
     a = check_finite(acceleration, "acceleration", limits.name)
-    ph = _stop_table(v, a, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel)
-    return BrakeProfile((p, v, a), ph)
+    ph, nb = _stop_table(v, a, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel,
+                         with_nb=True)
+    return BrakeProfile((p, v, a), ph, limits, nb)
 
 
 def stop_position(position: float, velocity: float, acceleration: float,
