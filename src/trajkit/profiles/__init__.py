@@ -4,6 +4,7 @@ between moving states, all of one motion type (:class:`JerkMotion`)."""
 from .batch import MoveBatch, plan_moves
 from .motion import JerkMotion, MotionExtrema, ProfileSample
 from .profile import PHASE_NAMES, Profile, min_duration, plan_move
+from .state_batch import StateMoveBatch, plan_state_moves
 from .state import (
     BlockedDurationError,
     DurationSet,
@@ -31,4 +32,6 @@ __all__ = [
     "plan_state_to_state",
     "plan_velocity",
     "min_state_duration",
+    "plan_state_moves",
+    "StateMoveBatch",
 ]

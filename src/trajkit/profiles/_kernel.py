@@ -35,7 +35,7 @@ from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, st
 
 __all__ = [
     "NWS", "workspace", "solve",
-    "TASK_MIN", "TASK_BLOCK", "TASK_FIXED", "TASK_VELOCITY",
+    "TASK_MIN", "TASK_BLOCK", "TASK_FIXED", "TASK_VELOCITY", "TASK_STEP2",
     "ST_OK", "ST_NONE", "ST_BRAKE", "ST_BLOCKED", "ST_SHORT",
 ]
 
@@ -44,6 +44,7 @@ TASK_MIN = 0       # minimum time
 TASK_BLOCK = 1     # minimum time and the blocked intervals
 TASK_FIXED = 2     # exactly IN_T
 TASK_VELOCITY = 3  # velocity interface, minimum time
+TASK_STEP2 = 4     # exactly IN_T, step 1 already done: its minimum duration in OUT_TMIN
 
 # status
 ST_OK = 0
@@ -141,6 +142,7 @@ def _scales(ws):
 def solve(ws):
     """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
     task = int(ws[IN_TASK])
+    tmin_in = ws[OUT_TMIN]
     ts, ls = _scales(ws)
     ws[_TS] = ts
     vs = ls / ts
@@ -190,6 +192,14 @@ def solve(ws):
     keep = ws[_KEEP:_KEEP + 3 * NPH].reshape((NPH, 3))
     valid = ws[_VALID:_VALID + NVALID]
     start_inside = inside(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4])
+    if task == TASK_STEP2:
+        T = ws[IN_T] / ts
+        tmin = tmin_in / ts
+        if T > tmin * (1.0 + DURATION_RTOL):
+            _step2(ws, T, tmin, 0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+                   ivl, cfg, st, keep, out, ts, js, as_)
+            return
+        task = TASK_FIXED  # the minimum itself: plan it
     best_total = math.inf
     nb_best = 0
     n_best = 0
@@ -249,6 +259,14 @@ def solve(ws):
         return
     if T <= best_total * (1.0 + DURATION_RTOL):
         return
+    _step2(ws, T, best_total, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+           ivl, cfg, st, keep, out, ts, js, as_)
+
+
+@jit
+def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl,
+           cfg, st, keep, out, ts, js, as_):
+    """Step 2: a profile of exactly ``T`` (normalised; brake included)."""
     for cand in range(NCAND):
         nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
         if nb < 0 or not (T - tb > 0.0):
@@ -263,7 +281,7 @@ def solve(ws):
             continue
         _copy_rows(keep, 0, brk, nb)
         _copy_rows(keep, nb, best, n)
-        _emit(ws, out, keep, nb + n, nb, tb + res[R_T], best_total, ts, js, as_)
+        _emit(ws, out, keep, nb + n, nb, tb + res[R_T], tmin, ts, js, as_)
         ws[OUT_SHAPE] = res[R_SHAPE] + 32
         return
     ws[OUT_STATUS] = ST_NONE

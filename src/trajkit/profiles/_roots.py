@@ -21,7 +21,7 @@ import numpy as np
 
 from ._compile import jit
 
-__all__ = ["MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner"]
+__all__ = ["MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner", "no_root_certain"]
 
 #: Highest polynomial degree a shape equation reduces to.
 MAX_DEGREE = 12
@@ -59,6 +59,56 @@ def _tables():
 
 
 _NODES, _MATS = _tables()
+
+
+def _bernstein_tables():
+    """``B[n] @ c``: the Bernstein coefficients on ``[-1, 1]`` of the degree-``n``
+    polynomial with monomial coefficients ``c`` (``x = 2u - 1``, ``u`` in ``[0, 1]``)."""
+    from math import comb
+
+    nmax = MAX_DEGREE
+    out = np.zeros((nmax + 1, nmax + 1, nmax + 1))
+    for n in range(nmax + 1):
+        # monomial in x -> monomial in u: (2u - 1)^k = sum_i C(k, i) 2^i (-1)^(k-i) u^i
+        S = np.zeros((n + 1, n + 1))  # S[i, k]
+        for k in range(n + 1):
+            for i in range(k + 1):
+                S[i, k] = comb(k, i) * 2.0 ** i * (-1.0) ** (k - i)
+        # monomial in u -> Bernstein: b_j = sum_{i <= j} C(j, i) / C(n, i) d_i
+        Bm = np.zeros((n + 1, n + 1))
+        for j in range(n + 1):
+            for i in range(j + 1):
+                Bm[j, i] = comb(j, i) / comb(n, i)
+        out[n, : n + 1, : n + 1] = Bm @ S
+    return out
+
+
+_BERN = _bernstein_tables()
+
+
+@jit
+def no_root_certain(c, deg):
+    """True when ``sum_k c[k] x^k`` certainly has no root (nor a touching one, see
+    :data:`TOUCH_RTOL`) in ``[-1, 1]``: its Bernstein coefficients there all
+    have one sign, away from zero (the polynomial lies in their convex hull)."""
+    B = _BERN[deg]
+    scale = 0.0
+    for k in range(deg + 1):
+        scale += abs(c[k])
+    tol = TOUCH_RTOL * scale * 4.0
+    lo = math.inf
+    hi = -math.inf
+    for j in range(deg + 1):
+        b = 0.0
+        for k in range(deg + 1):
+            b += B[j, k] * c[k]
+        if b < lo:
+            lo = b
+        if b > hi:
+            hi = b
+        if lo <= tol and hi >= -tol:
+            return False
+    return True
 
 
 @jit
@@ -170,6 +220,8 @@ def real_roots_unit(c, deg, out, D):
     while deg > 0 and c[deg] == 0.0:
         deg -= 1
     if deg == 0:
+        return 0
+    if no_root_certain(c, deg):
         return 0
     for k in range(deg + 1):
         D[0, k] = c[k]

@@ -122,7 +122,11 @@ S_NONEW = 15
 # shape of the best (code, see SHAPE_NAMES; +16 when mirrored), whether every valid
 # duration is wanted (else candidates that cannot win are not checked), whether the
 # search may stop at the first valid profile (set when it did), valid durations...
-R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_V0 = 0, 1, 2, 3, 4, 5, 6
+R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7
+
+# step 2 searches the shape families in stages, each over both directions
+# (the first profile of the duration found ends the search; cheap families first):
+STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL = 0, 1, 2, 3
 
 #: Names of the shape codes (ruckig's names of the reached limits).
 SHAPE_NAMES = ("none", "acc0", "acc1", "acc0_acc1", "vel", "acc0_vel", "acc1_vel",
@@ -1117,12 +1121,16 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
         solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
         return
     if cfg[TT] == cfg[TT]:  # step 2: exactly T
-        for shape in range(S2_NN, S2_H3 + 1):
-            solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
-                        scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
-            if res[R_T] < math.inf:
-                return
-        if int(cfg[MODE]) == M_ZERO:
+        stage = int(res[R_STAGE])
+        if stage == STAGE_CRUISE or stage == STAGE_HOLD:
+            for shape in range(S2_NN if stage == STAGE_CRUISE else S2_H1,
+                               (S2_AA if stage == STAGE_CRUISE else S2_H3) + 1):
+                solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                            scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
+                if res[R_T] < math.inf:
+                    return
+            return
+        if stage == STAGE_INFLECTION and int(cfg[MODE]) == M_ZERO:
             # the cruise at an inflection (UDUD): the second half a bump up again,
             # at the tighter of both legs' limits
             save = cfg.copy()
@@ -1142,11 +1150,10 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
                     break
             for k in range(NCFG):
                 cfg[k] = save[k]
-            if res[R_T] < math.inf:
-                return
-        if int(cfg[MODE]) == M_ZERO and cfg[S3] == 0.0 or (int(cfg[MODE]) == M_ZERO
-                                                           and cfg[K1] == max(lim[2], lim[4])
-                                                           and cfg[K4] == cfg[K1]):
+            return
+        mode = int(cfg[MODE])
+        if stage == STAGE_EQUAL and mode == M_ZERO and (
+                cfg[S3] == 0.0 or (cfg[K1] == max(lim[2], lim[4]) and cfg[K4] == cfg[K1])):
             # equal jerk on every ramp, at the tighter of both legs' limits
             save = cfg.copy()
             Km = max(lim[2], lim[4])
@@ -1689,6 +1696,16 @@ def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     symmetric = lim[1] == lim[3] and lim[2] == lim[4]
     rest_goal = st0[4] == 0.0 and st0[5] == 0.0 and st0[3] == st0[3] and st0[6] != st0[6]
     res[R_STOP] = -1.0 if (symmetric and rest_goal and res[R_ALL] == 0.0 and EARLY) else 0.0
+    if st0[6] == st0[6] and st0[3] == st0[3]:
+        for stage in range(STAGE_EQUAL + 1):
+            res[R_STAGE] = stage
+            direction(1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
+            if res[R_T] < math.inf:
+                break
+            direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
+            if res[R_T] < math.inf:
+                break
+        return
     direction(1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
     if res[R_STOP] <= 0.0:
         direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)

@@ -9,6 +9,7 @@ every other axis planned for exactly that duration.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -18,9 +19,14 @@ import numpy as np
 from .._constants import DURATION_RTOL
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
+from ..profiles import _batch_states as B
 from ..profiles.state import (
     BlockedDurationError,
     StateProfile,
+    _check_range,
+    _family,
+    _from_table,
+    _prepare,
     feasible_durations,
     plan_state_to_state,
 )
@@ -28,6 +34,8 @@ from ..trajectory import SYNC_MODES, Trajectory
 from ._inputs import check_duration, coerce_limits, coerce_states
 
 __all__ = ["plan_ptp_states", "STATE_SYNC_MODES", "COLLINEAR_RTOL"]
+
+_log = logging.getLogger("trajkit.sync")
 
 #: Accepted values of ``plan_ptp_states(..., sync=...)``.
 STATE_SYNC_MODES = SYNC_MODES
@@ -38,6 +46,10 @@ COLLINEAR_RTOL = 1e-9
 
 #: Maximum re-synchronisation rounds when axes have blocked intervals.
 SYNC_MAX_ROUNDS = 64
+
+#: When step 2 of an axis finds no profile of the common duration (rare, see
+#: docs/state-profiles.md "Known limits"), the duration grows by this factor.
+STEP2_RETRY_FACTOR = 1.01
 
 
 def plan_ptp_states(
@@ -102,6 +114,9 @@ def plan_ptp_states(
         if traj is not None:
             return traj
 
+    fast = _sync_time_compiled(S, G, lims, duration)
+    if fast is not None:
+        return fast
     sets = [feasible_durations(S[k], G[k], lims[k]) for k in range(n)]
     tmin = max(d.minimum for d in sets)
     if duration is not None:
@@ -126,6 +141,7 @@ def plan_ptp_states(
             if T2 == T:
                 break
             T = T2
+    slower = False
     for _ in range(SYNC_MAX_ROUNDS):
         axes: list[StateProfile] = []
         moved = False
@@ -143,10 +159,58 @@ def plan_ptp_states(
                 T = err.interval[1]
                 moved = True
                 break
+            except InfeasibleError:
+                # step 2 found no profile of this duration on this axis (a gap of
+                # the step-2 shape families, asymmetric limits with a reversal):
+                # the common duration moves up to one every axis can fill
+                if duration is not None:
+                    raise
+                T2 = T * STEP2_RETRY_FACTOR
+                for d in sets:
+                    T2 = d.next_feasible(T2)
+                T = T2
+                moved = True
+                slower = True
+                break
         if not moved:
-            return Trajectory(axes, "time")
+            traj = Trajectory(axes, "time")
+            if slower:
+                _log.warning("plan_ptp_states: step 2 found no profile of the minimum common "
+                             "duration %r s on an axis; planned with %r s", tmin, T)
+            return traj
     raise InfeasibleError(  # pragma: no cover - would need > 64 nested blocked intervals
         "could not find a common duration outside every axis' blocked intervals")
+
+
+def _sync_time_compiled(S, G, lims, duration):
+    """Time synchronisation in one compiled call (:func:`._batch_states.sync_time`),
+    or None: then the Python path plans again and gives the precise error."""
+    n = len(S)
+    inp = np.empty((n, B.NIN))
+    for k in range(n):
+        lim, s, g = _prepare(S[k], G[k], lims[k])
+        inp[k, 0:3] = s
+        inp[k, 3:6] = g
+        inp[k, 6:11] = (lim.v_max, lim.a_max, lim.j_max, lim.a_max_decel, lim.j_max_decel)
+    out = _sync_outputs(n)
+    status, dur, tmin, nph, nbr, shape, ph, blk, nblk = out
+    code, T = B.sync_time(inp, math.nan if duration is None else float(duration), *out)
+    if code != 0:
+        return None
+    axes = []
+    for k in range(n):
+        m = int(nph[k])
+        flat = ph[k, :m].ravel().tolist()
+        prof = _from_table(S[k], G[k], flat, m, int(nbr[k]), float(tmin[k]), _family(shape[k]),
+                           lims[k])
+        axes.append(_check_range(prof, lims[k]))
+    return Trajectory(axes, "time")
+
+
+def _sync_outputs(n):
+    return (np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.int64),
+            np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros((n, B.NPH, 3)),
+            np.zeros((n, B.NBLK, 2)), np.zeros(n, dtype=np.int64))
 
 
 def _phase_sync(s, g, lims, duration):
