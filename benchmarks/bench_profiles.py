@@ -39,7 +39,7 @@ import numpy as np
 import trajkit
 from trajkit import AxisLimits, plan_move, plan_moves, plan_ptp
 
-#: Targets from issue 2 (what the table compares against).
+#: Performance targets (what the table compares against).
 TARGET_BATCH_SPEEDUP = 10.0  # plan_moves per move vs ruckig 1-DoF per move
 TARGET_SCALAR_US = 15.0  # plan_move [us]
 TARGET_PTP6_US = 60.0  # 6-axis plan_ptp [us]

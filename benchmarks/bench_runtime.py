@@ -1,4 +1,4 @@
-"""Runtime speed and timing jitter (issue 6).
+"""Runtime speed and timing jitter.
 
 1. Setpoint generation with monitors for 6 axes (``Streamer.step`` at full
    override: sampling, position/velocity/acceleration monitors with braking
@@ -156,7 +156,7 @@ def main(argv=None) -> int:
     ap.add_argument("--cycles", type=int, default=50_000, help="cycles per speed row")
     ap.add_argument("--jitter-s", type=float, default=60.0, help="length of the paced run [s]")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--pallet", action="store_true", help="also simulate the seed-000 job")
+    ap.add_argument("--pallet", action="store_true", help="also simulate the palletizing job of Cao et al. (2012)")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     res = {

@@ -1,9 +1,9 @@
-"""Example 01: one axis, time-optimal jerk-limited move (seeds 000 and 001).
+"""Example 01: one axis, time-optimal jerk-limited move (Cao et al., 2012; patent CN105892402).
 
 Plans a 0.8 m move of a vertical axis three ways and prints real numbers:
 
-1. symmetric limits (the classic 7-phase S-curve of seed 000);
-2. asymmetric limits (seed 001): a gentle jerk while stopping, so the arm
+1. symmetric limits (the classic 7-phase S-curve of Cao et al., 2012);
+2. asymmetric limits (patent CN105892402): a gentle jerk while stopping, so the arm
    does not ring at the goal, at the price of a slightly longer move;
 3. the asymmetric move stretched to a fixed, longer duration.
 
@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
 
     # Limits in SI units: m/s, m/s^2, m/s^3.
     symmetric = AxisLimits(v_max=1.0, a_max=4.0, j_max=40.0, name="Z")
-    # Seed 001: accel leg J1 = 40, A1 = 4; decel leg J2 = 10 (R1 = 0.25), A2 = 3 (R2 = 0.75).
+    # Patent CN105892402: accel leg J1 = 40, A1 = 4; decel leg J2 = 10 (R1 = 0.25), A2 = 3 (R2 = 0.75).
     asymmetric = AxisLimits(v_max=1.0, a_max=4.0, j_max=40.0,
                             a_max_decel=3.0, j_max_decel=10.0, name="Z")
 
@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     from trajkit.plot.profiles import plot_profile
 
     png = out / "01_single_axis_move.png"
-    plot_profile(asym, png, unit="m", title="Z axis 0 -> 0.8 m, asymmetric limits (seed 001)")
+    plot_profile(asym, png, unit="m", title="Z axis 0 -> 0.8 m, asymmetric limits (CN105892402)")
     print(f"wrote {png}")
     return 0
 

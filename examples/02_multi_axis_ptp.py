@@ -1,13 +1,13 @@
 """Example 02: several axes, one point-to-point move, three synchronisations.
 
-A 4-axis cylindrical palletizing robot (seed 000) moves its joints from the
+A 4-axis cylindrical palletizing robot (Cao et al., 2012) moves its joints from the
 pick to above the stack: waist theta [rad], vertical Z [m], reach R [m] and
 gripper rotation D [rad]. Angles are given in degrees at the I/O boundary
 and converted to radians for the planner.
 
 * ``sync="none"``: every joint at its own minimum time (they arrive apart);
 * ``sync="time"``: all joints arrive together at the slowest joint's
-  minimum time (seed 002's synchronisation, with S-curves);
+  minimum time (the synchronisation of Jiang, 1987, with S-curves);
 * ``sync="phase"``: all joints follow one normalised profile, a straight
   line in joint space.
 

@@ -1,6 +1,6 @@
-"""Example 03: a spatial arc through three taught points, at constant feed (seed 002).
+"""Example 03: a spatial arc through three taught points, at constant feed (Jiang, 1987).
 
-Seed 002 teaches three points and interpolates the circle through them:
+Jiang (1987) teaches three points and interpolates the circle through them:
 the plane of the points, the centre and radius, then equal angle steps.
 This example builds the same arc with :class:`trajkit.paths.Arc3`, joins it
 to a taught line, splits the path into chords within a 10 um tolerance,
@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     chords = discretize(path, tol)
     arc_chords = discretize(arc, tol)
     n_uniform = uniform_chord_count(arc, tol, start=arc_chords.count)
-    step = 2 * arc.radius * math.acos(1 - tol / arc.radius)  # seed 003 eq. 11 solved for the arc
+    step = 2 * arc.radius * math.acos(1 - tol / arc.radius)  # Chen et al. (2013) eq. 11 solved for the arc
     print(f"coarse stage, tolerance {tol / MM * 1000:.0f} um: {chords.count} chords on the path "
           f"(largest error {chords.max_error / MM * 1000:.3f} um); on the arc alone "
           f"{arc_chords.count} adaptive chords, {n_uniform} equal angle steps, "

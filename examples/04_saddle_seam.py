@@ -1,7 +1,7 @@
-"""Example 04: welding the seam of a pipe branch on a theta/Z machine (seed 003).
+"""Example 04: welding the seam of a pipe branch on a theta/Z machine (Chen et al., 2013).
 
-1. The seed's worked chord-error example (r = 100, 100 vs 200 points per
-   turn), recomputed: the seed's printed numbers are 200 times too small.
+1. The paper's worked chord-error example (r = 100, 100 vs 200 points per
+   turn), recomputed: the paper's printed numbers are 200 times too small.
 2. An orthogonal tee, R = 150 mm, r = 100 mm: coarse chords within 10 um,
    adaptive vs equal theta steps.
 3. An oblique (60 deg) and offset (20 mm) branch on the same main pipe.
@@ -37,12 +37,12 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="trajkit-ex04-"))
     out.mkdir(parents=True, exist_ok=True)
 
-    # 1. seed 003's example: chord of a 3.6 / 1.8 deg step on a circle of radius 100
+    # 1. the example of Chen et al. (2013): chord of a 3.6 / 1.8 deg step on a circle of radius 100
     for pts, step in ((100, 3.6), (200, 1.8)):
         L = 2 * 100 * math.sin(math.radians(step / 2))
-        seed = 100 - math.sqrt(100**2 - 200 * math.sin(math.radians(step / 2)) ** 2 / 4)
+        printed = 100 - math.sqrt(100**2 - 200 * math.sin(math.radians(step / 2)) ** 2 / 4)
         print(f"r = 100, {pts} points per turn ({step} deg): chord {L:.6f}, "
-              f"E = {chord_error(L, 100.0):.6e} (seed prints {seed:.3e})")
+              f"E = {chord_error(L, 100.0):.6e} (paper prints {printed:.3e})")
 
     # 2. orthogonal tee
     tol = 10e-6

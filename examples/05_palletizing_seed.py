@@ -1,4 +1,4 @@
-"""Seed 000: plan the 25-box palletizing job with the classic PTP and the merged plan.
+"""Example 05: the 25-box palletizing job of Cao et al. (2012), classic PTP and merged plan.
 
 Run::
 

@@ -1,4 +1,4 @@
-"""Example 07: robot motion programs (seed 002): PTP, LIN, CIRC, blending, singularities.
+"""Example 07: robot motion programs (Jiang, 1987): PTP, LIN, CIRC, blending, singularities.
 
 1. Loads the shipped weld program for the 6-axis arm (``examples/data/arm6_weld.yaml``),
    plans it, samples it at a 4 ms period (inverse kinematics at every
@@ -49,7 +49,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {sg['kind']:4s} t0={sg['t0_s']:7.3f} s  {sg['duration_s']:6.3f} s  "
               f"{'; '.join(sg['instructions'])}")
     for sd in summary["slowdowns"]:
-        print(f"  slow-down in {sd['instruction']}: {sd['speed_mm_s']:.1f} of "
+        a, b = (", ".join(f"{c:.0f}" for c in sd[k]) for k in ("start_xyz_mm", "end_xyz_mm"))
+        print(f"  slow-down in {sd['instruction']}: ({a}) to ({b}) mm at {sd['speed_mm_s']:.1f} of "
               f"{sd['programmed_mm_s']:.0f} mm/s ({sd['reason']})")
     for lm in summary["limits"]:
         print(f"  joint {lm['joint']}: |v|/v_max {lm['velocity_ratio']:.3f}, "

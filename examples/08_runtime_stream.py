@@ -5,8 +5,15 @@ Run::
     python examples/08_runtime_stream.py --out /tmp/trajkit-examples
 
 1. streams a 3-axis PTP move with the feed override changed while moving
-   (100 -> 40 -> 100 %) and a pause/resume, and prints the largest
-   |velocity| / v_max and |acceleration| / limit of the stream (never above 1);
+   (100 -> 40 -> 100 %) and a pause/resume, and prints the applied rate over
+   time and the largest |velocity| / v_max and |acceleration| / limit of the
+   stream (never above 1). The move is planned with ``override_limits`` (a
+   reserve of acceleration and jerk for the slow-downs) and streamed against
+   the machine's full limits: that is what lets override and pause act at
+   once while keeping every limit. The rate itself changes within proven
+   bounds (its first and second derivatives are limited so that the
+   stream's acceleration and jerk stay within the machine's), so reaching a
+   new override level takes a fraction of a second to a few seconds;
 2. streams a move whose target lies beyond a soft limit: the look-ahead
    monitor trips on the cycle whose brake would cross it, the axes stop in
    minimum time inside the range, and the pulse count equals the position held;
@@ -24,6 +31,7 @@ import numpy as np
 
 from trajkit import AxisLimits, plan_ptp
 from trajkit.runtime import ServoParams, Streamer, pulse_counts, simulate
+from trajkit.runtime.streamer import override_limits
 
 DT = 0.001
 EQ = 1e-6  # pulse equivalent [m/pulse]
@@ -36,25 +44,34 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="trajkit-ex08-"))
     out.mkdir(parents=True, exist_ok=True)
 
-    lims = [AxisLimits(1.0, 4.0, 40.0, a_max_decel=6.0, j_max_decel=60.0,
+    lims = [AxisLimits(0.4, 4.0, 40.0, a_max_decel=6.0, j_max_decel=60.0,
                        position_min=-1.0, position_max=1.0, name=n) for n in "XYZ"]
-    move = plan_ptp([0.0, 0.0, 0.0], [0.9, -0.6, 0.3], lims)
+    # planned with the override reserve, streamed against the machine's limits
+    move = plan_ptp([-0.9, 0.6, -0.3], [0.9, -0.6, 0.3], override_limits(lims))
 
-    # 1. override and pause while moving
-    st = Streamer(move, DT, pulse_equivalents=EQ)
+    # 1. override and pause while moving: each command waits until the rate
+    #    has settled at the previous target, then 100 cycles more
+    script = [("override 40 %", lambda st: st.set_override(40), 0.4),
+              ("override 100 %", lambda st: st.set_override(100), 1.0),
+              ("pause", lambda st: st.pause(), 0.0),
+              ("resume", lambda st: st.resume(), 1.0)]
+    st = Streamer(move, DT, limits=lims, pulse_equivalents=EQ)
     st.start()
     sps = []
+    issued, settled, step = [], [], 0
+    next_at = 100
     while not st.finished:
-        k = len(sps)
-        if k == 300:
-            st.set_override(40)
-        if k == 900:
-            st.set_override(100)
-        if k == 1200:
-            st.pause()
-        if k == 1500:
-            st.resume()
+        if step < len(script) and len(sps) == next_at:
+            script[step][1](st)
+            issued.append(len(sps))
         sps.append(st.step())
+        if len(issued) > len(settled) and abs(sps[-1].override - script[step][2]) < 1e-9:
+            settled.append(len(sps) - 1)
+            step += 1
+            next_at = len(sps) + 100
+    for (what, _, target), k, done in zip(script, issued, settled):
+        print(f"{what:15s} at cycle {k:4d}: rate {target:.2f} from cycle {done:4d} "
+              f"({(done - k) * DT:.3f} s later, program time {sps[done].tau:.3f} s)")
     v = np.array([s.velocity for s in sps])
     a = np.array([s.acceleration for s in sps])
     vmax = np.array([lm.v_max for lm in lims])
@@ -68,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
 
     # 2. a target beyond the soft limit of X (the machine allows 0.6 m)
     far = plan_ptp([0.0, 0.0, 0.0], [0.9, 0.2, 0.0], lims)
-    tight = [AxisLimits(1.0, 4.0, 40.0, a_max_decel=6.0, j_max_decel=60.0,
+    tight = [AxisLimits(0.4, 4.0, 40.0, a_max_decel=6.0, j_max_decel=60.0,
                         position_min=-1.0, position_max=0.6, name="X")] + lims[1:]
     st2 = Streamer(far, DT, limits=tight, pulse_equivalents=EQ)
     sps2 = list(st2)

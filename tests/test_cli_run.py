@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from trajkit._atomicio import TEMP_GLOB
 from trajkit.cli import main
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "data"
@@ -34,7 +35,7 @@ def test_run_json_csv_plot(tmp_path, capsys):
     assert np.allclose(np.diff(t)[:-1], 0.004)
     assert t[-1] == pytest.approx(summary["duration_s"], abs=1e-12)
     assert out_png.stat().st_size > 10_000
-    assert not list(tmp_path.glob("*.tmp-*"))
+    assert not list(tmp_path.glob(TEMP_GLOB))
 
 
 def test_run_table_output(capsys):

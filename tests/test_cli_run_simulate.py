@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from trajkit._atomicio import TEMP_GLOB
 from trajkit.cli import main
 
 SCARA = str(Path(__file__).resolve().parent.parent / "examples" / "data" / "scara_pick.yaml")
@@ -28,7 +29,7 @@ def test_simulate_json_and_plots(tmp_path, capsys):
     fe_png = tmp_path / "run-following-error.png"
     assert out["following_error_plot"] == str(fe_png)
     assert png.stat().st_size > 10_000 and fe_png.stat().st_size > 10_000
-    assert not list(tmp_path.glob("*.tmp-*"))
+    assert not list(tmp_path.glob(TEMP_GLOB))
 
 
 def test_simulate_table_and_heavier_load(capsys):

@@ -15,6 +15,9 @@ def test_demo_writes_figures(tmp_path, capsys, monkeypatch):
     assert f"figures in {folder.resolve()}" in out
     assert "107.854" in out and "verified: ptp ok, merged ok, optimal ok" in out
     assert "optimal: " in out and "above its lower bound" in out
+    # the cell planner's row, and what every plan does in the cell
+    assert "cell ok" in out and "cell: collision-free in the cell" in out
+    assert "in the cell: ptp collides, merged collides, optimal collides, cell clear" in out
     names = sorted(os.listdir(folder))
     for n in ("pallet_b_velocity.png", "pallet_cycle_vs_zmax.png", "pallet_gripper_path_3d.png"):
         assert n in names and (folder / n).stat().st_size > 10_000

@@ -7,6 +7,7 @@ nowhere else. Examples added later are picked up by the glob.
 
 from __future__ import annotations
 
+import fnmatch
 import os
 import subprocess
 import sys
@@ -14,6 +15,8 @@ import time
 from pathlib import Path
 
 import pytest
+
+from trajkit._atomicio import TEMP_GLOB
 
 EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "examples"
 EXAMPLES = sorted(EXAMPLES_DIR.glob("[0-9]*.py"))
@@ -33,6 +36,10 @@ EXPECTED = {
     "01_single_axis_move": ["symmetric : T = 1.150000 s, shape 7-phase",
                             "final position 0.8 m"],
     "02_multi_axis_ptp": ["sync=time : T = 1.350000 s", "spread of the normalised progress"],
+    # override and pause act while moving (rate 0.40, at rest, back to 1.00)
+    "08_runtime_stream": ["override 40 %   at cycle  100: rate 0.40 from cycle",
+                          "rate 0.00 from cycle", "resume          at cycle",
+                          "largest |v|/v_max = 1.0000"],
 }
 
 
@@ -129,7 +136,7 @@ def test_example_runs(script, example_runs):
     assert written, f"{script.name} wrote nothing into --out"
     for name in written:
         assert (out / name).stat().st_size > 0, name
-        assert ".tmp-" not in name
+        assert not fnmatch.fnmatch(name, TEMP_GLOB), name
     assert list(cwd.iterdir()) == [], "an example wrote into the working directory"
     for text in EXPECTED.get(script.stem, []):
         assert text in proc.stdout, text

@@ -8,10 +8,11 @@ import pytest
 pytest.importorskip("fastapi")
 pytest.importorskip("httpx")
 
-from fastapi.testclient import TestClient  # noqa: E402
 from starlette.websockets import WebSocketDisconnect  # noqa: E402
+from hmi_support import WS_BASE, page_client  # noqa: E402
 
-from trajkit.hmi.app import WS_RATE_HZ, create_app  # noqa: E402
+from trajkit.hmi.app import MAX_WS_CLIENTS, WS_CLOSE_BUSY, WS_RATE_HZ, create_app  # noqa: E402
+from trajkit.hmi.security import WS_CLOSE_REFUSED, WS_CLOSE_TOKEN  # noqa: E402
 
 #: Largest number of messages read while waiting for something.
 MAX_MESSAGES = 500
@@ -25,8 +26,7 @@ FAST_SADDLE = {"kind": "saddle", "feed_mm_s": 300, "period_s": 0.005, "z_vmax_mm
 @pytest.fixture
 def client(tmp_path):
     app = create_app(programs_dir=tmp_path)
-    with TestClient(app) as c:
-        c.session = app.state.session
+    with page_client(app) as c:
         yield c
 
 
@@ -49,7 +49,7 @@ def test_live_stream_follows_a_run(client):
     res = client.post("/api/job", json=FAST_SADDLE)
     assert res.status_code == 200, res.text
     tb = client.session.job
-    with client.websocket_connect("/ws") as ws:
+    with client.websocket_connect(WS_BASE + "/ws") as ws:
         first = ws.receive_json()
         assert first["type"] == "live" and first["state"] == "idle" and first["seq"] == 1
         client.post("/api/run/start")
@@ -85,7 +85,7 @@ def test_live_stream_follows_a_run(client):
 
 def test_estop_on_the_stream(client):
     client.post("/api/job", json=FAST_SADDLE)
-    with client.websocket_connect("/ws") as ws:
+    with client.websocket_connect(WS_BASE + "/ws") as ws:
         client.post("/api/run/start")
         read_until(ws, lambda m: m["state"] == "running" and m.get("progress", 0) > 0.05)
         client.post("/api/run/estop")
@@ -104,11 +104,48 @@ def test_estop_on_the_stream(client):
 
 
 def test_websocket_needs_the_token(tmp_path):
-    app = create_app(token="ws-token-123", programs_dir=tmp_path)
-    with TestClient(app) as c:
+    app = create_app(token="ws-token-1234567", programs_dir=tmp_path)
+    with page_client(app) as c:
         with pytest.raises(WebSocketDisconnect) as exc:
-            with c.websocket_connect("/ws") as ws:
+            with c.websocket_connect(WS_BASE + "/ws") as ws:
+                ws.receive_json()
+        assert exc.value.code == WS_CLOSE_TOKEN == 4401  # accepted, then closed with the code
+        with pytest.raises(WebSocketDisconnect) as exc:
+            with c.websocket_connect(WS_BASE + "/ws?token=ws-token-1234568") as ws:
                 ws.receive_json()
         assert exc.value.code == 4401
-        with c.websocket_connect("/ws?token=ws-token-123") as ws:
+        with c.websocket_connect(WS_BASE + "/ws?token=ws-token-1234567") as ws:
             assert ws.receive_json()["type"] == "live"
+
+
+@pytest.mark.parametrize("headers", [
+    {"origin": "http://evil.example"},
+    {"origin": "http://127.0.0.1:9999"},  # another port of this machine is another origin
+    {"origin": "null"},
+    {"host": "evil.example:8765"},  # DNS rebinding
+])
+def test_websocket_refuses_foreign_origins_and_hosts(client, headers):
+    with pytest.raises(WebSocketDisconnect) as exc:
+        with client.websocket_connect(WS_BASE + "/ws", headers=headers) as ws:
+            ws.receive_json()
+    assert exc.value.code == WS_CLOSE_REFUSED  # refused before the handshake: HTTP 403 in a browser
+
+
+def test_websocket_from_the_page_itself(client):
+    with client.websocket_connect(WS_BASE + "/ws", headers={"origin": "http://127.0.0.1:8765"}) as ws:
+        assert ws.receive_json()["type"] == "live"
+
+
+def test_websocket_client_cap(client):
+    from contextlib import ExitStack
+
+    with ExitStack() as stack:
+        for _ in range(MAX_WS_CLIENTS):
+            ws = stack.enter_context(client.websocket_connect(WS_BASE + "/ws"))
+            assert ws.receive_json()["type"] == "live"
+        with pytest.raises(WebSocketDisconnect) as exc:
+            with client.websocket_connect(WS_BASE + "/ws") as ws:
+                ws.receive_json()
+        assert exc.value.code == WS_CLOSE_BUSY
+    with client.websocket_connect(WS_BASE + "/ws") as ws:  # a place is free again
+        assert ws.receive_json()["type"] == "live"

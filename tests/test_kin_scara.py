@@ -59,5 +59,5 @@ def test_out_of_reach_and_tilt(scara):
 def test_bad_config_and_joints(scara):
     with pytest.raises(InvalidInputError, match="'elbowup' is not one of"):
         scara.ik(Pose.from_xyz_abc([0.4, 0.1, 0.1]), "elbowup")
-    with pytest.raises(InvalidInputError, match="joints 0.3 of axis J3 is outside"):
+    with pytest.raises(InvalidInputError, match=r"joints: joint J3 = 300 mm is outside its range \[0, 200\] mm"):
         scara.check_joints([0.0, 0.0, 0.3, 0.0])

@@ -14,8 +14,9 @@ PKG = pathlib.Path(__file__).resolve().parents[1] / "src" / "trajkit"
 SHELLS = ("trajkit.cli", "trajkit.plot", "trajkit.hmi", "trajkit.io")
 #: Modules that are allowed to do I/O or print.
 SHELL_DIRS = ("cli", "plot", "hmi", "io")
-#: Bottom-level helpers allowed to touch files (atomic writes for exports).
-IO_HELPERS = ("_atomicio.py",)
+#: Bottom-level helpers allowed to touch files (atomic writes for exports), and
+#: ``python -m trajkit`` (the command line's entry point, a shell).
+IO_HELPERS = ("_atomicio.py", "__main__.py")
 FORBIDDEN_IMPORTS = ("matplotlib", "plotly", "rich", "fastapi", "uvicorn", "typer")
 
 

@@ -97,7 +97,7 @@ def test_domain_errors(tmp_path):
 
 
 def test_bad_files(tmp_path):
-    with pytest.raises(InvalidInputError, match=r"not valid YAML at line 2"):
+    with pytest.raises(InvalidInputError, match=r"job\.yaml:2: not valid YAML"):
         load_job(_write(tmp_path, "name: x\n  bad: [1,\n"))
     with pytest.raises(InvalidInputError, match=r"expected a mapping of fields, got list"):
         load_job(_write(tmp_path, "- 1\n- 2\n"))

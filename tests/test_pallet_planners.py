@@ -266,7 +266,7 @@ def test_planner_registry_accepts_a_third_planner(seed):
         assert "paper_planned_s" not in s["plans"]["test-slow"]
     finally:
         PLANNERS.pop("test-slow")
-    with pytest.raises(InvalidInputError, match=r"planner must be one of \['merged', 'optimal', 'ptp'\], got 'x'"):
+    with pytest.raises(InvalidInputError, match=r"planner must be one of \['cell', 'merged', 'optimal', 'ptp'\], got 'x'"):
         plan_cycle(seed, "x")
 
 

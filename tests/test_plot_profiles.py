@@ -162,10 +162,26 @@ def test_plot_trajectory(sync, tmp_path):
 def test_plot_trajectory_units():
     traj = plan_ptp([0.0, 0.0], [1.0, 2.0], AxisLimits(1.0, 2.0, 10.0))
     fig = plot_trajectory(traj, units=["rad", "m"])
-    assert "[unit]" in fig.axes[0].get_ylabel()
-    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["q0 [rad]", "q1 [m]"]
+    # one column of panels per unit: every y axis has one unit
+    axs = np.array(fig.axes).reshape(4, 2)
+    assert [ax.get_ylabel() for ax in axs[:, 0]] == [
+        "position\n[rad]", "velocity\n[rad/s]", "acceleration\n[rad/s$^2$]", "jerk\n[rad/s$^3$]"]
+    assert axs[0, 1].get_ylabel() == "position\n[m]"
+    assert [t.get_text() for t in axs[0, 0].get_legend().get_texts()] == ["q0"]
+    assert [t.get_text() for t in axs[0, 1].get_legend().get_texts()] == ["q1"]
     fig = plot_trajectory(traj, units="mm")
     assert "[mm/s]" in fig.axes[1].get_ylabel()
     with pytest.raises(InvalidInputError,
                        match=r"units has 3 entries but the trajectory has 2 axes"):
         plot_trajectory(traj, units=["m", "m", "m"])
+
+
+def test_many_axes_get_distinct_colours():
+    from matplotlib.colors import to_rgba
+
+    n = 14
+    traj = plan_ptp(np.zeros(n), np.linspace(0.5, 2.0, n), AxisLimits(1.0, 2.0, 10.0))
+    fig = plot_trajectory(traj)
+    lines = _data_lines(fig.axes[0])
+    colours = {to_rgba(ln.get_color()) for ln in lines}
+    assert len(lines) == n and len(colours) == n

@@ -176,15 +176,17 @@ def test_csv_round_trip(tmp_path):
     assert path.read_text() == text
     rows = list(csv.reader(io.StringIO(text)))
     header, data = rows[0], np.array(rows[1:], dtype=float)
-    assert header == ["t"] + [f"{n}_{q}" for n in "ABCD" for q in ("pos", "vel", "acc")]
+    assert header == ["t_s"] + [f"{n}_{q}" for n in "ABCD" for q in
+                                ("position_m", "velocity_m_s", "acceleration_m_s2", "jerk_m_s3")]
     t = data[:, 0]
     np.testing.assert_array_equal(t, tr.times(0.01))
     s = tr.sample(t)
     for k in range(4):
-        np.testing.assert_array_equal(data[:, 1 + 3 * k], s.position[:, k])
-        np.testing.assert_array_equal(data[:, 2 + 3 * k], s.velocity[:, k])
-        np.testing.assert_array_equal(data[:, 3 + 3 * k], s.acceleration[:, k])
-    assert not list(tmp_path.glob("*.tmp-*"))
+        np.testing.assert_array_equal(data[:, 1 + 4 * k], s.position[:, k])
+        np.testing.assert_array_equal(data[:, 2 + 4 * k], s.velocity[:, k])
+        np.testing.assert_array_equal(data[:, 3 + 4 * k], s.acceleration[:, k])
+        np.testing.assert_array_equal(data[:, 4 + 4 * k], s.jerk[:, k])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ptp.csv"]
 
 
 def test_json_round_trip_reintegrates(tmp_path):

@@ -54,7 +54,10 @@ def test_circ_passes_through_its_three_points(arm, start):
     travelled = np.linalg.norm(np.diff(fk, axis=0), axis=1).sum()
     assert travelled == pytest.approx(Arc3(p0.position, via, end).length, rel=1e-5)
     _check_limits(arm, smp)
-    cruise = np.isclose(smp.tool_speed, 0.15, rtol=0, atol=1e-12)
+    # cruising at the programmed speed (a uniform slow-down of the timing by its final
+    # check may take a few parts in 1e8 off it), never above it
+    assert smp.tool_speed.max() <= 0.15 * (1 + 1e-9)
+    cruise = np.isclose(smp.tool_speed, 0.15, rtol=1e-6, atol=0)
     assert cruise.sum() > 100
 
 

@@ -9,8 +9,6 @@ is kept as an alias of :func:`trajkit.sync.plan_ptp` for existing callers.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 import os
@@ -20,8 +18,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._atomicio import atomic_write
-from ._constants import PERIOD_RTOL
-from ._validate import check_positive
+from ._csvio import csv_text, unit_suffix
+from ._sampling import MAX_SAMPLES, period_times
+from .errors import InvalidInputError
 
 __all__ = ["Trajectory", "TrajectorySample", "SYNC_MODES"]
 
@@ -121,14 +120,13 @@ class Trajectory:
             out[3, :, k] = s.jerk
         return TrajectorySample(tt, out[0], out[1], out[2], out[3])
 
-    def times(self, period: float) -> np.ndarray:
-        """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``."""
-        dt = check_positive(period, "period")
-        n = int(math.floor(self.duration / dt + PERIOD_RTOL))
-        t = np.arange(n + 1) * dt
-        if t[-1] < self.duration:
-            t = np.append(t, self.duration)
-        return t
+    def times(self, period: float, max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
+        """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``.
+
+        Refuses (:class:`InvalidInputError`) more than ``max_samples`` samples
+        (:data:`trajkit._sampling.MAX_SAMPLES` by default; ``None``: no cap).
+        """
+        return period_times(self.duration, period, end="exact", max_samples=max_samples)
 
     def to_dict(self) -> dict:
         """JSON-ready description: duration, sync mode and per-axis profiles."""
@@ -145,26 +143,28 @@ class Trajectory:
             _atomic_write(path, text)
         return text
 
-    def to_csv(self, path: str | os.PathLike | None = None, period: float = 0.001) -> str:
+    def to_csv(self, path: str | os.PathLike | None = None, period: float = 0.001,
+               units: str | Sequence[str] = "m") -> str:
         """Samples at a fixed period as CSV text (and optionally to ``path``).
 
-        Columns: ``t`` [s], then ``<axis>_pos``, ``<axis>_vel``, ``<axis>_acc``
-        for each axis.
+        Columns: ``t_s``, then ``<axis>_position_<u>``, ``<axis>_velocity_<u>_s``,
+        ``<axis>_acceleration_<u>_s2``, ``<axis>_jerk_<u>_s3`` for each axis,
+        with ``units`` the position unit of all axes or of each (the planner
+        itself is unit-agnostic; default ``"m"``).
         """
+        us = [units] * self.n_axes if isinstance(units, str) else list(units)
+        if len(us) != self.n_axes:
+            raise InvalidInputError(f"units has {len(us)} entries but the trajectory has "
+                                    f"{self.n_axes} axes")
         t = self.times(period)
         s = self.sample(t)
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        header = ["t"]
-        for nm in self.names:
-            header += [f"{nm}_pos", f"{nm}_vel", f"{nm}_acc"]
-        w.writerow(header)
+        header = ["t_s"]
         cols = [t]
-        for k in range(self.n_axes):
-            cols += [s.position[:, k], s.velocity[:, k], s.acceleration[:, k]]
-        for row in np.column_stack(cols):
-            w.writerow([repr(float(x)) for x in row])
-        text = buf.getvalue()
+        for k, (nm, u) in enumerate(zip(self.names, us)):
+            header += [f"{nm}_{q}_{unit_suffix(u, d)}"
+                       for d, q in enumerate(("position", "velocity", "acceleration", "jerk"))]
+            cols += [s.position[:, k], s.velocity[:, k], s.acceleration[:, k], s.jerk[:, k]]
+        text = csv_text(header, cols)
         if path is not None:
             _atomic_write(path, text)
         return text

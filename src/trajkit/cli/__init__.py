@@ -4,7 +4,10 @@ Each group of sub-commands lives in its own module exposing
 ``register(subparsers)``; a sub-command sets ``func(args) -> int`` with
 :meth:`argparse.ArgumentParser.set_defaults`. Errors the user can fix
 (:class:`trajkit.TrajkitError`, bad files) print one line on stderr and exit
-with status 2, without a traceback.
+with status 2, without a traceback. Every file a command writes appears only
+when the whole command succeeds (:func:`trajkit._atomicio.output_group`). An
+unexpected exception (a defect) also prints one line, asks for a report and
+exits with status 3; ``TRAJKIT_DEBUG=1`` shows its traceback.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import sys
 from typing import Sequence
 
 from .. import __version__
+from .._atomicio import output_group
 from ..errors import TrajkitError
 
 __all__ = ["main", "build_parser"]
@@ -67,7 +71,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args.func(args) or 0)
+        with output_group():  # every file the command writes appears, or none does
+            return int(args.func(args) or 0)
     except BrokenPipeError:  # e.g. `trajkit ... --json | head`
         try:
             sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the final flush
@@ -81,6 +86,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a defect in trajkit, not in the input: still one line
+        if os.environ.get("TRAJKIT_DEBUG"):
+            raise
+        msg = " ".join(str(exc).split())
+        msg = msg if len(msg) <= 160 else msg[:157] + "..."
+        print(f"trajkit {args.command}: internal error ({type(exc).__name__}: {msg}); this is a "
+              "defect in trajkit, please report the command and its input "
+              "(TRAJKIT_DEBUG=1 shows the traceback)", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -10,31 +10,37 @@ planner itself is unit-agnostic), times in seconds.
 from __future__ import annotations
 
 import argparse
-import io
-import json
 import math
 import os
+import re
 import sys
 from typing import Any, Literal, Sequence
 
 import numpy as np
-import yaml
+
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._atomicio import atomic_write
+from .._csvio import csv_text, unit_suffix
+from .._sampling import MAX_SAMPLES, count_samples
 from .._validate import check_finite
+from ..io.document import plain, read_document
+from ..io.schema import Real, RealOrInf, short_repr, validation_message
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
 from ..sync import plan_ptp
 from ..trajectory import SYNC_MODES, Trajectory
-from ._console import _fmt, print_json, print_table
+from ._console import print_json, print_table
 
 __all__ = ["register", "load_ptp_job", "PtpJob", "JobLimits"]
 
 #: Largest number of CSV rows a ``--csv`` export may write (guards against a
 #: typo in ``--period`` filling the disk).
-MAX_CSV_ROWS = 10_000_000
+MAX_CSV_ROWS = MAX_SAMPLES
+
+#: Most axes of a ``trajkit ptp`` job (for many independent moves use ``plan_moves``).
+MAX_PTP_AXES = 1024
 
 #: Suffixes accepted by ``--file``.
 _JOB_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
@@ -91,13 +97,13 @@ class JobLimits(BaseModel):
     """Limits of one axis in a job file (same fields as :class:`AxisLimits`)."""
 
     model_config = ConfigDict(extra="forbid")
-    v_max: float
-    a_max: float
-    j_max: float
-    a_max_decel: float | None = None
-    j_max_decel: float | None = None
-    position_min: float = -math.inf
-    position_max: float = math.inf
+    v_max: RealOrInf
+    a_max: RealOrInf
+    j_max: RealOrInf
+    a_max_decel: RealOrInf | None = None
+    j_max_decel: RealOrInf | None = None
+    position_min: RealOrInf = -math.inf
+    position_max: RealOrInf = math.inf
 
 
 class PtpJob(BaseModel):
@@ -119,28 +125,18 @@ class PtpJob(BaseModel):
     """
 
     model_config = ConfigDict(extra="forbid")
-    start: list[float] = Field(min_length=1)
-    goal: list[float] = Field(min_length=1)
+    start: list[Real] = Field(min_length=1, max_length=MAX_PTP_AXES)
+    goal: list[Real] = Field(min_length=1, max_length=MAX_PTP_AXES)
     limits: list[JobLimits] = Field(min_length=1)
     names: list[str] | None = None
     sync: Literal["time", "phase", "none"] = "time"
-    duration: float | None = None
+    duration: Real | None = None
     unit: str | list[str] = "m"
 
     @field_validator("limits", mode="before")
     @classmethod
     def _one_or_many(cls, v: Any) -> Any:
         return [v] if isinstance(v, dict) else v
-
-
-def _first_error(exc: Any) -> str:
-    errs = exc.errors()
-    e = errs[0]
-    loc = ".".join(str(p) for p in e.get("loc", ())) or "(top level)"
-    more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
-    got = e.get("input")
-    shown = "" if isinstance(got, dict) else f", got {got!r}"
-    return f"field {loc}: {e.get('msg', 'invalid')}{shown}{more}"
 
 
 def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
@@ -167,53 +163,17 @@ def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
     kind = _JOB_SUFFIXES.get(os.path.splitext(p)[1].lower())
     if kind is None:
         raise InvalidInputError(f"--file must end in .yaml, .yml or .json, got {p!r}")
-    with open(p, encoding="utf-8") as fh:
-        text = fh.read()
-    try:
-        data = json.loads(text) if kind == "json" else yaml.safe_load(text)
-    except (ValueError, yaml.YAMLError) as exc:  # json.JSONDecodeError is a ValueError
-        mark = getattr(exc, "problem_mark", None)
-        if mark is not None:
-            problem = getattr(exc, "problem", None) or "syntax error"
-            first = f"{problem} at line {mark.line + 1}, column {mark.column + 1}"
-        else:
-            first = " ".join(str(exc).split())
-        raise InvalidInputError(f"{p}: not valid {kind.upper()}: {first}") from None
+    data = plain(read_document(p, kind=kind))
     if not isinstance(data, dict):
         raise InvalidInputError(f"{p}: expected a mapping of fields at the top level, "
                                 f"got {type(data).__name__}")
     try:
         return PtpJob.model_validate(data)
     except ValidationError as exc:
-        raise InvalidInputError(f"{p}: {_first_error(exc)}") from None
+        raise InvalidInputError(f"{p}: {validation_message(exc)}") from None
 
 
 # ------------------------------------------------------------------- outputs
-def _print_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
-    """Print a table wide enough for every cell, without console markup.
-
-    Like :func:`trajkit.cli._console.print_table`, but the rich console is as
-    wide as the table (no ellipsis in long shape names) and cells are plain
-    text (``[s]`` in a header is a unit, not rich markup).
-    """
-    try:
-        from rich.console import Console
-        from rich.table import Table
-        from rich.text import Text
-    except ImportError:  # pragma: no cover - rich is optional
-        print_table(title, columns, rows)
-        return
-    cells = [[_fmt(c) for c in row] for row in rows]
-    widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(columns)]
-    width = max(sum(widths) + 3 * len(widths) + 1, len(title))
-    table = Table(title=Text(title))
-    for h in columns:
-        table.add_column(Text(h), justify="right", no_wrap=True)
-    for r in cells:
-        table.add_row(*(Text(c) for c in r))
-    Console(width=width).print(table)
-
-
 def _jsonable(obj: Any) -> Any:
     """Replace non-finite floats by the strings "inf"/"-inf"/"nan" (strict JSON)."""
     if isinstance(obj, float):
@@ -280,7 +240,7 @@ def _print_phases(title: str, profile: Profile, unit: str) -> None:
     for k, name in enumerate(PHASE_NAMES):
         rows.append([k + 1, name, profile.phase_durations[k], profile.jerks[k],
                      end[k, 0], end[k, 1], end[k, 2], end[k, 3]])
-    _print_table(
+    print_table(
         title,
         ["#", "phase", "duration [s]", f"jerk [{unit}/s^3]", "t_end [s]",
          f"pos [{unit}]", f"vel [{unit}/s]", f"acc [{unit}/s^2]"],
@@ -325,31 +285,23 @@ def _check_sampling(args: argparse.Namespace, duration: float) -> float | None:
     dt = _number(args.period, "--period")
     if not (math.isfinite(dt) and dt > 0.0):
         raise InvalidInputError(f"--period must be a finite time > 0 s, got {dt!r}")
-    rows = duration / dt + 2
-    if rows > MAX_CSV_ROWS:
-        raise InvalidInputError(
-            f"--period {dt!r} s gives {rows:.3g} samples over {duration:.6g} s, "
-            f"more than the {MAX_CSV_ROWS} allowed"
-        )
+    count_samples(duration, dt, MAX_CSV_ROWS, what="CSV rows")
     return dt
 
 
 def _write_csv(path: str, traj: Trajectory, names: Sequence[str], units: Sequence[str],
                period: float, single: bool) -> int:
     """Write samples with a header row naming quantity and unit; return the row count."""
-    t = traj.times(period)
+    t = traj.times(period, max_samples=MAX_CSV_ROWS)
     s = traj.sample(t)
-    header = ["t [s]"]
+    header = ["t_s"]
     cols = [t]
     for k, (nm, u) in enumerate(zip(names, units)):
         pre = "" if single else f"{nm}_"
-        header += [f"{pre}position [{u}]", f"{pre}velocity [{u}/s]",
-                   f"{pre}acceleration [{u}/s^2]", f"{pre}jerk [{u}/s^3]"]
+        header += [f"{pre}{q}_{unit_suffix(u, d)}"
+                   for d, q in enumerate(("position", "velocity", "acceleration", "jerk"))]
         cols += [s.position[:, k], s.velocity[:, k], s.acceleration[:, k], s.jerk[:, k]]
-    buf = io.StringIO()
-    buf.write(",".join(header) + "\n")
-    np.savetxt(buf, np.column_stack(cols), delimiter=",", fmt="%.17g")
-    atomic_write(path, buf.getvalue())
+    atomic_write(path, csv_text(header, cols))
     return int(t.size)
 
 
@@ -394,7 +346,7 @@ def _cmd_move(args: argparse.Namespace) -> int:
     if args.json:
         print_json(_jsonable(_profile_json(profile, None, unit)))
     else:
-        _print_table(
+        print_table(
             f"move {start:g} -> {goal:g} {unit}",
             ["duration [s]", "min duration [s]", "shape", "reached limits",
                    f"peak vel [{unit}/s]", f"peak acc [{unit}/s^2]",
@@ -413,6 +365,27 @@ def _cmd_move(args: argparse.Namespace) -> int:
         plot_profile(profile, args.plot, unit=unit)
         _note(args, f"wrote {args.plot}")
     return 0
+
+
+_UNIT = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
+
+
+def _check_axes(names: Sequence[str], units: Sequence[str], where: str) -> None:
+    """Refuse duplicate axis names, too many axes and units that are not plain words."""
+    if len(names) > MAX_PTP_AXES:
+        raise InvalidInputError(f"{where or ''}start has {len(names)} axes, more than the "
+                                f"{MAX_PTP_AXES} a ptp job may have (plan_moves plans many "
+                                "independent moves at once)")
+    seen: dict[str, int] = {}
+    for k, nm in enumerate(names):
+        if nm in seen:
+            raise InvalidInputError(f"{where or '--'}names: axes {seen[nm]} and {k} are both "
+                                    f"called {short_repr(nm)}; axis names must be unique")
+        seen[nm] = k
+    for u in units:
+        if not _UNIT.match(u):
+            raise InvalidInputError(f"{where or '--'}unit: {short_repr(u)} is not a unit name "
+                                    "(letters and digits, e.g. m, rad, deg, mm)")
 
 
 def _ptp_inputs(args: argparse.Namespace):
@@ -472,6 +445,7 @@ def _ptp_inputs(args: argparse.Namespace):
     if names is None:
         names = [f"q{k}" for k in range(n)]
     where = "" if args.file is None else f"{args.file}: field "
+    _check_axes(names, units, where)
     start = [check_finite(x, f"{where}start", names[k]) for k, x in enumerate(start)]
     goal = [check_finite(x, f"{where}goal", names[k]) for k, x in enumerate(goal)]
     return start, goal, limits, list(names), list(units), sync, duration
@@ -490,7 +464,7 @@ def _cmd_ptp(args: argparse.Namespace) -> int:
             "axes": [_profile_json(p, nm, u) for p, nm, u in zip(traj.axes, names, units)],
         }))
     else:
-        _print_table(
+        print_table(
             f"ptp, {traj.n_axes} axes, sync={traj.sync}: duration {traj.duration:.6g} s",
             ["axis", "start", "goal", "unit", "duration [s]", "min duration [s]",
                    "shape", "reached limits", "peak vel [unit/s]"],

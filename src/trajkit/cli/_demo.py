@@ -1,9 +1,11 @@
 """Sub-command ``trajkit demo``: the project's main job in one command.
 
-Runs the seed 000 palletizing scenario with the classic, merged and optimal planners,
-prints the table beside the paper's table 1, and writes the figures (B-axis
-velocity, cycle time against Zmax, 3-D gripper path, one 4-axis transfer
-move) into a folder (``./trajkit-demo/`` by default).
+Runs the palletizing job of Cao et al. (2012) in its cell (conveyor, guides,
+end stop, pallet) with the classic, merged and optimal planners and the cell
+planner, prints the table beside the paper's table 1 and what each plan does
+in the cell, and writes the figures (B-axis velocity, cycle time against
+Zmax, 3-D gripper path in the cell, one 4-axis transfer move) into a folder
+(``./trajkit-demo/`` by default).
 """
 
 from __future__ import annotations
@@ -25,11 +27,14 @@ TRANSFER_PLOT = "ptp_transfer_4axis.png"
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "demo",
-        help="run the seed palletizing scenario (classic PTP, merged, optimal) and write its plots",
-        description="Plan seed 000's palletizing job (25 boxes) with the classic PTP, the "
-                    "paper's merged planner and trajkit's optimal planner (B passes its "
-                    "clearance heights without stopping), verify all three, print the table "
-                    "beside the paper's table 1 and write the figures into a folder.",
+        help="run the palletizing job of Cao et al. (2012) in its cell (classic PTP, merged, "
+             "optimal, cell) and write its plots",
+        description="Plan the palletizing job of Cao et al. (2012) (25 boxes) with the classic "
+                    "PTP, the paper's merged planner, trajkit's optimal planner (B passes its "
+                    "clearance heights without stopping) and the cell planner (around the "
+                    "real cell's obstacles and the growing stack), verify all four, print the "
+                    "table beside the paper's table 1, check every plan against the cell and "
+                    "write the figures into a folder.",
     )
     p.add_argument("--out", metavar="DIR", default=DEFAULT_OUT,
                    help=f"folder for the figures (default ./{DEFAULT_OUT}/)")
@@ -62,25 +67,46 @@ def write_transfer_plot(scenario: Any, out_dir: Path, box: int = 0) -> Path | No
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from ..palletizing.report import TABLE_COLUMNS, bound_lines, summarize, table_rows
+    from .._atomicio import output_folder
+
+    out = Path(args.out)
+    with output_folder(out):  # checked before planning; all figures or none
+        return _demo(out)
+
+
+def _demo(out: Path) -> int:
+    from ..io.pallet_job import seed_cell_job_path
+    from ..palletizing.report import (
+        CELL_COLUMNS,
+        TABLE_COLUMNS,
+        bound_lines,
+        cell_lines,
+        cell_rows,
+        summarize,
+        table_rows,
+    )
     from ..plot.pallet import write_pallet_plots
     from ._console import print_table
     from ._pallet import run_pallet
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)  # fail fast on a bad folder, before planning
-    scenario, plans, reports = run_pallet(None, progress=sys.stderr.isatty())
-    summary = summarize(plans)
+    scenario, plans, reports = run_pallet(str(seed_cell_job_path()), progress=sys.stderr.isatty())
+    summary = summarize(plans, reports=reports)
     print_table(
         f"trajkit demo - {scenario.name}: {summary['boxes']} boxes, planned cycle time "
-        "(paper: seed 000 table 1)",
+        "(paper: Cao et al., 2012, table 1)",
         TABLE_COLUMNS, table_rows(summary),
     )
+    print_table(f"{scenario.name}: in the cell (clearance, stack, gripper volume)",
+                CELL_COLUMNS, cell_rows(summary))
     for line in bound_lines(summary):
         print(line)
-    print("verified: " + ", ".join(f"{n} ok" for n, r in reports.items() if r.ok)
-          + " (joint limits and ranges, places reached, clearance rule)")
-    written = write_pallet_plots(plans, out)
+    for line in cell_lines(summary):
+        print(line)
+    print("verified: " + ", ".join(f"{n} ok" for n, r in reports.items() if r.ok_without_cell)
+          + " (joint limits and ranges, places reached, placing order, clearance rule); "
+          + "in the cell: " + ", ".join(
+              f"{n} {'clear' if r.cell.ok else 'collides'}" for n, r in reports.items()))
+    written = write_pallet_plots(plans, out, reports=reports)
     tr = write_transfer_plot(scenario, out)
     if tr is not None:
         written.append(tr)

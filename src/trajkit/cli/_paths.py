@@ -8,8 +8,6 @@ angles in degrees, the period in seconds; the library works in m, rad, s.
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import math
 import os
 from typing import Any
@@ -17,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from .._atomicio import atomic_write
+from .._csvio import csv_text
+from .._sampling import count_samples
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..paths import Arc3, CompositePath, Line, SaddleCurve, circle_through, discretize, uniform_chord_count
@@ -29,9 +29,6 @@ MM = 1e-3  # metres per millimetre
 
 #: Default tangent jump [deg] treated as a corner by ``trajkit path``.
 DEFAULT_CORNER_DEG = 0.01
-
-#: Largest number of CSV rows an export may write (a typo in --period must not fill the disk).
-MAX_CSV_ROWS = 5_000_000
 
 _UNITS_NOTE = "Units: lengths in mm, speeds in mm/s, mm/s^2, mm/s^3, angles in deg, period in s."
 
@@ -134,7 +131,8 @@ def _motion_options(p, required: bool = True) -> None:
 
 def _output_options(p) -> None:
     p.add_argument("--json", action="store_true", help="print a JSON summary")
-    p.add_argument("--csv", metavar="FILE", help="write setpoints: t [s], x, y, z [mm], machine axes")
+    p.add_argument("--csv", metavar="FILE",
+                   help="write setpoints: t_s, x_mm, y_mm, z_mm (saddle: and theta_deg, z_axis_mm)")
     p.add_argument("--plot", metavar="FILE.png", help="write a figure: path with chords, axes against time")
 
 
@@ -188,7 +186,7 @@ def _run_saddle(args: argparse.Namespace) -> int:
         ],
     }
     if args.csv:
-        _write_csv(args.csv, fs.t, fs.points, {"theta": th_deg, "z_axis": ax[1, 0] / MM})
+        _write_csv(args.csv, fs.t, fs.points, {"theta_deg": th_deg, "z_axis_mm": ax[1, 0] / MM})
     if args.plot:
         from ..plot.paths import plot_saddle_plan
 
@@ -203,14 +201,9 @@ def _run_saddle(args: argparse.Namespace) -> int:
 # -------------------------------------------------------------------- path
 def load_path_file(filename: str) -> dict:
     """Read a path job (YAML) into a dict with ``start`` and ``segments`` (mm)."""
-    import yaml
+    from ..io.document import plain, read_document
 
-    try:
-        with open(filename, encoding="utf-8") as fh:
-            data = yaml.safe_load(fh)
-    except yaml.YAMLError as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise InvalidInputError(f"{filename}: not valid YAML: {first}") from None
+    data = plain(read_document(filename))
     if not isinstance(data, dict):
         raise InvalidInputError(f"{filename}: expected a mapping with 'start' and 'segments'")
     unknown = set(data) - {"start", "segments", "feed", "tolerance", "period", "accel", "jerk", "units",
@@ -346,22 +339,16 @@ def _motion_values(args) -> tuple[float, float, float, float, float]:
     return feed, tol, period, acc, jerk
 
 
-def _check_rows(duration_guess: float, period: float) -> None:
-    if period > 0 and duration_guess / period > MAX_CSV_ROWS:
-        raise InvalidInputError(
-            f"about {duration_guess / period:.3g} setpoints at period {period!r} s: more than "
-            f"{MAX_CSV_ROWS}; use a longer --period"
-        )
+def _check_rows(duration_floor: float, period: float) -> None:
+    """Refuse early when even the nominal duration (a lower bound) gives too many setpoints;
+    the planned duration is checked again before sampling."""
+    count_samples(duration_floor, period, what="setpoints")
 
 
 def _write_csv(filename: str, t, points, axes: dict) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["t", "x", "y", "z", *axes.keys()])
+    """Setpoints: ``t_s, x_mm, y_mm, z_mm`` and the machine axes (names carry their units)."""
     cols = [t, points[:, 0] / MM, points[:, 1] / MM, points[:, 2] / MM, *axes.values()]
-    for row in np.column_stack(cols):
-        w.writerow([repr(float(x)) for x in row])
-    atomic_write(os.fspath(filename), buf.getvalue())
+    atomic_write(os.fspath(filename), csv_text(["t_s", "x_mm", "y_mm", "z_mm", *axes.keys()], cols))
 
 
 def _print_summary(title: str, summary: dict) -> None:

@@ -41,7 +41,7 @@ def register(subparsers: Any) -> None:
                    help="run the program through the servo simulation (trajkit.runtime) and "
                         "print planned vs simulated time per segment; with --plot also write "
                         "the following error to FILE-following-error.png")
-    p.add_argument("--inertia-ratio", type=float, default=1.0, metavar="R",
+    p.add_argument("--inertia-ratio", type=float, default=None, metavar="R",
                    help="with --simulate: actual / nominal load inertia (default 1)")
     p.set_defaults(func=cmd_run)
 
@@ -53,6 +53,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise InvalidInputError(
             f"--period must be between {MIN_PERIOD} and {MAX_PERIOD} s, got {args.period!r}"
         )
+    if args.inertia_ratio is not None and not args.simulate:
+        raise InvalidInputError("--inertia-ratio only acts on the servo simulation: add --simulate")
     program = load_program(args.program)
     run = program.run()
     samples = run.sample(run.times(args.period))
@@ -64,7 +66,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.simulate:
         from ..runtime import ServoParams, simulate
 
-        report = simulate(run, args.period, ServoParams(inertia_ratio=args.inertia_ratio))
+        ratio = 1.0 if args.inertia_ratio is None else args.inertia_ratio
+        report = simulate(run, args.period, ServoParams(inertia_ratio=ratio))
         summary["simulation"] = report.to_dict()
     if args.csv:
         run.to_csv(samples, args.csv)

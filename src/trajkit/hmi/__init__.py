@@ -1,4 +1,4 @@
-"""Web HMI of trajkit (issue 7): FastAPI app, page and live WebSocket.
+"""Web HMI of trajkit: FastAPI app, page and live WebSocket.
 
 Start it with ``trajkit hmi`` or :func:`trajkit.hmi.server.serve`; build the
 app with :func:`create_app` (needs the ``hmi`` extra: fastapi, uvicorn).

@@ -55,6 +55,18 @@ COMMAND_WAIT_S = 2.0
 #: One actual tool point is kept every this many control periods.
 TRAIL_EVERY = 5
 
+#: After a run the loop keeps simulating the servo axes until every axis is
+#: within this fraction of its in-position window of the command and moves
+#: less than that per period (or the brakes have stopped it after an
+#: emergency stop), so that the actual position shown is the one the axis keeps.
+REST_FRACTION = 1e-3
+
+#: Longest time the loop simulates the axes coming to rest after a run [s].
+REST_MAX_S = 5.0
+
+#: Time step of the finite difference that gives the live tool speed [s].
+TOOL_SPEED_STEP_S = 1e-4
+
 
 class ConflictError(TrajkitError):
     """The command is not allowed in the present state (e.g. start while a run is active)."""
@@ -112,6 +124,29 @@ class RuntimeDrive:
         return bool(self.streamer.finished)
 
     @property
+    def braking(self) -> bool:
+        """True while the holding brakes are still stopping an axis after an emergency stop."""
+        sv = self.streamer.servo
+        return sv is not None and sv.braking and bool(np.any(sv.v))
+
+    def at_rest(self) -> bool:
+        """True when the simulated axes stand still where they will stay.
+
+        Braked axes are at rest once they stopped; driven axes once each is
+        within :data:`REST_FRACTION` of its in-position window of the command
+        and moves less than that per period.
+        """
+        sv = self.streamer.servo
+        sp = self.last
+        if sv is None or sp is None:
+            return True
+        if sv.braking:
+            return not np.any(sv.v)
+        tol = REST_FRACTION * sv.window
+        return bool(np.all(np.abs(sp.position - sv.measured) <= tol)
+                    and np.all(np.abs(sv.v) * self.table.period <= tol))
+
+    @property
     def tau(self) -> float:
         """Program time [s]."""
         return float(self.streamer.tau)
@@ -145,6 +180,9 @@ class Session:
         self.programs_dir = programs_dir
         self._clock = clock
         self._lock = threading.RLock()
+        # events and the actual-path trail have their own short lock: the live stream
+        # reads them without waiting for the run loop (which holds _lock while it ticks)
+        self._feed_lock = threading.Lock()
         self._cmds: collections.deque[_Command] = collections.deque()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -158,6 +196,9 @@ class Session:
         self.run_id = 0
         self.ticks = 0
         self.last_estop_latency_s: float | None = None
+        self.job_id = 0  # counts loads and unloads: the page refreshes its job view on a change
+        #: held while a job is planned: one plan at a time (a second request answers 409)
+        self.plan_lock = threading.Lock()
         self.trail: collections.deque = collections.deque(maxlen=TRAIL_POINTS)
         self._trail_total = 0
         self._snap: dict = {}
@@ -172,14 +213,15 @@ class Session:
     # ------------------------------------------------------------------ events
     def event(self, level: str, text: str) -> None:
         """Append to the event log (``level`` info, warning or fault)."""
-        with self._lock:
+        with self._feed_lock:
             self._event_id += 1
             self.events.append({"id": self._event_id, "time": time.time(), "level": level, "text": text})
             del self.events[:-MAX_EVENTS]
         log.info("hmi %s: %s", level, text)
 
     def events_since(self, last_id: int) -> list[dict]:
-        with self._lock:
+        """Events with an id above ``last_id`` (never waits for the run loop)."""
+        with self._feed_lock:
             return [e for e in self.events if e["id"] > last_id]
 
     # ------------------------------------------------------------------ robot / teach
@@ -272,12 +314,34 @@ class Session:
             raise ConflictError(f"cannot {what} during an emergency stop: reset first")
 
     def load(self, table: JobTable) -> None:
-        """Make ``table`` the job that the next start runs."""
+        """Make ``table`` the job that the next start runs.
+
+        The simulated machine is placed at the job's start: the live values
+        (axes, progress, job title) show the new job from now on.
+        """
         with self._lock:
             self._require_inactive("load a job")
             self.job = table
+            self.drive = None
+            self.job_id += 1
+            self._publish()
         self.event("info", f"loaded {table.title}: {table.duration:.3f} s, "
                            f"{table.t.size} setpoints every {table.period * 1e3:g} ms")
+
+    def disarm(self, reason: str) -> None:
+        """Unload the job after a failed plan: Start then has nothing to run.
+
+        Does nothing while a run is active (the running job stays loaded).
+        """
+        with self._lock:
+            if self.state in _ACTIVE:
+                return
+            old = self.job
+            self.job = None
+            self.drive = None
+            self.job_id += 1
+            self._publish()
+        self.event("warning", f"plan failed: {reason}" + (f"; {old.title} unloaded" if old else ""))
 
     def start(self, table: JobTable | None = None) -> int:
         """Start the loaded job (or ``table``, e.g. a jog, without loading it); returns the run id.
@@ -297,9 +361,10 @@ class Session:
             if not resume:
                 drive = RuntimeDrive(table)
                 drive.command("override", self.override)
-                self.run_id += 1
-                self.trail.clear()
-                self._trail_total = 0
+                with self._feed_lock:
+                    self.run_id += 1
+                    self.trail.clear()
+                    self._trail_total = 0
                 self.ticks = 0
                 self.drive = drive
             cmd = _Command("start", self._clock())
@@ -320,18 +385,14 @@ class Session:
         it for a batch of periods), so its arrival time is exact.
         """
         arrival = self._clock()
-        if name == "estop" and self.drive is not None:
-            cmd = _Command(name, arrival)
-            self._cmds.append(cmd)  # deque.append is atomic
-            self._wake.set()
-            if wait:
+        if name == "estop":
+            cmd = self.request_estop(arrival)
+            if wait and cmd is not None:
                 cmd.done.wait(COMMAND_WAIT_S)
             return
         with self._lock:
             st = self.state
-            if name == "estop":
-                pass  # always accepted; at rest it latches the fault
-            elif name == "pause" and st != "running":
+            if name == "pause" and st != "running":
                 raise ConflictError(f"cannot pause: the run is {st}")
             elif name == "resume" and st not in ("paused", "pausing"):
                 raise ConflictError(f"cannot resume: the run is {st}")
@@ -342,11 +403,7 @@ class Session:
             elif name == "override":
                 self.override = float(value)
             if self.drive is None:
-                if name == "estop":
-                    self.state = "fault"
-                    self.last_estop_latency_s = 0.0
-                    self.event("fault", "EMERGENCY STOP (machine at rest)")
-                elif name == "reset":
+                if name == "reset":
                     self.state = "idle"
                     self.event("info", "emergency stop reset")
                 self._publish()
@@ -357,6 +414,34 @@ class Session:
             self._wake.set()
         if wait:
             cmd.done.wait(COMMAND_WAIT_S)
+
+    def request_estop(self, arrival: float | None = None) -> "_Command | None":
+        """Queue an emergency stop without waiting for anything; return its command.
+
+        A machine with a run (or the rest of one) gets the stop in the first
+        control period that starts after ``arrival`` (the command's ``done``
+        is set then); a machine at rest without one latches the fault at once
+        (returns None). Never blocks on the session lock, so no other request
+        can hold it up.
+        """
+        arrival = self._clock() if arrival is None else arrival
+        if self.drive is not None:
+            cmd = _Command("estop", arrival)
+            self._cmds.append(cmd)  # deque.append is atomic
+            self._wake.set()
+            return cmd
+        with self._lock:
+            if self.drive is None:
+                self.state = "fault"
+                self.last_estop_latency_s = 0.0
+                self._publish()
+                latched = True
+            else:
+                latched = False
+        if latched:
+            self.event("fault", "EMERGENCY STOP (machine at rest)")
+            return None
+        return self.request_estop(arrival)
 
     def _ensure_thread(self) -> None:
         if self._thread is None or not self._thread.is_alive():
@@ -374,9 +459,23 @@ class Session:
     # ------------------------------------------------------------------ loop
     def _loop(self) -> None:
         while not self._closing:
+            latched = False
             with self._lock:
                 drive = self.drive
+                if drive is None and self._cmds:
+                    # the run was unloaded after these were queued (a new job): an
+                    # emergency stop still latches the fault; other commands lapse
+                    while self._cmds:
+                        c = self._cmds.popleft()
+                        if c.name == "estop" and self.state != "fault":
+                            self.state = "fault"
+                            self.last_estop_latency_s = max(self._clock() - c.arrival, 0.0)
+                            latched = True
+                        c.done.set()
+                    self._publish()
                 busy = drive is not None and (self._cmds or self.state in _ACTIVE)
+            if latched:
+                self.event("fault", "EMERGENCY STOP (machine at rest)")
             if not busy:
                 self._wake.wait(0.1)
                 self._wake.clear()
@@ -393,21 +492,35 @@ class Session:
                 self.event("fault", f"run aborted by an internal error: {exc}")
 
     def _run(self, drive: RuntimeDrive) -> None:
-        """Tick ``drive`` in real time until it rests with no command pending."""
+        """Tick ``drive`` in real time until it rests with no command pending.
+
+        Returns early when another drive replaced it (a new job or run) or
+        when the axes have not come to rest within :data:`REST_MAX_S`.
+        """
         dt = drive.table.period
         t0 = self._clock()
         k = 0
         last_pub = -math.inf
+        resting = 0  # periods ticked since the run itself ended
+        rested = False
         while not self._closing:
             now = self._clock()
             due = int((now - t0) / dt)
             with self._lock:
+                if self.drive is not drive:
+                    return
+                if self.state not in _ACTIVE and not self._cmds:
+                    resting += max(due - k, 0)
+                    if resting * dt > REST_MAX_S:
+                        return
                 while k < due:
                     k += 1
                     nominal = t0 + k * dt
                     # commands that arrived before this period starts are applied in it
                     applied = []
                     while self._cmds and self._cmds[0].arrival <= nominal:
+                        if self._cmds[0].name == "reset" and drive.braking:
+                            break  # a reset waits until the brakes have stopped every axis
                         c = self._cmds.popleft()
                         drive.command(c.name, c.value)
                         applied.append(c)
@@ -423,13 +536,17 @@ class Session:
                     self._log_runtime_events(drive)
                     if self.ticks % TRAIL_EVERY == 0 or self.state not in _ACTIVE:
                         self._add_trail(drive, sp)
-                    if self.state not in _ACTIVE and not self._cmds:
+                    if self.state not in _ACTIVE and (not rested or applied):
+                        self._rest(drive)  # the jog joints follow the command at once
+                        rested = True
+                    elif self.state in _ACTIVE:
+                        rested = False
+                    if self.state not in _ACTIVE and not self._cmds and drive.at_rest():
                         break
                 if now - last_pub >= SNAPSHOT_PERIOD_S or self.state not in _ACTIVE:
                     self._publish()
                     last_pub = now
-                if self.state not in _ACTIVE and not self._cmds:
-                    self._rest(drive)
+                if self.state not in _ACTIVE and not self._cmds and drive.at_rest():
                     return
             time.sleep(min(LOOP_SLEEP_S, dt))
 
@@ -437,8 +554,10 @@ class Session:
         q = sp.actual if sp.actual is not None else sp.position
         tool = drive.table.tool_of(q) if drive.table.tool_of is not None else None
         if tool is not None:
-            self.trail.append((np.asarray(tool) / MM).round(4).tolist())
-            self._trail_total += 1
+            pt = (np.asarray(tool) / MM).round(4).tolist()
+            with self._feed_lock:
+                self.trail.append(pt)
+                self._trail_total += 1
 
     def _log_runtime_events(self, drive: RuntimeDrive) -> None:
         for ev in drive.new_events():
@@ -473,19 +592,25 @@ class Session:
 
     # ------------------------------------------------------------------ snapshot
     def _publish(self) -> None:
+        """Refresh the live values (called with the session lock held)."""
         drive = self.drive
+        job = self.job
         snap = {
             "state": self.state,
             "run_id": self.run_id,
             "override_pct": 100.0 * self.override,
-            "job": None if self.job is None else self.job.title,
+            "job": None if job is None else job.title,
+            "job_id": self.job_id,
             "server_time": time.time(),
         }
-        sp = None if drive is None else drive.last
+        if (drive is not None and job is not None and drive.table is not job
+                and drive.table.kind == "jog" and self.state == "idle"):
+            drive = None  # a finished jog: the views show the job that Start will run
         if drive is not None:
             st = drive.streamer
             tb = drive.table
             snap["run_title"] = tb.title
+            snap["cycle"] = st.cycle
             snap["plan_time_s"] = st.tau
             T = st.source.duration
             snap["duration_s"] = T
@@ -493,26 +618,45 @@ class Session:
             snap["rate"] = st.s
             snap["motion"] = st.source.motion_labels[st.source.motion_at(st.tau)]
             snap["fault"] = None if st.fault is None else str(st.fault)
-        if sp is not None:
-            tb = drive.table
-            act = sp.actual if sp.actual is not None else sp.position
-            snap["axes"] = [
-                {"name": n, "unit": u, "position": float(p * s), "actual": float(a * s),
-                 "velocity": float(v * s), "following_error": float((p - a) * s)}
-                for n, u, p, a, v, s in zip(tb.axis_names, tb.axis_units, sp.position, act,
-                                            sp.velocity, tb.axis_scale)]
-            if tb.tool_of is not None:
-                snap["tool_mm"] = (np.asarray(tb.tool_of(act)) / MM).tolist()
+            sp = drive.last
+            if sp is not None:
+                act = sp.actual if sp.actual is not None else sp.position
+                self._axes_view(snap, tb, sp.position, act, sp.velocity)
+            else:  # started, first period not yet run: the machine is at the start
+                self._axes_view(snap, tb, tb.q[0], tb.q[0], np.zeros_like(tb.q[0]))
+        elif job is not None:  # a job loaded, not started: the machine waits at its start
+            snap["plan_time_s"] = 0.0
+            snap["duration_s"] = job.duration
+            snap["progress"] = 0.0
+            q0 = job.q[0]
+            self._axes_view(snap, job, q0, q0, np.zeros_like(q0))
         self._snap = snap
 
+    @staticmethod
+    def _axes_view(snap: dict, tb: JobTable, pos, act, vel) -> None:
+        snap["axes"] = [
+            {"name": n, "unit": u, "position": float(p * s), "actual": float(a * s),
+             "velocity": float(v * s), "following_error": float((p - a) * s)}
+            for n, u, p, a, v, s in zip(tb.axis_names, tb.axis_units, pos, act, vel, tb.axis_scale)]
+        if tb.tool_of is not None:
+            snap["tool_mm"] = (np.asarray(tb.tool_of(act)) / MM).tolist()
+            # commanded tool speed: the tool point's rate of change along the axis velocities
+            h = TOOL_SPEED_STEP_S
+            pos = np.asarray(pos, dtype=float)
+            vel = np.asarray(vel, dtype=float)
+            if np.any(vel):
+                d = np.asarray(tb.tool_of(pos + h * vel)) - np.asarray(tb.tool_of(pos - h * vel))
+                snap["tool_speed_mm_s"] = float(np.linalg.norm(d) / (2.0 * h) / MM)
+            else:
+                snap["tool_speed_mm_s"] = 0.0
+
     def snapshot(self) -> dict:
-        """The latest live values (JSON-ready)."""
-        with self._lock:
-            snap = dict(self._snap)
-            snap["state"] = self.state
-            snap["override_pct"] = 100.0 * self.override
-            snap["estop_latency_s"] = self.last_estop_latency_s
-            return snap
+        """The latest live values (JSON-ready); never waits for the run loop."""
+        snap = dict(self._snap)  # replaced as a whole by the loop: reading it is atomic
+        snap["state"] = self.state
+        snap["override_pct"] = 100.0 * self.override
+        snap["estop_latency_s"] = self.last_estop_latency_s
+        return snap
 
     def trail_since(self, run_id: int, n_seen: int) -> tuple[list, int, bool]:
         """Actual tool points [mm] of the current run not yet seen.
@@ -520,7 +664,7 @@ class Session:
         Returns the new points, the new count and whether the reader must
         drop what it has (another run began since ``run_id``).
         """
-        with self._lock:
+        with self._feed_lock:
             pts = list(self.trail)
             total = self._trail_total
             fresh = run_id != self.run_id

@@ -27,7 +27,8 @@ from ..limits import AxisLimits
 from ..runtime.streamer import OVERRIDE_RESERVE, override_limits
 from .models import PalletJob, ProgramJob, SaddleJob
 
-__all__ = ["JobTable", "plan_job", "plan_jog", "MM", "PATH_PREVIEW_POINTS"]
+__all__ = ["JobTable", "plan_job", "plan_jog", "check_size", "summary_view", "MM",
+           "PATH_PREVIEW_POINTS", "MAX_SETPOINTS"]
 
 MM = 1e-3  # metres per millimetre
 
@@ -122,16 +123,68 @@ class JobTable:
             "period_s": self.period,
             "path_mm": (self.xyz[idx] / MM).round(4).tolist(),
             "summary": self.summary,
+            "summary_view": summary_view(self.summary, self.period),
         }
 
 
-def _times(duration: float, period: float) -> np.ndarray:
-    n = math.ceil(duration / period)
-    if n + 1 > MAX_SETPOINTS:
+def check_size(duration: float, period: float) -> int:
+    """Number of setpoints of a ``duration`` [s] plan at ``period`` [s], refused above the cap.
+
+    Raises
+    ------
+    InvalidInputError
+        More than :data:`MAX_SETPOINTS` setpoints (the message gives the
+        cap and the longest job the period allows).
+    """
+    if not (math.isfinite(duration) and duration >= 0.0):
+        raise InvalidInputError(f"the planned duration must be finite, got {duration!r} s")
+    n = math.ceil(duration / period) + 1
+    if n > MAX_SETPOINTS:
         raise InvalidInputError(
-            f"period_s {period!r} gives {n + 1} setpoints for {duration:.3f} s, "
-            f"more than the {MAX_SETPOINTS} allowed: choose a longer period"
+            f"the plan lasts {duration:.3f} s: at period_s {period:g} that is {n} setpoints, more "
+            f"than the {MAX_SETPOINTS} a job may have (at most {(MAX_SETPOINTS - 1) * period:.1f} s "
+            f"at this period): choose a longer period or a faster job"
         )
+    return n
+
+
+#: Label and unit shown in the page for each summary key.
+SUMMARY_LABELS = {
+    "duration_s": ("Planned duration", "s"),
+    "path_length_mm": ("Path length", "mm"),
+    "feed_mm_s": ("Programmed feed", "mm/s"),
+    "max_tool_speed_mm_s": ("Highest tool speed", "mm/s"),
+    "slowdowns": ("Slowed stretches", ""),
+    "override_reserve": ("Planned accel. and jerk", "% of the machine's"),
+    "boxes": ("Boxes", ""),
+    "per_box_s": ("Time per box", "s"),
+    "planner": ("Planner", ""),
+    "robot": ("Robot", ""),
+    "instructions": ("Instructions", ""),
+}
+
+_LIMIT_LABELS = {"velocity": "speed", "acceleration": "acceleration", "jerk": "jerk"}
+
+
+def summary_view(summary: dict, period: float) -> list[dict]:
+    """The summary as rows ``{"label", "value", "unit"}`` for the page (in display units)."""
+    rows = [{"label": "Control period", "value": period * 1e3, "unit": "ms"}]
+    for key, value in summary.items():
+        if key == "axis_limit_use_pct":
+            for axis, use in value.items():
+                for qty, pct in use.items():
+                    rows.append({"label": f"{axis} {_LIMIT_LABELS.get(qty, qty)} limit used",
+                                 "value": pct, "unit": "%"})
+            continue
+        label, unit = SUMMARY_LABELS.get(key, (key.replace("_", " ").capitalize(), ""))
+        if key == "override_reserve":
+            value = 100.0 * value
+        rows.append({"label": label, "value": value, "unit": unit})
+    return rows
+
+
+def _times(duration: float, period: float) -> np.ndarray:
+    n = check_size(duration, period) - 1
     t = np.arange(n + 1) * period
     t[-1] = min(t[-1], duration)
     if t.size > 1 and t[-1] <= t[-2]:
@@ -147,7 +200,7 @@ def _scale(kinds) -> tuple[tuple, np.ndarray]:
 
 
 def plan_saddle_job(req: SaddleJob) -> JobTable:
-    """Plan a saddle seam (seed 003) and tabulate theta and Z at the period."""
+    """Plan a saddle seam on the theta/Z machine and tabulate theta and Z at the period."""
     from ..interpolation import SaddleMachine, plan_saddle
     from ..paths import SaddleCurve
 
@@ -163,10 +216,11 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
                    name="theta").scaled(d2r),
         AxisLimits(req.z_vmax_mm_s, req.z_amax_mm_s2, req.z_jmax_mm_s3, name="z_axis").scaled(MM),
     )
-    _times(curve.length / (req.feed_mm_s * MM), req.period_s)  # size check before planning
+    check_size(curve.length / (req.feed_mm_s * MM), req.period_s)  # the nominal feed, before planning
     reserved = SaddleMachine(*override_limits([machine.theta, machine.z]))
     plan = plan_saddle(curve, req.feed_mm_s * MM, req.accel_mm_s2 * MM, req.jerk_mm_s3 * MM,
                        reserved, req.tolerance_mm * MM, req.period_s)
+    check_size(plan.duration, req.period_s)  # the planned (slowed) duration, before sampling
     fs, ax = plan.setpoints(req.period_s)
     units, scale = _scale(("revolute", "prismatic"))
     summary = {
@@ -205,7 +259,7 @@ def plan_saddle_job(req: SaddleJob) -> JobTable:
 
 
 def plan_pallet_job(req: PalletJob) -> JobTable:
-    """Plan the first ``boxes`` boxes of the seed-000 palletizing job."""
+    """Plan the reference palletizing cell (:func:`trajkit.palletizing.seed_scenario`) for ``layers`` layers."""
     from ..palletizing import plan_cycle, seed_scenario
 
     machine = seed_scenario(layers=req.layers).robot
@@ -229,13 +283,16 @@ def plan_pallet_job(req: PalletJob) -> JobTable:
                     machine_limits=tuple(machine.limits))
 
 
-def plan_program_job(req: ProgramJob, source: str = "program") -> JobTable:
-    """Plan a PTP/LIN/CIRC program text and tabulate its joints at the period."""
+def plan_program_job(req: ProgramJob, source: str = "program", urdf_dirs=()) -> JobTable:
+    """Plan a PTP/LIN/CIRC program text and tabulate its joints at the period.
+
+    ``urdf_dirs``: folders whose URDF files the program may name (none by default).
+    """
     from ..io.program import parse_program
 
     from ..robot.execute import run_motions
 
-    prog = parse_program(req.text, source=source)
+    prog = parse_program(req.text, source=source, urdf_dirs=urdf_dirs)
     run = run_motions(_reserved(prog.robot), prog.motions, prog.start)
     t = _times(run.duration, req.period_s)
     smp = run.sample(t)
@@ -252,14 +309,17 @@ def plan_program_job(req: ProgramJob, source: str = "program") -> JobTable:
                     machine_limits=tuple(robot.limits))
 
 
-def plan_job(req) -> JobTable:
-    """Plan a validated job request (:mod:`trajkit.hmi.models`)."""
+def plan_job(req, urdf_dirs=()) -> JobTable:
+    """Plan a validated job request (:mod:`trajkit.hmi.models`).
+
+    ``urdf_dirs``: folders whose URDF files a program may name (none by default).
+    """
     if isinstance(req, SaddleJob):
         return plan_saddle_job(req)
     if isinstance(req, PalletJob):
         return plan_pallet_job(req)
     if isinstance(req, ProgramJob):
-        return plan_program_job(req)
+        return plan_program_job(req, urdf_dirs=urdf_dirs)
     raise InvalidInputError(f"unknown job type {type(req).__name__}")
 
 

@@ -52,11 +52,11 @@ def _pos(**kw):
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # true or "50" is not a number
 
 
 class SaddleJob(_Model):
-    """A saddle (pipe-intersection) seam on the theta/Z machine of seed 003.
+    """A saddle (pipe-intersection) seam on the theta/Z machine (a rotary table and a vertical axis).
 
     Attributes
     ----------
@@ -95,13 +95,13 @@ class SaddleJob(_Model):
 
 
 class PalletJob(_Model):
-    """The palletizing job of seed 000 (issue 4's scenario) with a cycle planner.
+    """The reference palletizing cell (:func:`trajkit.palletizing.seed_scenario`) with a cycle planner.
 
     Attributes
     ----------
     planner : {"ptp", "merged", "optimal"}
     layers : int
-        Number of layers of the seed stack to place, 1 .. 5 (5 boxes each).
+        Number of layers of the reference stack to place, 1 .. 5 (5 boxes each).
     period_s : float
     """
 

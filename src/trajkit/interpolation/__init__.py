@@ -11,12 +11,21 @@ from .feed import (
     plan_feed,
     setpoint_times,
 )
-from .machine import AXIS_NAMES, BUDGET, AxisCheck, SaddleMachine, SaddlePlan, axis_states, check_axes, plan_saddle
+from .machine import (
+    AXIS_NAMES,
+    AxisCheck,
+    SaddleAxesPath,
+    SaddleMachine,
+    SaddlePlan,
+    axis_states,
+    check_axes,
+    plan_saddle,
+)
 
 __all__ = [
     "CHORD_REASON",
     "AXIS_NAMES",
-    "BUDGET",
+    "SaddleAxesPath",
     "AxisCheck",
     "SaddleMachine",
     "SaddlePlan",

@@ -19,17 +19,18 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from .._sampling import MAX_SAMPLES, period_times
 from .._validate import check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..paths.base import Path
 from ..paths.chords import arc_step_for_tolerance
 from ..profiles import plan_move
-from ._pieces import JerkPieces, velocity_change
+from ._pieces import JerkPieces
 
 __all__ = ["Slowdown", "FeedSample", "FeedPlan", "plan_feed", "MIN_PERIOD", "MAX_PERIOD", "setpoint_times"]
 
-#: Shortest and longest control period accepted [s] (0.1 ms ... seed 003's 100 ms).
+#: Shortest and longest control period accepted [s] (0.1 ms ... the 100 ms step of Jiang, 1987).
 MIN_PERIOD = 1e-4
 MAX_PERIOD = 0.1
 
@@ -47,6 +48,13 @@ REFINE_ITER = 60
 
 #: Bisection steps when lowering a plateau that is too short.
 PLATEAU_BISECT = 100
+
+#: A stretch runs below the feed (a slow-down) when a speed limit is below
+#: this fraction of it.
+SLOWDOWN_RTOL = 1e-3
+
+#: Slow-down stretches are split where their limiting speed changes by this factor.
+SLOWDOWN_BAND = 1.25
 
 #: Reason given for a slowdown caused by the chord error between setpoints.
 CHORD_REASON = "chord error at the period"
@@ -104,21 +112,21 @@ class FeedSample:
     points: np.ndarray
 
 
-def setpoint_times(duration: float, period: float) -> np.ndarray:
+def setpoint_times(duration: float, period: float,
+                   max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
     """Fixed-period sample times ``k * period``, k = 0 .. ceil(duration / period).
 
     The last sample is at or after the end (where the motion holds the goal
     at rest), so consecutive samples are always exactly one period apart.
+    More than ``max_samples`` setpoints are refused before anything is
+    allocated (:data:`trajkit._sampling.MAX_SAMPLES` by default).
 
     Returns
     -------
     ndarray, shape (n,) [s]
     """
     dt = _check_period(period)
-    n = int(math.ceil(duration / dt)) if duration > 0 else 0
-    if n * dt < duration:  # round-off in the division
-        n += 1
-    return np.arange(n + 1) * dt
+    return period_times(duration, dt, end="after", max_samples=max_samples, what="setpoints")
 
 
 def _check_period(period: float) -> float:
@@ -173,9 +181,9 @@ class FeedPlan:
         pts = self.path.point(s) if points else np.empty((tt.size, 0))
         return FeedSample(tt, s, v, a, j, pts)
 
-    def setpoints(self, period: float) -> FeedSample:
+    def setpoints(self, period: float, max_samples: int | None = MAX_SAMPLES) -> FeedSample:
         """Samples at a fixed control period (see :func:`setpoint_times`)."""
-        return self.sample(setpoint_times(self.duration, period))
+        return self.sample(setpoint_times(self.duration, period, max_samples))
 
     @property
     def peak_speed(self) -> float:
@@ -204,11 +212,11 @@ class FeedPlan:
 # ---------------------------------------------------------------- planning
 def chord_speed_limit(path: Path, tolerance: float, period: float) -> SpeedLimitFn:
     """Speed limit so that the straight line between consecutive setpoints
-    stays within ``tolerance`` of the path (seed 002: too high a speed for the
-    period leaves the path).
+    stays within ``tolerance`` of the path (Jiang, 1987: too high a speed for
+    the period leaves the path).
 
     ``v_lim(s) = arc(K, E) / period`` where ``arc`` is the arc length whose
-    chord has sagitta E on a circle of radius K (seed 003, eq. 11) and K the
+    chord has sagitta E on a circle of radius K (Chen et al., 2013, eq. 11) and K the
     smallest radius of curvature within one grid cell either side.
     """
     E = check_positive(tolerance, "tolerance")
@@ -238,8 +246,16 @@ def plan_feed(
     reasons: Sequence[str] = (),
     tolerance: float | None = None,
     period: float | None = None,
+    axes: Any = None,
 ) -> FeedPlan:
     """Plan the tool's motion along ``path`` at the commanded ``feed``.
+
+    Where no limit is below the feed, a stretch between two stops is the
+    closed-form rest-to-rest profile (``plan_move`` of its length, exactly
+    time-optimal). Otherwise it is timed by the path-timing engine
+    (:func:`trajkit.timing.plan_path_timing`) under the feed, the speed-limit
+    curve, the tangential acceleration and jerk and, with ``axes``, the
+    machine axes' own velocity, acceleration and jerk limits.
 
     Parameters
     ----------
@@ -257,6 +273,10 @@ def plan_feed(
         When both are given, the speed is also limited so that the chord
         between two consecutive setpoints deviates from the path by at most
         ``tolerance`` [m] (see :func:`chord_speed_limit`).
+    axes : tuple (joint_path, limits, names), optional
+        Machine axes driven along the path: a :class:`trajkit.timing.JointPath`
+        over the whole path's arc length, their :class:`~trajkit.AxisLimits`,
+        and their names (for the slow-down reasons).
 
     Returns
     -------
@@ -299,162 +319,135 @@ def plan_feed(
     slowdowns: list[Slowdown] = []
     profiles = []
     for s0, s1 in zip(stops[:-1], stops[1:]):
-        zones = _zones(cap, s0, s1, F) if fns else []
-        if not zones:
+        grid = np.linspace(s0, s1, LIMIT_GRID)
+        if fns:
+            vg, _ = cap(grid)
+            if np.any(~(vg > 0)):
+                i = int(np.argmin(np.where(vg > 0, np.inf, 0.0)))
+                raise InvalidInputError(f"speed limit is not positive at s={grid[i]!r} m: {vg[i]!r}")
+        if axes is None and (not fns or bool(np.all(cap(grid)[0] >= F))):
             prof = plan_move(0.0, s1 - s0, AxisLimits(v_max=F, a_max=A, j_max=J, name="path"))
             pieces += [(d, j) for d, j in zip(prof.phase_durations, prof.jerks) if d > 0.0]
             profiles.append(prof)
             continue
-        profiles.append(None)
-        plateaus = _plateaus(zones, s0, s1, F)
-        _make_feasible(plateaus, A, J)
-        pieces += _build(plateaus, A, J)
-        for z0, z1, vmin, why in zones:
-            spd = min(p[2] for p in plateaus if p[0] < z1 and p[1] > z0)
-            slowdowns.append(Slowdown(z0, z1, spd, vmin, names[why] if why < len(names) else "limit"))
+        timing = _engine_stretch(path, s0, s1, F, A, J, cap, axes)
+        profiles.append(timing)
+        pieces += [(d, j) for d, j in zip(np.diff(timing.t), timing.jerk) if d > 0.0]
+        slowdowns += _stretch_slowdowns(timing, s0, F, cap, names, axes)
     motion = JerkPieces(pieces, 0.0, L)
     return FeedPlan(path, F, A, J, motion, slowdowns, stops, profiles, names)
 
 
-def _zones(cap, s0: float, s1: float, F: float):
-    """Regions of [s0, s1] where the speed limit is below the feed: (start, end, min, reason)."""
-    s = np.linspace(s0, s1, LIMIT_GRID)
-    v, why = cap(s)
-    if np.any(~(v > 0)):
-        i = int(np.argmin(np.where(v > 0, np.inf, 0.0)))
-        raise InvalidInputError(f"speed limit is not positive at s={s[i]!r} m: {v[i]!r}")
-    low = v < F
+class _Shifted:
+    """A joint path restricted to ``[s0, s1]`` of another (re-based at 0)."""
+
+    def __init__(self, base: Any, s0: float, s1: float) -> None:
+        self.base = base
+        self.s0 = s0
+        self.length = s1 - s0
+        self.n_joints = base.n_joints
+        bp = np.asarray(getattr(base, "breakpoints", np.zeros(0)), dtype=float)
+        self.breakpoints = bp[(bp > s0) & (bp < s1)] - s0
+        self.cheap_derivatives = bool(getattr(base, "cheap_derivatives", False))
+
+    def derivatives(self, s: np.ndarray):
+        return self.base.derivatives(np.clip(self.s0 + np.asarray(s, dtype=float), self.s0,
+                                             self.s0 + self.length))
+
+
+class _ArcLength:
+    """The path parameter itself as the one joint (``q = s``): the tangential limits."""
+
+    #: Exact derivatives are cheap: the timing engine checks its limits with them.
+    cheap_derivatives = True
+
+    def __init__(self, length: float) -> None:
+        self.length = length
+        self.n_joints = 1
+        self.breakpoints = np.zeros(0)
+
+    def derivatives(self, s: np.ndarray):
+        s = np.asarray(s, dtype=float)
+        one = np.ones((s.size, 1))
+        zero = np.zeros((s.size, 1))
+        return s[:, None], one, zero, zero.copy()
+
+
+def _engine_stretch(path: Path, s0: float, s1: float, F: float, A: float, J: float, cap, axes):
+    """The stretch [s0, s1] (rest to rest) timed by the path-timing engine."""
+    from ..timing import plan_path_timing
+
+    def speed(s):
+        return np.minimum(F, cap(s0 + np.asarray(s))[0]) if cap is not None else np.full(np.size(s), F)
+
+    if axes is None:
+        jp, lims = _ArcLength(s1 - s0), [AxisLimits(math.inf, A, J, name="path")]
+        return plan_path_timing(jp, lims, speed=speed)
+    base, lims, _names = axes
+    return plan_path_timing(_Shifted(base, s0, s1), list(lims), speed=speed, accel=A, jerk=J)
+
+
+def ramp_mask(v: np.ndarray) -> np.ndarray:
+    """Nodes on the ramps from and to rest: before the first and after the last local
+    maximum of the planned speed ``v`` (their low speed is the start or the stop)."""
+    n = v.size
+    out = np.zeros(n, dtype=bool)
+    if n < 3:
+        return np.ones(n, dtype=bool)
+    up = np.nonzero(np.diff(v) < 0.0)[0]
+    first = int(up[0]) if up.size else n - 1
+    down = np.nonzero(np.diff(v) > 0.0)[0]
+    last = int(down[-1]) + 1 if down.size else 0
+    out[:first] = True
+    out[last + 1:] = True
+    return out
+
+
+def stretch_speed(v: np.ndarray, ramp: np.ndarray) -> float:
+    """The slowest planned speed of a slow-down stretch off the ramps from and to rest
+    (the fastest one when the stretch lies on a ramp)."""
+    off = ~ramp
+    return float(v[off].min()) if off.any() else float(v.max())
+
+
+def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], axes) -> list[Slowdown]:
+    """Stretches where a speed limit is below the feed, split where the limit's level changes."""
+    s = timing.grid
+    v = timing.grid_speed
+    vlim, why = cap(s0 + s)
+    label = [names[w] if w < len(names) else "limit" for w in why]
+    if axes is not None:
+        _, d1, d2, d3 = timing.grid_derivatives
+        lims = axes[1]
+        ax_names = axes[2]
+        qty = []
+        for k, lm in enumerate(lims):
+            with np.errstate(divide="ignore"):
+                qty += [(lm.v_max / np.abs(d1[:, k]), f"{ax_names[k]} velocity"),
+                        (np.sqrt(min(lm.a_max, lm.a_max_decel) / np.abs(d2[:, k])),
+                         f"{ax_names[k]} acceleration"),
+                        (np.cbrt(min(lm.j_max, lm.j_max_decel) / np.abs(d3[:, k])), f"{ax_names[k]} jerk")]
+        for arr, nm in qty:
+            lower = arr < vlim
+            vlim = np.where(lower, arr, vlim)
+            label = [nm if lw else lb for lw, lb in zip(lower, label)]
+    limited = vlim < F * (1.0 - SLOWDOWN_RTOL)
+    ramp = ramp_mask(v)
+    band = np.floor(np.log(np.maximum(vlim, 1e-300) / F) / math.log(SLOWDOWN_BAND))
     out = []
     i = 0
-    n = s.size
-    while i < n:
-        if not low[i]:
+    while i < s.size:
+        if not limited[i]:
             i += 1
             continue
-        k = i
-        while k < n and low[k]:
-            k += 1
-        a, b = max(i - 1, 0), min(k, n - 1)  # the neighbouring grid points bound the region
-        seg = slice(a, b + 1)
-        m = a + int(np.argmin(v[seg]))
-        vm, wm = _refine_min(cap, s[max(m - 1, 0)], s[min(m + 1, n - 1)], float(v[m]), int(why[m]))
-        out.append((float(s[a]), float(s[b]), vm, wm))
-        i = k
-    # merge touching zones
-    merged = []
-    for z in out:
-        if merged and z[0] <= merged[-1][1]:
-            p = merged[-1]
-            merged[-1] = (p[0], max(p[1], z[1]), min(p[2], z[2]), p[3] if p[2] <= z[2] else z[3])
-        else:
-            merged.append(z)
-    return merged
-
-
-def _refine_min(cap, lo: float, hi: float, vbest: float, wbest: int) -> tuple[float, int]:
-    """Lowest speed limit in [lo, hi] by golden-section search (never above the grid value)."""
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
-    (f1,), (w1,) = cap(np.array([x1]))
-    (f2,), (w2,) = cap(np.array([x2]))
-    for _ in range(REFINE_ITER):
-        if f1 < f2:
-            hi, x2, f2, w2 = x2, x1, f1, w1
-            x1 = hi - g * (hi - lo)
-            (f1,), (w1,) = cap(np.array([x1]))
-        else:
-            lo, x1, f1, w1 = x1, x2, f2, w2
-            x2 = lo + g * (hi - lo)
-            (f2,), (w2,) = cap(np.array([x2]))
-    for f, w in ((f1, w1), (f2, w2)):
-        if f < vbest:
-            vbest, wbest = float(f), int(w)
-    return vbest, wbest
-
-
-def _plateaus(zones, s0, s1, F):
-    """[start, end, level] list covering [s0, s1], with zero-length rests at both ends."""
-    pl = [[s0, s0, 0.0]]
-    cur = s0
-    for z0, z1, vmin, _ in zones:
-        if z0 > cur:
-            pl.append([cur, z0, F])
-        pl.append([max(z0, cur), z1, vmin])
-        cur = z1
-    if s1 > cur:
-        pl.append([cur, s1, F])
-    pl.append([s1, s1, 0.0])
-    return pl
-
-
-def _dist(v1, v2, A, J):
-    return velocity_change(v1, v2, A, J)[1]
-
-
-def _need(pl, i, level, A, J):
-    need = 0.0
-    for k in (i - 1, i + 1):
-        lk = pl[k][2]
-        if lk < level:
-            need += _dist(lk, level, A, J)
-    return need
-
-
-def _make_feasible(pl, A, J) -> None:
-    """Lower or merge plateaus until each is long enough for its speed changes."""
-    for _ in range(100 * len(pl) + 100):
-        changed = False
-        # merge equal neighbours
-        i = 1
-        while i < len(pl) - 1:
-            if i + 1 < len(pl) - 1 and pl[i][2] == pl[i + 1][2]:
-                pl[i][1] = pl[i + 1][1]
-                del pl[i + 1]
-                continue
-            i += 1
-        for i in range(1, len(pl) - 1):
-            length = pl[i][1] - pl[i][0]
-            level = pl[i][2]
-            if _need(pl, i, level, A, J) <= length * (1 + SPEED_RTOL):
-                continue
-            changed = True
-            vn = max(pl[i - 1][2], pl[i + 1][2])
-            if vn < level and _need(pl, i, vn, A, J) <= length:
-                lo, hi = vn, level
-                for _ in range(PLATEAU_BISECT):
-                    mid = 0.5 * (lo + hi)
-                    if _need(pl, i, mid, A, J) <= length:
-                        lo = mid
-                    else:
-                        hi = mid
-                    if hi - lo <= BISECT_RTOL * hi:
-                        break
-                pl[i][2] = lo
-            else:
-                # too short even at the faster neighbour's level: merge with it. That
-                # neighbour is never a rest end (a rest end has level 0, and a plateau
-                # between two zero levels always fits its own speed changes).
-                j = i - 1 if pl[i - 1][2] >= pl[i + 1][2] else i + 1
-                a, b = min(i, j), max(i, j)
-                pl[a] = [pl[a][0], pl[b][1], min(pl[a][2], pl[b][2])]
-                del pl[b]
-            break
-        if not changed:
-            return
-    raise InvalidInputError("feed planner did not converge (plateau lengths)")  # pragma: no cover
-
-
-def _build(pl, A, J):
-    """Constant-jerk pieces for a feasible plateau list."""
-    out: list[tuple[float, float]] = []
-    for i in range(1, len(pl) - 1):
-        s_a, s_b, lv = pl[i]
-        prev, nxt = pl[i - 1][2], pl[i + 1][2]
-        up, d_up = velocity_change(prev, lv, A, J) if prev < lv else ([], 0.0)
-        dn, d_dn = velocity_change(lv, nxt, A, J) if nxt < lv else ([], 0.0)
-        cruise = max((s_b - s_a) - d_up - d_dn, 0.0)
-        out += up
-        if cruise > 0.0 and lv > 0.0:
-            out.append((cruise / lv, 0.0))
-        out += dn
+        j = i
+        while j + 1 < s.size and limited[j + 1] and band[j + 1] == band[i]:
+            j += 1
+        seg = slice(i, j + 1)
+        k = i + int(np.argmin(vlim[seg]))
+        spd = stretch_speed(v[seg], ramp[seg])
+        if not ramp[k]:
+            spd = min(spd, float(v[k]))
+        out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), spd, float(vlim[k]), label[k]))
+        i = j + 1
     return out

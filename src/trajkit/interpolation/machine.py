@@ -1,4 +1,4 @@
-"""The saddle machine of seed 003: rotary axis theta and linear axis Z.
+"""The saddle machine: rotary axis theta and linear axis Z along a pipe-intersection seam.
 
 The torch follows the seam of a :class:`~trajkit.paths.SaddleCurve` at a
 constant tool speed (the feed). Machine axes as functions of the seam's arc
@@ -10,45 +10,32 @@ jerk = d3s/dt3, each axis q moves with
     d2q/dt2 = q'' v^2 + q' a
     d3q/dt3 = q''' v^3 + 3 q'' v a + q' jerk
 
-(primes: derivatives in s). The planner gives every axis limit a budget
-(:data:`BUDGET`): the constant-speed terms ``q' v``, ``q'' v^2``,
-``q''' v^3`` set the speed-limit curve ``v_lim(s)``; the tangential
-acceleration and jerk are lowered so that the terms with ``a`` and ``jerk``
-fit in the rest. Then the feed is planned below ``v_lim`` (see
-:func:`~trajkit.interpolation.plan_feed`) and the result is verified on a
-fine grid; if the verification finds any excess (sampling of ``v_lim``
-between grid points), the budgets shrink and it plans again.
+(primes: derivatives in s). :func:`plan_saddle` hands the two axes to the
+path-timing engine (:func:`trajkit.timing.plan_path_timing`) with their
+exact derivatives: the minimum-time feed under the axis limits, the
+tangential limits, the feed and the chord tolerance at the period.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from .._sampling import MAX_SAMPLES
 from .._validate import check_positive
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from ..paths.saddle import SaddleCurve
 from .feed import FeedPlan, FeedSample, _check_period, plan_feed, setpoint_times
 
-__all__ = ["SaddleMachine", "SaddlePlan", "AxisCheck", "plan_saddle", "BUDGET", "AXIS_NAMES"]
+__all__ = ["SaddleMachine", "SaddlePlan", "SaddleAxesPath", "AxisCheck", "plan_saddle", "AXIS_NAMES"]
 
 #: Names of the machine axes, in order.
 AXIS_NAMES = ("theta", "z_axis")
 _QUANTITIES = ("velocity", "acceleration", "jerk")
-
-#: Share of each axis limit given to the constant-speed terms (v^1, v^2, v^3)
-#: and to the tangential terms (a, jerk, and the cross term 3 q'' v a).
-BUDGET = {
-    "accel_static": 0.7,
-    "accel_tangential": 0.3,
-    "jerk_static": 0.5,
-    "jerk_tangential": 0.25,
-    "jerk_cross": 0.25,
-}
 
 #: Verification grid: this many points per control period (plus every piece boundary).
 CHECK_PER_PERIOD = 8
@@ -59,11 +46,8 @@ CHECK_MAX_POINTS = 200_000
 #: Replanning rounds when the verification finds an excess.
 MAX_ROUNDS = 8
 
-#: Extra margin when shrinking budgets after an excess.
-SHRINK_MARGIN = 0.999
-
-#: Guards a division when an axis never accelerates along the seam.
-_TINY = 1e-300
+#: Extra margin when the axis limits are lowered after an excess.
+SHRINK_MARGIN = 1.0 - 1e-6
 
 #: Relative slack of the final limit check (floating-point round-off).
 CHECK_RTOL = 1e-9
@@ -139,7 +123,7 @@ class SaddlePlan:
     check : AxisCheck
         Verification on the fine grid.
     budget_scale : float
-        Final scale of the speed-limit budgets (1 unless replanning shrank them).
+        Final scale of the axis limits (1 unless a replanning round lowered them).
     rounds : int
         Planning rounds used.
     """
@@ -171,10 +155,14 @@ class SaddlePlan:
         """
         return axis_states(self.curve, self.feed_plan.sample(t, points=False))
 
-    def setpoints(self, period: float) -> tuple[FeedSample, np.ndarray]:
-        """Fixed-period setpoints: the feed samples and the axis states (2, 4, n)."""
-        fs = self.feed_plan.sample(setpoint_times(self.duration, period))
-        return fs, axis_states(self.curve, fs)
+    def setpoints(self, period: float,
+                  max_samples: int | None = MAX_SAMPLES) -> tuple[FeedSample, np.ndarray]:
+        """Fixed-period setpoints: the feed samples and the axis states (2, 4, n);
+        at most ``max_samples`` (see :func:`~trajkit.interpolation.setpoint_times`)."""
+        fs = self.feed_plan.sample(setpoint_times(self.duration, period, max_samples), points=False)
+        theta = self.curve.theta_of_s(fs.s)  # once, for the points and the axes
+        fs = replace(fs, points=self.curve.point_theta(theta))
+        return fs, axis_states(self.curve, fs, theta)
 
     def report(self) -> list[dict]:
         """Where and why the feed is lowered: s range [m], theta range [deg], speed, reason."""
@@ -189,14 +177,16 @@ class SaddlePlan:
         return out
 
 
-def axis_states(curve: SaddleCurve, fs: FeedSample) -> np.ndarray:
-    """Axis position/velocity/acceleration/jerk from feed samples (exact chain rule).
+def axis_states(curve: SaddleCurve, fs: FeedSample, theta: np.ndarray | None = None) -> np.ndarray:
+    """Axis position/velocity/acceleration/jerk from feed samples (exact chain rule);
+    ``theta``: the seam angles at ``fs.s`` when already known.
 
     Returns
     -------
     ndarray, shape (2, 4, n)
     """
-    q = curve.machine_axes(fs.s)  # (2, 4, n): value, q', q'', q'''
+    # (2, 4, n): value, q', q'', q'''
+    q = curve.machine_axes(fs.s) if theta is None else curve.machine_axes_theta(theta)
     v, a, j = fs.v, fs.a, fs.j
     out = np.empty_like(q)
     out[:, 0] = q[:, 0]
@@ -224,6 +214,24 @@ def check_axes(plan_curve: SaddleCurve, feed_plan: FeedPlan, machine: SaddleMach
     return AxisCheck(peaks, lim, peaks / lim, int(t.size))
 
 
+class SaddleAxesPath:
+    """The saddle machine's axes theta(s), Z(s) along the seam (a :class:`trajkit.timing.JointPath`)
+    with exact derivatives (:meth:`SaddleCurve.machine_axes`)."""
+
+    #: Exact derivatives are cheap: the timing engine checks its limits with them.
+    cheap_derivatives = True
+
+    def __init__(self, curve: SaddleCurve) -> None:
+        self.curve = curve
+        self.length = curve.length
+        self.n_joints = 2
+        self.breakpoints = np.zeros(0)
+
+    def derivatives(self, s: np.ndarray):
+        q = self.curve.machine_axes(np.clip(np.asarray(s, dtype=float), 0.0, self.length))
+        return q[:, 0].T, q[:, 1].T, q[:, 2].T, q[:, 3].T
+
+
 def plan_saddle(
     curve: SaddleCurve,
     feed: float,
@@ -234,6 +242,15 @@ def plan_saddle(
     period: float,
 ) -> SaddlePlan:
     """Plan a constant-feed pass along a saddle seam within the machine's axis limits.
+
+    The torch speed is the path-timing engine's minimum-time motion
+    (:func:`trajkit.timing.plan_path_timing`) under the feed, the tangential
+    acceleration and jerk, the chord tolerance at the period and every
+    velocity, acceleration and jerk limit of the theta and Z axes, evaluated
+    with the seam's exact derivatives; it runs at the feed wherever no limit
+    is below it. The result is checked on a fine grid with the exact axis
+    states (:func:`check_axes`); an excess there (between the engine's own
+    check points) lowers the axis limits by the excess and plans again.
 
     Parameters
     ----------
@@ -271,46 +288,19 @@ def plan_saddle(
     J = check_positive(j_max, "tangential jerk j_max")
     E = check_positive(tolerance, "tolerance")
     dt = _check_period(period)
-    lim = machine.limits_array()
-    # largest |q'|, |q''| over the seam (dense exact evaluation)
-    sg = np.linspace(0.0, curve.length, 8193)
-    qg = curve.machine_axes(sg)
-    q1max = np.max(np.abs(qg[:, 1]), axis=1)
-    q2max = np.max(np.abs(qg[:, 2]), axis=1)
-    reasons = [f"{ax} {qty}" for ax in AXIS_NAMES for qty in _QUANTITIES]
-
+    axes_path = SaddleAxesPath(curve)
     scale = 1.0
-    tan_scale = 1.0
     last = None
     for rnd in range(1, MAX_ROUNDS + 1):
-        ea, ej = BUDGET["accel_static"] * scale, BUDGET["jerk_static"] * scale
-
-        def vlim(s, ea=ea, ej=ej, scale=scale):
-            q = curve.machine_axes(s)
-            cand = np.empty((6, np.size(s)))
-            with np.errstate(divide="ignore"):
-                for i in range(2):
-                    cand[3 * i] = scale * lim[i, 0] / np.abs(q[i, 1])
-                    cand[3 * i + 1] = np.sqrt(ea * lim[i, 1] / np.abs(q[i, 2]))
-                    cand[3 * i + 2] = np.cbrt(ej * lim[i, 2] / np.abs(q[i, 3]))
-            return np.min(cand, axis=0), np.argmin(cand, axis=0)
-
-        a_eff = A
-        j_eff = J
-        for i in range(2):
-            a_eff = min(a_eff, tan_scale * BUDGET["accel_tangential"] * lim[i, 1] / q1max[i])
-            a_eff = min(a_eff, tan_scale * BUDGET["jerk_cross"] * lim[i, 2]
-                        / (3.0 * math.sqrt(max(ea * lim[i, 1] * q2max[i], _TINY))))
-            j_eff = min(j_eff, tan_scale * BUDGET["jerk_tangential"] * lim[i, 2] / q1max[i])
-        fp = plan_feed(curve, F, a_eff, j_eff, speed_limit=vlim, reasons=reasons,
-                       tolerance=E, period=dt)
+        lims = [machine.theta.derated(scale, scale, scale) if scale < 1.0 else machine.theta,
+                machine.z.derated(scale, scale, scale) if scale < 1.0 else machine.z]
+        fp = plan_feed(curve, F, A, J, tolerance=E, period=dt,
+                       axes=(axes_path, lims, AXIS_NAMES))
         chk = check_axes(curve, fp, machine, dt)
         last = SaddlePlan(curve, machine, fp, chk, scale, rnd)
         if chk.ok:
             return last
-        worst = float(np.max(chk.ratio))
-        scale *= SHRINK_MARGIN / worst
-        tan_scale *= SHRINK_MARGIN / worst
+        scale *= SHRINK_MARGIN / float(np.max(chk.ratio))
     raise InfeasibleError(  # pragma: no cover - not reached in the sweeps
         f"no saddle plan within the axis limits after {MAX_ROUNDS} rounds "
         f"(worst ratio {float(np.max(last.check.ratio))!r})"

@@ -3,8 +3,9 @@
 A job file gives lengths in millimetres and angles in degrees (the names
 say so: ``x_mm``, ``yaw_deg``); :func:`scenario_from_job` converts to SI and
 builds a :class:`~trajkit.palletizing.PalletScenario`. Every error names the
-field (``pallet.length_mm``) and the offending value. The seed scenario ships
-as ``trajkit/data/seed_pallet.yaml`` (:func:`seed_job_path`).
+field (``pallet.length_mm``) and the offending value. The palletizing job of
+Cao et al. (2012) ships as ``trajkit/data/seed_pallet.yaml``
+(:func:`seed_job_path`).
 
 Example::
 
@@ -14,6 +15,15 @@ Example::
     box: {length_mm: 600, width_mm: 400, height_mm: 200}
     pattern: {name: interlock, alternate: rotate180}
     layers: 5
+    cell:                        # optional: the cell's geometry (the ``cell`` planner)
+      clearance_mm: 10
+      settle_mm: 20
+      gripper: {height_mm: 100}  # footprint: the box's unless length_mm/width_mm are given
+      obstacles:
+        - {name: conveyor belt, x_mm: [600, 1500], y_mm: [-300, 300], z_mm: [0, 200]}
+
+The same job in its cell ships as ``trajkit/data/seed_cell.yaml``
+(:func:`seed_cell_job_path`).
 """
 
 from __future__ import annotations
@@ -25,18 +35,28 @@ from pathlib import Path
 from typing import Any, Literal, Optional
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from ..errors import InvalidInputError
 from ..kinematics.palletizer import DEFAULT_JOINT_TABLE, JOINT_NAMES, CylindricalPalletizer
+from ..palletizing.cell import Cell, GripperVolume, Obstacle
 from ..palletizing.patterns import BoxSize, LayerPattern, StackPattern, make_pattern
 from ..palletizing.scenario import PalletScenario
+from .document import plain, read_document
+from .schema import Angle_deg, Coordinate_mm, Count, Length_mm, LimitValue, PositiveLength_mm, Time_s, validation_message
 
-__all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "parse_job"]
+__all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "seed_cell_job_path",
+           "parse_job"]
 
 _MM = 1e-3
 _DEG = math.pi / 180.0
+
+
+#: Most layers in a job.
+MAX_LAYERS = 1000
+
+#: Most boxes in a custom layer.
+MAX_BOXES_PER_LAYER = 10000
 
 
 class _Model(BaseModel):
@@ -46,13 +66,13 @@ class _Model(BaseModel):
 class JointSpec(_Model):
     """One joint's limits in deg (A, D) or mm (B, C) units."""
 
-    v_max: float = Field(gt=0, allow_inf_nan=False)
-    a_max: float = Field(gt=0, allow_inf_nan=False)
-    j_max: float = Field(gt=0, allow_inf_nan=False)
-    min: float = Field(allow_inf_nan=False)
-    max: float = Field(allow_inf_nan=False)
-    a_max_decel: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
-    j_max_decel: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
+    v_max: LimitValue
+    a_max: LimitValue
+    j_max: LimitValue
+    min: Coordinate_mm
+    max: Coordinate_mm
+    a_max_decel: Optional[LimitValue] = None
+    j_max_decel: Optional[LimitValue] = None
 
 
 class RobotSpec(_Model):
@@ -63,49 +83,80 @@ class RobotSpec(_Model):
 
 
 class PickSpec(_Model):
-    x_mm: float = Field(allow_inf_nan=False)
-    y_mm: float = Field(allow_inf_nan=False)
-    z_mm: float = Field(allow_inf_nan=False)
-    yaw_deg: float = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Coordinate_mm
+    y_mm: Coordinate_mm
+    z_mm: Coordinate_mm
+    yaw_deg: Angle_deg = 0.0
 
 
 class PalletSpec(_Model):
-    centre_mm: tuple[float, float, float]
-    length_mm: float = Field(gt=0, allow_inf_nan=False)
-    width_mm: float = Field(gt=0, allow_inf_nan=False)
-    overhang_mm: float = Field(default=0.0, ge=0, allow_inf_nan=False)
-
-    @field_validator("centre_mm")
-    @classmethod
-    def _finite(cls, v):
-        if not all(math.isfinite(x) for x in v):
-            raise ValueError("must be finite numbers")
-        return v
+    centre_mm: tuple[Coordinate_mm, Coordinate_mm, Coordinate_mm]
+    length_mm: PositiveLength_mm
+    width_mm: PositiveLength_mm
+    overhang_mm: Length_mm = 0.0
 
 
 class BoxSpec(_Model):
-    length_mm: float = Field(gt=0, allow_inf_nan=False)
-    width_mm: float = Field(gt=0, allow_inf_nan=False)
-    height_mm: float = Field(gt=0, allow_inf_nan=False)
+    length_mm: PositiveLength_mm
+    width_mm: PositiveLength_mm
+    height_mm: PositiveLength_mm
 
 
 class BoxPlace(_Model):
     """A box of a custom layer: centre offset from the pallet centre and yaw."""
 
-    x_mm: float = Field(allow_inf_nan=False)
-    y_mm: float = Field(allow_inf_nan=False)
-    yaw_deg: float = Field(default=0.0, allow_inf_nan=False)
+    x_mm: Coordinate_mm
+    y_mm: Coordinate_mm
+    yaw_deg: Angle_deg = 0.0
 
 
 class PatternSpec(_Model):
     name: Literal["seed", "column", "interlock", "pinwheel", "custom"] = "interlock"
     alternate: Literal["none", "rotate180", "mirror"] = "rotate180"
-    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1)
+    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1, max_length=MAX_BOXES_PER_LAYER)
 
 
 class GripperSpec(_Model):
-    grip_s: float = Field(default=0.0, ge=0, allow_inf_nan=False)
-    release_s: float = Field(default=0.0, ge=0, allow_inf_nan=False)
+    grip_s: Time_s = 0.0
+    release_s: Time_s = 0.0
+
+
+#: Most obstacles in a cell.
+MAX_OBSTACLES = 1000
+
+
+class ObstacleSpec(_Model):
+    """A static obstacle: an axis-aligned box ``[x] x [y] x [z]`` in mm (robot base frame)."""
+
+    name: str = "obstacle"
+    x_mm: tuple[Coordinate_mm, Coordinate_mm]
+    y_mm: tuple[Coordinate_mm, Coordinate_mm]
+    z_mm: tuple[Coordinate_mm, Coordinate_mm]
+
+    @field_validator("x_mm", "y_mm", "z_mm")
+    @classmethod
+    def _interval(cls, v):
+        if not v[1] > v[0]:
+            raise ValueError("an interval [min, max] needs max > min")
+        return v
+
+
+class GripperVolumeSpec(_Model):
+    """The gripper above the gripper point; length/width default to the box's."""
+
+    height_mm: PositiveLength_mm = 100.0
+    length_mm: Optional[PositiveLength_mm] = None
+    width_mm: Optional[PositiveLength_mm] = None
+
+
+class CellSpec(_Model):
+    """The cell around the robot (obstacles, gripper volume, clearance, settle height)."""
+
+    clearance_mm: Length_mm = 10.0
+    settle_mm: Length_mm = 20.0
+    box_at_pick: bool = True
+    gripper: GripperVolumeSpec = Field(default_factory=GripperVolumeSpec)
+    obstacles: list[ObstacleSpec] = Field(default_factory=list, max_length=MAX_OBSTACLES)
 
 
 class PalletJob(_Model):
@@ -117,19 +168,26 @@ class PalletJob(_Model):
     pallet: PalletSpec
     box: BoxSpec
     pattern: PatternSpec = Field(default_factory=PatternSpec)
-    layers: int = Field(ge=1)
-    lift_mm: float = Field(default=400.0, ge=0, allow_inf_nan=False)
-    approach_mm: float = Field(default=200.0, ge=0, allow_inf_nan=False)
+    layers: Count = Field(ge=1, le=MAX_LAYERS)
+    lift_mm: Length_mm = 400.0
+    approach_mm: Length_mm = 200.0
     gripper: GripperSpec = Field(default_factory=GripperSpec)
+    cell: Optional[CellSpec] = None
 
 
-def _fmt_error(err: ValidationError, source: str) -> str:
-    e = err.errors()[0]
-    loc = ".".join(str(x) for x in e["loc"]) or "(top level)"
-    val = e.get("input")
-    shown = "" if isinstance(val, dict) else f" (got {val!r})"
-    more = f" [+{err.error_count() - 1} more]" if err.error_count() > 1 else ""
-    return f"{source}: field {loc}: {e['msg']}{shown}{more}"
+def cell_from_spec(spec: CellSpec) -> Cell:
+    """The SI :class:`~trajkit.palletizing.cell.Cell` of a job's ``cell`` section."""
+    g = spec.gripper
+    return Cell(
+        obstacles=tuple(Obstacle(tuple(v * _MM for v in o.x_mm), tuple(v * _MM for v in o.y_mm),
+                                 tuple(v * _MM for v in o.z_mm), o.name) for o in spec.obstacles),
+        gripper=GripperVolume(g.height_mm * _MM,
+                              None if g.length_mm is None else g.length_mm * _MM,
+                              None if g.width_mm is None else g.width_mm * _MM),
+        clearance=spec.clearance_mm * _MM,
+        settle=spec.settle_mm * _MM,
+        box_at_pick=spec.box_at_pick,
+    )
 
 
 def parse_job(data: Any, source: str = "job") -> PalletJob:
@@ -145,7 +203,7 @@ def parse_job(data: Any, source: str = "job") -> PalletJob:
     try:
         return PalletJob.model_validate(data)
     except ValidationError as exc:
-        raise InvalidInputError(_fmt_error(exc, source)) from None
+        raise InvalidInputError(f"{source}: {validation_message(exc)}") from None
 
 
 def scenario_from_job(job: PalletJob | dict, source: str = "job") -> PalletScenario:
@@ -202,6 +260,7 @@ def scenario_from_job(job: PalletJob | dict, source: str = "job") -> PalletScena
             release_s=job.gripper.release_s,
             overhang=job.pallet.overhang_mm * _MM,
             name=job.name,
+            cell=None if job.cell is None else cell_from_spec(job.cell),
         )
     except InvalidInputError as exc:
         raise type(exc)(f"{source}: {exc}") from None
@@ -221,16 +280,16 @@ def load_job(path: str | os.PathLike) -> PalletScenario:
         A place outside the robot's reach.
     """
     p = Path(path)
-    text = p.read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise InvalidInputError(f"{p}: not valid YAML{where}: {getattr(exc, 'problem', exc)}") from None
+    data = plain(read_document(p))
     return scenario_from_job(parse_job(data, str(p)), str(p))
 
 
 def seed_job_path() -> Path:
-    """Path of the shipped seed-scenario job file ``trajkit/data/seed_pallet.yaml``."""
+    """Path of the shipped job of Cao et al. (2012), ``trajkit/data/seed_pallet.yaml``."""
     return Path(str(resources.files("trajkit") / "data" / "seed_pallet.yaml"))
+
+
+def seed_cell_job_path() -> Path:
+    """Path of the job of Cao et al. (2012) in its cell, ``trajkit/data/seed_cell.yaml``
+    (conveyor, guides, end stop, pallet; 10 mm clearance, 20 mm settle)."""
+    return Path(str(resources.files("trajkit") / "data" / "seed_cell.yaml"))

@@ -42,11 +42,12 @@ from pathlib import Path
 from typing import Any, Optional, Union
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import Pose, RobotModel
+from .document import MAX_DOCUMENT_BYTES, LineDict, LineList, parse_document, plain
+from .schema import Angle_deg, Coordinate_mm, Length_mm, PositiveLength_mm, Real, Time_s, short_repr
 
 __all__ = ["Program", "load_program", "parse_program", "make_robot", "ROBOT_MODELS"]
 
@@ -58,70 +59,24 @@ ROBOT_MODELS = ("arm6", "scara", "palletizer")
 
 INSTRUCTIONS = ("PTP", "LIN", "CIRC", "WAIT")
 
+#: Most instructions in a program (planning costs about 30 ms per LIN/CIRC).
+MAX_INSTRUCTIONS = 2000
 
-# --------------------------------------------------------------------------- YAML with lines
-class _LineDict(dict):
-    line: int = 0
-    key_lines: dict
+#: Most taught points in a program.
+MAX_POINTS = 10000
 
-    def __init__(self, *a: Any, **k: Any) -> None:
-        super().__init__(*a, **k)
-        self.key_lines = {}
-
-
-class _LineList(list):
-    line: int = 0
-    item_lines: list
-
-
-class _LineLoader(yaml.SafeLoader):
-    """SafeLoader that records the line (1-based) of every mapping key and list item."""
-
-
-def _construct_mapping(loader: _LineLoader, node: yaml.MappingNode) -> _LineDict:
-    loader.flatten_mapping(node)
-    out = _LineDict()
-    out.line = node.start_mark.line + 1
-    for knode, vnode in node.value:
-        key = loader.construct_object(knode, deep=True)
-        try:
-            hash(key)
-        except TypeError:
-            raise InvalidInputError(f"line {knode.start_mark.line + 1}: unhashable key {key!r}") from None
-        if key in out:
-            raise InvalidInputError(f"line {knode.start_mark.line + 1}: duplicate key {key!r}")
-        out[key] = loader.construct_object(vnode, deep=True)
-        out.key_lines[key] = knode.start_mark.line + 1
-    return out
-
-
-def _construct_sequence(loader: _LineLoader, node: yaml.SequenceNode) -> _LineList:
-    out = _LineList(loader.construct_object(c, deep=True) for c in node.value)
-    out.line = node.start_mark.line + 1
-    out.item_lines = [c.start_mark.line + 1 for c in node.value]
-    return out
-
-
-_LineLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-_LineLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_SEQUENCE_TAG, _construct_sequence)
-
-
-def _plain(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [_plain(v) for v in x]
-    return x
+#: Most joints of a point.
+MAX_JOINTS = 64
 
 
 def _line_of(raw: Any, loc: tuple) -> int:
     line = getattr(raw, "line", 0)
     node = raw
     for part in loc:
-        if isinstance(node, _LineDict) and part in node:
+        if isinstance(node, LineDict) and part in node:
             line = node.key_lines.get(part, line)
             node = node[part]
-        elif isinstance(node, _LineList) and isinstance(part, int) and 0 <= part < len(node):
+        elif isinstance(node, LineList) and isinstance(part, int) and 0 <= part < len(node):
             line = node.item_lines[part]
             node = node[part]
         else:
@@ -149,16 +104,16 @@ class UrdfSpec(_Model):
 
 
 class Defaults(_Model):
-    speed_mm_s: float = Field(default=250.0, gt=0, allow_inf_nan=False)
-    speed_pct: float = Field(default=100.0, gt=0, le=100, allow_inf_nan=False)
-    zone_mm: float = Field(default=0.0, ge=0, allow_inf_nan=False)
+    speed_mm_s: PositiveLength_mm = 250.0
+    speed_pct: Real = Field(default=100.0, gt=0, le=100, allow_inf_nan=False)
+    zone_mm: Length_mm = 0.0
 
 
 class PointSpec(_Model):
-    joints_deg: Optional[list[float]] = None
-    joints: Optional[dict[str, float]] = None
-    xyz_mm: Optional[list[float]] = Field(default=None, min_length=3, max_length=3)
-    abc_deg: Optional[list[float]] = Field(default=None, min_length=3, max_length=3)
+    joints_deg: Optional[list[Angle_deg]] = Field(default=None, max_length=MAX_JOINTS)
+    joints: Optional[dict[str, Angle_deg]] = Field(default=None, max_length=MAX_JOINTS)
+    xyz_mm: Optional[list[Coordinate_mm]] = Field(default=None, min_length=3, max_length=3)
+    abc_deg: Optional[list[Angle_deg]] = Field(default=None, min_length=3, max_length=3)
     config: Optional[Union[str, dict[str, str]]] = None
 
     @model_validator(mode="after")
@@ -179,25 +134,25 @@ class PointSpec(_Model):
 
 class PtpSpec(_Model):
     PTP: str
-    speed_pct: Optional[float] = Field(default=None, gt=0, le=100, allow_inf_nan=False)
-    zone_mm: Optional[float] = Field(default=None, ge=0, allow_inf_nan=False)
+    speed_pct: Optional[Real] = Field(default=None, gt=0, le=100, allow_inf_nan=False)
+    zone_mm: Optional[Length_mm] = None
 
 
 class LinSpec(_Model):
     LIN: str
-    speed_mm_s: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
-    zone_mm: Optional[float] = Field(default=None, ge=0, allow_inf_nan=False)
+    speed_mm_s: Optional[PositiveLength_mm] = None
+    zone_mm: Optional[Length_mm] = None
 
 
 class CircSpec(_Model):
     CIRC: str
     via: str
-    speed_mm_s: Optional[float] = Field(default=None, gt=0, allow_inf_nan=False)
-    zone_mm: Optional[float] = Field(default=None, ge=0, allow_inf_nan=False)
+    speed_mm_s: Optional[PositiveLength_mm] = None
+    zone_mm: Optional[Length_mm] = None
 
 
 class WaitBody(_Model):
-    time_s: float = Field(ge=0, allow_inf_nan=False)
+    time_s: Time_s
 
 
 class WaitSpec(_Model):
@@ -211,8 +166,8 @@ class ProgramFile(_Model):
     robot: Union[str, UrdfSpec]
     defaults: Defaults = Defaults()
     start: Optional[str] = None
-    points: dict[str, PointSpec] = Field(min_length=1)
-    program: list[dict[str, Any]] = Field(min_length=1)
+    points: dict[str, PointSpec] = Field(min_length=1, max_length=MAX_POINTS)
+    program: list[dict[str, Any]] = Field(min_length=1, max_length=MAX_INSTRUCTIONS)
 
 
 # --------------------------------------------------------------------------- result
@@ -248,18 +203,51 @@ class Program:
         return run_motions(self.robot, self.motions, self.start)
 
 
-def make_robot(spec: Any, base_dir: str | os.PathLike | None = None) -> RobotModel:
-    """Robot model from a ``robot:`` value: ``"arm6"``, ``"scara"``, ``"palletizer"`` or a URDF spec."""
+class UrdfRefusedError(InvalidInputError):
+    """A URDF path outside the allowed folders (the message never says whether it exists)."""
+
+
+def make_robot(spec: Any, base_dir: str | os.PathLike | None = None, *,
+               urdf_dirs: Any = None) -> RobotModel:
+    """Robot model from a ``robot:`` value: ``"arm6"``, ``"scara"``, ``"palletizer"`` or a URDF spec.
+
+    Parameters
+    ----------
+    spec : str or UrdfSpec
+    base_dir : path, optional
+        Folder that a relative URDF path is relative to (without ``urdf_dirs``).
+    urdf_dirs : sequence of path, optional
+        When given, a URDF file is opened only if it is a ``.urdf`` file
+        inside one of these folders once links and ``..`` are resolved (a
+        relative path is looked up in each folder in turn); any other path
+        is refused with :class:`UrdfRefusedError`, with the same message
+        whether or not it exists. Empty: built-in robots only.
+    """
     if isinstance(spec, str):
         from ..robot.models import robot_by_name
 
         return robot_by_name(spec)
+    if urdf_dirs is not None:
+        p = _urdf_inside(spec.urdf, urdf_dirs)
+    else:
+        p = Path(spec.urdf)
+        if not p.is_absolute() and base_dir is not None:
+            p = Path(base_dir) / p
     from ..kinematics.urdf import UrdfRobot
 
-    p = Path(spec.urdf)
-    if not p.is_absolute() and base_dir is not None:
-        p = Path(base_dir) / p
     return UrdfRobot(p, spec.tip_link)
+
+
+def _urdf_inside(name: str, dirs: Any) -> Path:
+    shown = name if len(name) <= 60 else name[:57] + "..."
+    if "\x00" not in name and name.lower().endswith(".urdf"):
+        for d in dirs:
+            root = Path(d).resolve()
+            cand = (root / name).resolve()
+            if cand.is_relative_to(root) and cand.is_file():
+                return cand
+    where = "the robots folder" if dirs else "a robots folder (none is configured)"
+    raise UrdfRefusedError(f"{shown!r} is not a URDF file of {where}")
 
 
 def load_program(path: str | os.PathLike) -> Program:
@@ -277,22 +265,18 @@ def load_program(path: str | os.PathLike) -> Program:
         The file cannot be read.
     """
     p = Path(path)
-    text = p.read_text(encoding="utf-8")
-    return parse_program(text, source=str(p), base_dir=p.parent)
+    if p.is_dir():
+        raise InvalidInputError(f"{p}: is a folder, not a file")
+    with open(p, "rb") as fh:
+        data = fh.read(MAX_DOCUMENT_BYTES + 1)
+    return parse_program(data, source=str(p), base_dir=p.parent)
 
 
-def parse_program(text: str, source: str = "<string>",
-                  base_dir: str | os.PathLike | None = None) -> Program:
-    """Validate program ``text`` (YAML); see :func:`load_program`."""
-    try:
-        raw = yaml.load(text, Loader=_LineLoader)  # noqa: S506 - SafeLoader subclass
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{source}:{mark.line + 1}" if mark is not None else source
-        msg = getattr(exc, "problem", None) or str(exc)
-        raise InvalidInputError(f"{where}: not valid YAML: {msg}") from None
-    except InvalidInputError as exc:
-        raise InvalidInputError(f"{source}: {exc}") from None
+def parse_program(text: str | bytes, source: str = "<string>",
+                  base_dir: str | os.PathLike | None = None, *, urdf_dirs: Any = None) -> Program:
+    """Validate program ``text`` (YAML, str or UTF-8 bytes); see :func:`load_program` and,
+    for ``urdf_dirs``, :func:`make_robot`."""
+    raw = parse_document(text, source=source, kind="yaml")
     if not isinstance(raw, dict):
         raise InvalidInputError(f"{source}: a program must be a mapping with robot, points, program")
 
@@ -300,16 +284,19 @@ def parse_program(text: str, source: str = "<string>",
         raise cls(f"{source}:{_line_of(raw, loc)}: {_loc_str(loc)}: {msg}")
 
     try:
-        spec = ProgramFile.model_validate(_plain(raw))
+        spec = ProgramFile.model_validate(plain(raw))
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = tuple(x for x in err["loc"] if not (isinstance(x, str) and x.startswith("function-")))
         loc = tuple(x for x in loc if x not in ("str", "UrdfSpec", "dict[str,str]"))
         got = err.get("input")
-        got_s = "" if isinstance(got, (dict, list)) else f" (got {got!r})"
+        got_s = "" if isinstance(got, (dict, list)) else f" (got {short_repr(got)})"
         fail(loc, f"{err['msg']}{got_s}")
 
-    robot = make_robot(spec.robot, base_dir)
+    try:
+        robot = make_robot(spec.robot, base_dir, urdf_dirs=urdf_dirs)
+    except UrdfRefusedError as exc:
+        fail(("robot", "urdf"), str(exc))
 
     from ..robot.motion import CartesianTarget, Circ, JointTarget, Lin, Ptp, Wait
 

@@ -230,18 +230,27 @@ class RobotModel(ABC):
         """Joint ranges, shape (n_joints, 2) [rad or m]."""
         return np.array([[lim.position_min, lim.position_max] for lim in self.limits])
 
+    def joint_unit(self, k: int) -> tuple[str, float]:
+        """Display unit of joint ``k`` and the factor from SI: ``("deg", 180/pi)`` or ``("mm", 1000)``."""
+        return ("deg", 180.0 / math.pi) if self.joint_kinds[k] == REVOLUTE else ("mm", 1e3)
+
     def check_joints(self, q: Any, field: str = "joints") -> np.ndarray:
-        """Return ``q`` as a float array (n_joints,); raise if outside a range.
+        """Return ``q`` [rad or m] as a float array (n_joints,); raise if outside a range.
 
         Raises
         ------
         InvalidInputError
             Wrong size, NaN, or a joint outside its range (the message names
-            the joint, the value and the range).
+            the joint, and the value and the range in deg or mm).
         """
         arr = check_array(q, field, ndim=1, size=self.n_joints)
         for k, lim in enumerate(self.limits):
-            lim.check_position(arr[k], field)
+            x = float(arr[k])
+            if not lim.position_min <= x <= lim.position_max:
+                unit, sc = self.joint_unit(k)
+                raise InvalidInputError(
+                    f"{field}: joint {self.joint_names[k]} = {x * sc:.6g} {unit} is outside its "
+                    f"range [{lim.position_min * sc:.6g}, {lim.position_max * sc:.6g}] {unit}")
         return arr
 
     def parse_config(self, config: Any) -> str:

@@ -1,4 +1,4 @@
-"""The 4-axis cylindrical palletizing robot of seed 000.
+"""The 4-axis cylindrical palletizing robot of Cao et al. (2012).
 
 Joints (internal units SI):
 
@@ -39,8 +39,9 @@ JOINT_NAMES = ("A", "B", "C", "D")
 _DEG = math.pi / 180.0
 _MM = 1e-3
 
-#: The default robot of issue 4, in the table's units (deg and mm): per joint
-#: ``(v_max, a_max, j_max, range_min, range_max)``.
+#: The default palletizer, in the table's units (deg and mm): per joint
+#: ``(v_max, a_max, j_max, range_min, range_max)``. Cao et al. (2012) give no
+#: joint limits; these are trajkit's defaults for their robot.
 DEFAULT_JOINT_TABLE: dict[str, tuple[float, float, float, float, float]] = {
     "A": (160.0, 620.0, 5400.0, -180.0, 180.0),       # deg/s, deg/s^2, deg/s^3, deg
     "B": (1300.0, 5200.0, 45000.0, 0.0, 2000.0),      # mm/s, mm/s^2, mm/s^3, mm
@@ -104,7 +105,7 @@ class CylindricalPalletizer:
         decel: dict[str, Sequence[float]] | None = None,
         name: str = "cylindrical palletizer",
     ) -> "CylindricalPalletizer":
-        """Build a robot from a table in deg and mm (the issue's units).
+        """Build a robot from a table in deg and mm (the units of :data:`DEFAULT_JOINT_TABLE`).
 
         Parameters
         ----------
@@ -148,7 +149,7 @@ class CylindricalPalletizer:
 
     @property
     def z_top(self) -> float:
-        """Highest position of joint B [m] (``Z_top`` of seed 000)."""
+        """Highest position of joint B [m] (``Z_top`` of Cao et al., 2012)."""
         return self.limits[1].position_max
 
     # ------------------------------------------------------------ kinematics
@@ -285,7 +286,7 @@ class CylindricalPalletizer:
 
 
 def default_palletizer() -> CylindricalPalletizer:
-    """The robot of issue 4 (table :data:`DEFAULT_JOINT_TABLE`, converted to SI)."""
+    """The default palletizer (table :data:`DEFAULT_JOINT_TABLE`, converted to SI)."""
     return CylindricalPalletizer.from_table(DEFAULT_JOINT_TABLE, name="default palletizer")
 
 

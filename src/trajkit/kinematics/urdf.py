@@ -74,7 +74,9 @@ class UrdfRobot(RobotModel):
     path : str or PathLike
         URDF file.
     tip_link : str
-        Name of the tool link (or any frame) whose pose is the tool pose.
+        Name of the tool link (or any frame) whose pose is the tool pose. Only
+        the joints of the chain from the base to it are the robot's joints;
+        any other joint (a gripper's fingers) is locked at its neutral position.
     accel_factor, jerk_factor : float
         Default a_max = accel_factor * v_max [1/s], j_max = jerk_factor *
         a_max [1/s] for joints whose limits are not given.
@@ -105,6 +107,12 @@ class UrdfRobot(RobotModel):
             raise InvalidInputError(f"cannot read URDF {path!r}: {exc}") from None
         if not model.existFrame(tip_link):
             raise InvalidInputError(f"URDF {path!r} has no link named {tip_link!r}")
+        # joints that do not move the tip (a gripper's fingers, other branches) are
+        # locked at their neutral position: the robot is the chain to the tip
+        support = set(model.supports[model.frames[model.getFrameId(tip_link)].parentJoint])
+        lock = [j for j in range(1, model.njoints) if j not in support]
+        if lock:
+            model = _pin.buildReducedModel(model, lock, _pin.neutral(model))
         af = check_positive(accel_factor, "accel_factor")
         jf = check_positive(jerk_factor, "jerk_factor")
         self.model = model

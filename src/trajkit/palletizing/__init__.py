@@ -4,7 +4,7 @@ Quick start::
 
     from trajkit.palletizing import seed_scenario, plan_cycle, verify_plan
     sc = seed_scenario()
-    plan = plan_cycle(sc, "optimal")     # or "merged", "ptp"
+    plan = plan_cycle(sc, "optimal")     # or "merged", "ptp"; "cell" with a cell
     verify_plan(plan).raise_if_failed()
     print(plan.total_s, plan.per_box_s)
 """
@@ -40,6 +40,9 @@ from .optimal import (
     plan_trip_optimal,
     trip_lower_bound,
 )
+from .cell import Cell, GripperVolume, Obstacle
+from .cellcheck import CellFinding, CellReport, check_cell
+from .cellplan import CellTrip, plan_cycle_cell
 from .report import PAPER_TABLE1, summarize, table_rows
 from .scenario import PalletScenario, TripSpec, seed_scenario
 from .timeline import Piece, Timeline, TimelineSample
@@ -54,6 +57,8 @@ __all__ = [
     "plan_trip_merged", "plan_trip_ptp", "register_planner",
     "OptimalTrip", "clearance_window", "plan_cycle_optimal", "plan_trip_optimal",
     "trip_lower_bound",
+    "Cell", "GripperVolume", "Obstacle", "CellFinding", "CellReport", "check_cell",
+    "CellTrip", "plan_cycle_cell",
     "PAPER_TABLE1", "summarize", "table_rows",
     "PalletScenario", "TripSpec", "seed_scenario",
     "Piece", "Timeline", "TimelineSample",

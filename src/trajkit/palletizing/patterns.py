@@ -1,4 +1,4 @@
-"""Layer patterns for palletizing: column, interlock, pinwheel and the seed preset.
+"""Layer patterns for palletizing: column, interlock, pinwheel and the ``seed`` preset.
 
 A *layer pattern* lists the boxes of one layer as centre offsets from the
 pallet centre [m] and yaw angles [rad]; a :class:`StackPattern` adds the
@@ -229,7 +229,10 @@ def _overlap(p: np.ndarray, q: np.ndarray) -> bool:
 
 # ---------------------------------------------------------------- generators
 def seed_layer(box: BoxSize | None = None) -> LayerPattern:
-    """The layer of seed 000 / issue 4 on a 1200 x 1000 mm pallet.
+    """The ``seed`` preset: the layer of the shipped job on a 1200 x 1000 mm pallet.
+
+    Cao et al. (2012) give no picture of their layer; this is trajkit's
+    choice for their 600 x 400 mm boxes (see docs/palletizing.md).
 
     Two boxes long side along x at (-300, -300) and (300, -300) mm, three
     boxes turned 90 degrees at (-400, 200), (0, 200), (400, 200) mm from the
@@ -281,7 +284,7 @@ def interlock_layer(pallet_length: float, pallet_width: float, box: BoxSize) -> 
     and ``k`` rows of turned boxes (depth = box length) are chosen to hold
     the most boxes, preferring mixed layers (which interlock when alternate
     layers are turned or mirrored). On a 1200 x 1000 pallet with 600 x 400
-    boxes this gives the seed layer.
+    boxes this gives the ``seed`` layer.
     """
     L = check_positive(pallet_length, "pallet length")
     W = check_positive(pallet_width, "pallet width")

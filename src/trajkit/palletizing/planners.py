@@ -85,6 +85,13 @@ class CyclePlan:
         Absolute start time of each trip [s].
     timeline : Timeline
         The whole job's joint trajectory (joints A, B, C, D; rad, m, m, rad).
+    info : dict
+        Planner-specific details (bounds, per-trip choices).
+    rule : {"seed", "cell"}
+        The clearance rule the plan keeps: ``"seed"`` (A, C, D move only
+        while B is above the trips' clearance heights ``Z1``, ``Z2``) or
+        ``"cell"`` (the cell's geometry; the trips' clearance heights are
+        then the settle heights).
     """
 
     planner: str
@@ -93,6 +100,7 @@ class CyclePlan:
     trip_starts: np.ndarray
     timeline: Timeline
     info: dict = field(default_factory=dict)
+    rule: str = "seed"
 
     @property
     def total_s(self) -> float:

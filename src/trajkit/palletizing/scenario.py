@@ -1,7 +1,7 @@
 """A palletizing scenario: robot, pick point, pallet, pattern, and its trips.
 
-All quantities in SI (m, rad, s). :func:`seed_scenario` is the scenario of
-seed 000 / issue 4.
+All quantities in SI (m, rad, s). :func:`seed_scenario` is the palletizing
+experiment of Cao et al. (2012) with the default palletizer.
 """
 
 from __future__ import annotations
@@ -15,9 +15,14 @@ import numpy as np
 from .._validate import check_array, check_finite
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.palletizer import CylindricalPalletizer, default_palletizer
+from .cell import Cell, Prisms, prism_signed_distance, stack_prisms
 from .patterns import BoxSize, StackPattern, check_layer_fit, make_pattern
 
-__all__ = ["PalletScenario", "TripSpec", "seed_scenario"]
+__all__ = ["PalletScenario", "TripSpec", "seed_scenario", "CELL_OVERLAP_ATOL"]
+
+#: Overlap [m] between a cell obstacle and a resting box that still counts as
+#: touching (round-off of mm inputs).
+CELL_OVERLAP_ATOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -48,7 +53,7 @@ class TripSpec:
 
     @property
     def z_levels(self) -> tuple[float, float, float, float]:
-        """``(Z0, Z1, Z2, Z3)`` of seed 000 [m]."""
+        """``(Z0, Z1, Z2, Z3)`` as named by Cao et al. (2012) [m]."""
         return (float(self.q_start[1]), self.z_clear_start, self.z_clear_goal,
                 float(self.q_goal[1]))
 
@@ -80,6 +85,11 @@ class PalletScenario:
     overhang : float
         Allowed overhang past the pallet edge [m].
     name : str
+    cell : Cell, optional
+        The cell's geometry (obstacles, gripper volume, clearance, settle
+        height); ``None`` for a job planned under the clearance heights
+        alone. The ``cell`` planner needs one, and :func:`verify_plan`
+        checks every plan against it.
 
     Raises
     ------
@@ -102,6 +112,7 @@ class PalletScenario:
     release_s: float = 0.0
     overhang: float = 0.0
     name: str = "scenario"
+    cell: Cell | None = None
     _cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -119,9 +130,13 @@ class PalletScenario:
             object.__setattr__(self, f, v)
         L, W = (check_finite(x, "pallet_size") for x in self.pallet_size)
         object.__setattr__(self, "pallet_size", (L, W))
+        if self.cell is not None and not isinstance(self.cell, Cell):
+            raise InvalidInputError(f"cell must be a Cell or None, got {self.cell!r}")
         check_layer_fit(self.pattern.layer_at(0), L, W, self.overhang)
         check_layer_fit(self.pattern.layer_at(1), L, W, self.overhang)
         self._validate_reach()
+        if self.cell is not None:
+            self._validate_cell()
 
     # ------------------------------------------------------------- geometry
     @property
@@ -172,6 +187,24 @@ class PalletScenario:
         q = rob.joints_from_pose(poses, qp[3], yaw_period=math.pi, check=False)
         rob.check_joints(q, "place")
 
+    def _validate_cell(self) -> None:
+        """No static obstacle may pierce a box at its place or the box at the pick."""
+        static = self.cell.static_prisms()
+        if not len(static):
+            return
+        b = self.box
+        poses = np.vstack([self.place_poses(), self.pick[None, :]])
+        boxes = stack_prisms(poses, b.length, b.width, b.height)
+        keys = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
+        d = prism_signed_distance(Prisms(*(getattr(boxes, k)[:, None] for k in keys)),
+                                  Prisms(*(getattr(static, k)[None, :] for k in keys)))
+        i, k = np.unravel_index(int(np.argmin(d)), d.shape)
+        if d[i, k] < -CELL_OVERLAP_ATOL:
+            what = "the box at the pick" if i == poses.shape[0] - 1 else f"box {i} at its place"
+            raise InvalidInputError(
+                f"cell obstacle {static.names[k]!r} overlaps {what} by {-d[i, k] * 1000:.3f} mm"
+            )
+
     # ---------------------------------------------------------------- trips
     def trips(self) -> list[TripSpec]:
         """The trips of the whole job, in order: load 0, return 0, load 1, ...
@@ -209,17 +242,19 @@ class PalletScenario:
             "grip_s": self.grip_s,
             "release_s": self.release_s,
             "boxes": self.n_boxes,
+            **({"cell": self.cell.to_dict()} if self.cell is not None else {}),
         }
 
 
 def seed_scenario(robot: CylindricalPalletizer | None = None, **overrides: Any) -> PalletScenario:
-    """The scenario of seed 000 / issue 4 (25 boxes, 5 layers, 180-degree interlock).
+    """The palletizing experiment of Cao et al. (2012): 25 boxes, 5 layers, 180-degree interlock.
 
     Pick (1200, 0, 400) mm, yaw 0; pallet centre (0, 1400, 400) mm on a
-    1200 x 1000 mm pallet; boxes 600 x 400 x 200 mm in the seed layer, the
+    1200 x 1000 mm pallet; boxes 600 x 400 x 200 mm in the ``seed`` layer, the
     2nd and 4th layers turned 180 degrees; lift 400 mm, approach 200 mm;
-    gripper times zero. Keyword arguments override fields of
-    :class:`PalletScenario`.
+    gripper times zero. The paper gives no joint limits: the robot is
+    :func:`~trajkit.kinematics.default_palletizer` unless given. Keyword
+    arguments override fields of :class:`PalletScenario`.
     """
     box = BoxSize(0.6, 0.4, 0.2)
     kw: dict[str, Any] = dict(
@@ -231,7 +266,7 @@ def seed_scenario(robot: CylindricalPalletizer | None = None, **overrides: Any) 
         layers=5,
         lift=0.4,
         approach=0.2,
-        name="seed 000",
+        name="Cao et al. (2012) job",
     )
     kw.update(overrides)
     return PalletScenario(**kw)

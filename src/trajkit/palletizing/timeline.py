@@ -7,6 +7,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .._sampling import MAX_SAMPLES, period_times
 from ..errors import InvalidInputError
 from ..profiles import Profile
 
@@ -166,12 +167,10 @@ class Timeline:
                 out[3, m, k] = s.jerk
         return TimelineSample(tt, out[0], out[1], out[2], out[3])
 
-    def times(self, period: float) -> np.ndarray:
-        """Times 0, dt, 2 dt, ... plus ``duration`` [s]."""
-        if not period > 0.0:
-            raise InvalidInputError(f"period must be > 0 s, got {period!r}")
-        t = np.arange(0.0, self.duration, period)
-        return np.append(t, self.duration)
+    def times(self, period: float, max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
+        """Times 0, dt, 2 dt, ... ending exactly at ``duration`` [s]; at most
+        ``max_samples`` (see :func:`trajkit._sampling.period_times`)."""
+        return period_times(self.duration, period, end="exact", max_samples=max_samples)
 
     def __repr__(self) -> str:
         return f"Timeline(n_joints={self.n_joints}, duration={self.duration!r})"

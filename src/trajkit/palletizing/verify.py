@@ -1,8 +1,10 @@
-"""Independent checks of a :class:`CyclePlan`: limits, ranges, places, clearance.
+"""Independent checks of a :class:`CyclePlan`: limits, ranges, places, clearance, cell.
 
 The checks do not trust the planner's bookkeeping: they read the plan's
 timeline (exact phase-boundary states and dense samples) and recompute the
-clearance crossing times by inverting B's profiles.
+clearance crossing times by inverting B's profiles. When the scenario has a
+cell, :func:`~trajkit.palletizing.cellcheck.check_cell` checks the swept
+volume against the obstacles and the growing stack as well.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from ..errors import TrajkitError
 from ..profiles import Profile
 from ..verify import verify_state_profile
 from ._crossing import clearance_crossings
+from .cellcheck import CellReport, check_cell
 from .planners import HORIZONTAL_JOINTS, CyclePlan
 
 __all__ = ["VerificationReport", "verify_plan", "PlanVerificationError"]
@@ -57,24 +60,46 @@ class VerificationReport:
     checks : dict
         Counts of what was checked (samples, boundaries, places, crossings)
         and the worst ratios |value| / limit per joint.
+    cell : CellReport or None
+        The check against the scenario's cell (``None`` without a cell).
     """
 
     violations: list = field(default_factory=list)
     checks: dict = field(default_factory=dict)
+    cell: CellReport | None = None
 
     @property
     def ok(self) -> bool:
+        """No violation, the cell's rules included."""
+        return not self.violations and (self.cell is None or self.cell.ok)
+
+    @property
+    def ok_without_cell(self) -> bool:
+        """No violation of the limits, places, order and clearance rule (cell aside)."""
         return not self.violations
 
-    def raise_if_failed(self) -> None:
-        """Raise :class:`PlanVerificationError` with the first violations."""
-        if self.violations:
-            more = f" (and {len(self.violations) - 3} more)" if len(self.violations) > 3 else ""
-            raise PlanVerificationError("; ".join(self.violations[:3]) + more)
+    def all_violations(self) -> list[str]:
+        """The violations, then the cell findings (one line each)."""
+        cell = [f"cell: {f.message()}" for f in self.cell.findings] if self.cell else []
+        return list(self.violations) + cell
+
+    def raise_if_failed(self, cell: bool = True) -> None:
+        """Raise :class:`PlanVerificationError` with the first violations.
+
+        Parameters
+        ----------
+        cell : bool
+            Count the cell's findings too (default).
+        """
+        vs = self.all_violations() if cell else list(self.violations)
+        if vs:
+            more = f" (and {len(vs) - 3} more)" if len(vs) > 3 else ""
+            raise PlanVerificationError("; ".join(vs[:3]) + more)
 
 
-def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> VerificationReport:
-    """Check a plan against the robot, the places and the clearance rule.
+def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S,
+                cell: bool = True) -> VerificationReport:
+    """Check a plan against the robot, the places, the clearance rule and the cell.
 
     Checks
 
@@ -83,16 +108,27 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
       samples of the whole timeline;
     * each place is reached exactly (joints and forward-kinematics pose) and
       the robot rests there; the job ends back at the pick;
+    * the boxes are placed in a valid order: each box of the pattern once,
+      a layer complete before the next starts, every load trip followed by
+      the return trip of the same box;
     * the clearance rule: A, C, D rest at their start values while B is below
       ``Z1`` on the way up and at their goal values while B is below ``Z2``
       on the way down, on dense samples and exactly at the crossing times
-      (recomputed by inverting B's profiles).
+      (recomputed by inverting B's profiles). For a plan under the cell's
+      rule (``plan.rule == "cell"``) ``Z1`` and ``Z2`` are the settle
+      heights: the trip's start and goal heights (read from the timeline)
+      plus the cell's ``settle``;
+    * with a cell: :func:`~trajkit.palletizing.cellcheck.check_cell` (the
+      swept volume against the obstacles and the stack, certified between
+      samples), reported in ``report.cell``.
 
     Parameters
     ----------
     plan : CyclePlan
     samples_per_s : float
         Density of the dense samples [1/s].
+    cell : bool
+        Run the cell check when the scenario has a cell (default).
 
     Returns
     -------
@@ -177,9 +213,12 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
             v.append(f"{tp.spec.kind} trip of box {tp.spec.box}: not at rest at its end")
         if tp.spec.kind == "load":
             n_places += 1
-            if np.any(np.abs(q - q_places[tp.spec.box]) > POSITION_ATOL):
+            # the box looks the same turned by 180 degrees: the wrist may take
+            # either turn, the joints must agree with the place but for D
+            qp = q_places[tp.spec.box]
+            if np.any(np.abs(q[:3] - qp[:3]) > POSITION_ATOL):
                 v.append(f"box {tp.spec.box}: placed at joints {q.tolist()}, planned "
-                         f"{q_places[tp.spec.box].tolist()}")
+                         f"{qp.tolist()}")
             pose = rob.pose_from_joints(q)
             dyaw = (pose[3] - places[tp.spec.box, 3]) % np.pi
             dyaw = min(dyaw, np.pi - dyaw)
@@ -189,11 +228,19 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
     if np.any(np.abs(tl.goal - plan.scenario.pick_joints()) > POSITION_ATOL):
         v.append(f"the job ends at {tl.goal.tolist()}, not back at the pick")
 
+    # --- placing order: every box once, layer by layer, load then return
+    v.extend(_order_violations(plan))
+
     # --- clearance rule, dense samples and exact crossing times
     n_cross = 0
     h = list(HORIZONTAL_JOINTS)
+    settle = plan.scenario.cell.settle if plan.scenario.cell is not None else 0.0
     for tp, ts, te in zip(plan.trips, plan.trip_starts, ends):
         z0, z1, z2, z3 = tp.spec.z_levels
+        if plan.rule == "cell":
+            # settle heights above where B really starts and ends the trip
+            zb = tl.sample(np.array([ts, te])).position[:, _B]
+            z1, z2 = float(zb[0]) + settle, float(zb[1]) + settle
         qa, qb = tp.spec.q_start[h], tp.spec.q_goal[h]
         m = (s.t >= ts) & (s.t <= te)
         tt, zb, qh = s.t[m], s.position[m, _B], s.position[m][:, h]
@@ -246,7 +293,54 @@ def verify_plan(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> Verifi
                                  f"outside the clearance window [{t_up:.6f}, {t_dn:.6f}] s")
     rep.checks = {"samples": int(t.size), "phase_boundaries": n_bound, "places": n_places,
                   "crossings": n_cross, "worst_ratio": worst}
+    if cell and plan.scenario.cell is not None:
+        rep.cell = check_cell(plan, samples_per_s)
+        rep.checks["cell_samples"] = rep.cell.samples
+        rep.checks["cell_intervals"] = rep.cell.certified_intervals
     return rep
+
+
+def _order_violations(plan: CyclePlan) -> list[str]:
+    """Each box of the pattern placed once, layer by layer, each load followed by its return."""
+    sc = plan.scenario
+    per_layer = sc.pattern.layer.n_boxes
+    out = []
+    seen: set = set()
+    layer = 0
+    trips = plan.trips
+    if len(trips) != 2 * sc.n_boxes:
+        out.append(f"the plan has {len(trips)} trips, the job needs {2 * sc.n_boxes} "
+                   f"(a load and a return trip per box)")
+    for i, tp in enumerate(trips):
+        kind, box = tp.spec.kind, tp.spec.box
+        want = "load" if i % 2 == 0 else "return"
+        if kind != want:
+            out.append(f"trip {i} is a {kind} trip, expected a {want} trip")
+            continue
+        if not 0 <= box < sc.n_boxes:
+            out.append(f"trip {i}: box {box} is not a box of the pattern (0..{sc.n_boxes - 1})")
+            continue
+        if kind == "return":
+            if box != trips[i - 1].spec.box:
+                out.append(f"trip {i}: return trip of box {box} after the load trip of box "
+                           f"{trips[i - 1].spec.box}")
+            continue
+        if box in seen:
+            out.append(f"box {box} is placed twice (trip {i})")
+        seen.add(box)
+        k = box // per_layer
+        if k < layer:
+            out.append(f"box {box} of layer {k + 1} is placed after layer {layer + 1} started "
+                       f"(trip {i})")
+        elif k > layer:
+            missing = [b for b in range(layer * per_layer, k * per_layer) if b not in seen]
+            if missing:
+                out.append(f"box {box} of layer {k + 1} is placed before layer {layer + 1} is "
+                           f"complete (boxes {missing} missing, trip {i})")
+            layer = k
+    if not out and len(seen) != sc.n_boxes:
+        out.append(f"{sc.n_boxes - len(seen)} boxes are never placed")
+    return out
 
 
 def _crossings(tl, ts: float, te: float, z1: float, z2: float):

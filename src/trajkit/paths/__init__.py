@@ -1,7 +1,8 @@
 """Geometric paths parameterised by arc length, and their chord discretisation.
 
-All lengths in metres. ``Line``, ``Arc3`` (3-point spatial arc, seed 002),
-``CompositePath`` and ``SaddleCurve`` (pipe intersections, seed 003) share
+All lengths in metres. ``Line``, ``Arc3`` (3-point spatial arc, Jiang 1987),
+``CompositePath`` and ``SaddleCurve`` (pipe intersections, Chen et al. 2013)
+share
 the :class:`Path` interface: ``length``, ``point(s)``, ``tangent(s)``,
 ``curvature(s)`` vectorised in arc length ``s``.
 """

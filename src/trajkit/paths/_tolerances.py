@@ -2,6 +2,20 @@
 
 from __future__ import annotations
 
+#: Supported range of path geometry [m]: every coordinate, radius and offset
+#: lies within +-MAX_COORDINATE (1000 km), ...
+MAX_COORDINATE = 1e6
+
+#: ... and every segment length, arc radius and pipe radius is at least
+#: MIN_FEATURE (1 nm) ...
+MIN_FEATURE = 1e-9
+
+#: ... and at least this fraction of the largest coordinate of its points (a
+#: 1 um arc 10 km from the origin has points known to 2e-12 m only). Inside
+#: these ranges the geometry is exact to about 1e-9 relative; outside them
+#: construction is refused (InvalidInputError).
+MIN_RELATIVE_FEATURE = 1e-6
+
 #: Arc points whose cross product |(p2-p1) x (p3-p1)| is below this fraction of
 #: |p2-p1| |p3-p1| are collinear (the sine of the angle at p1); no arc.
 COLLINEAR_SIN = 1e-9

@@ -1,4 +1,4 @@
-"""Spatial circular arc through three points (seed 002)."""
+"""Spatial circular arc through three points (Jiang, 1987)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import check_array
 from ..errors import InvalidInputError
-from ._tolerances import COINCIDENT_DIST, COLLINEAR_SIN
-from .base import Path
+from ._tolerances import COINCIDENT_DIST, COLLINEAR_SIN, MAX_COORDINATE
+from .base import Path, check_point, check_size
 
 __all__ = ["Arc3", "circle_through"]
 
@@ -35,11 +34,13 @@ def circle_through(p1: Any, p2: Any, p3: Any) -> tuple[np.ndarray, float, np.nda
     Raises
     ------
     InvalidInputError
-        When two points coincide or the three are collinear (no plane).
+        When two points coincide or the three are collinear (no plane), a
+        coordinate lies outside +-1e6 m, or the radius is outside
+        [1e-9, 2e6] m.
     """
-    a = check_array(p1, "arc point p1", ndim=1, size=3)
-    b = check_array(p2, "arc point p2", ndim=1, size=3)
-    c = check_array(p3, "arc point p3", ndim=1, size=3)
+    a = check_point(p1, "arc point p1")
+    b = check_point(p2, "arc point p2")
+    c = check_point(p3, "arc point p3")
     pairs = ((("p1", a), ("p2", b)), (("p2", b), ("p3", c)), (("p1", a), ("p3", c)))
     for (n1, x), (n2, y) in pairs:
         if np.linalg.norm(y - x) <= COINCIDENT_DIST:
@@ -59,11 +60,16 @@ def circle_through(p1: Any, p2: Any, p3: Any) -> tuple[np.ndarray, float, np.nda
     # centre = a + (|u|^2 (v x w) + |v|^2 (w x u)) / (2 |w|^2)
     centre = a + (np.dot(u, u) * np.cross(v, w) + np.dot(v, v) * np.cross(w, u)) / (2.0 * nw * nw)
     radius = float(np.mean([np.linalg.norm(p - centre) for p in (a, b, c)]))
+    check_size(radius, "arc radius", a, b, c)
+    if np.abs(centre).max() > 2.0 * MAX_COORDINATE:
+        raise InvalidInputError(
+            f"arc points p1={a.tolist()}, p2={b.tolist()}, p3={c.tolist()} are nearly collinear: "
+            f"the centre lies {np.abs(centre).max():.3g} m away, outside the supported range")
     return centre, radius, w / nw
 
 
 class Arc3(Path):
-    """Circular arc from ``p1`` via ``p2`` to ``p3`` (seed 002), or the full circle.
+    """Circular arc from ``p1`` via ``p2`` to ``p3`` (Jiang, 1987), or the full circle.
 
     Parameters
     ----------

@@ -8,9 +8,37 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInputError
-from ._tolerances import S_RANGE_RTOL
+from .._validate import check_array
+from ._tolerances import MAX_COORDINATE, MIN_FEATURE, MIN_RELATIVE_FEATURE, S_RANGE_RTOL
 
-__all__ = ["Path"]
+__all__ = ["Path", "check_point", "check_size"]
+
+
+def check_point(p: Any, field: str) -> np.ndarray:
+    """A point (3,) [m] with finite coordinates within +-``MAX_COORDINATE``."""
+    a = check_array(p, field, ndim=1, size=3)
+    big = np.abs(a) > MAX_COORDINATE
+    if big.any():
+        k = int(np.argmax(big))
+        raise InvalidInputError(
+            f"{field}: coordinate {'xyz'[k]} = {a[k]:.6g} m is outside the supported range "
+            f"+-{MAX_COORDINATE:g} m")
+    return a
+
+
+def check_size(value: float, field: str, *points: np.ndarray) -> float:
+    """A length or radius [m] in [``MIN_FEATURE``, 2 ``MAX_COORDINATE``], and at least
+    ``MIN_RELATIVE_FEATURE`` times the largest coordinate of ``points``."""
+    if not MIN_FEATURE <= value <= 2.0 * MAX_COORDINATE:
+        raise InvalidInputError(
+            f"{field} {value:.6g} m is outside the supported range "
+            f"[{MIN_FEATURE:g}, {2.0 * MAX_COORDINATE:g}] m")
+    far = max((float(np.abs(p).max()) for p in points), default=0.0)
+    if value < MIN_RELATIVE_FEATURE * far:
+        raise InvalidInputError(
+            f"{field} {value:.6g} m is too small for points {far:.6g} m from the origin "
+            f"(at least {MIN_RELATIVE_FEATURE:g} of it: move the origin closer)")
+    return value
 
 
 class Path(ABC):

@@ -1,11 +1,11 @@
-"""Coarse stage: chord-error-bounded discretisation of a path (seed 003).
+"""Coarse stage: chord-error-bounded discretisation of a path (Chen et al., 2013).
 
 A chord of length L on a circle of radius K deviates from the arc by the
-sagitta (seed 003, eq. 11)
+sagitta (Chen et al., 2013, eq. 11)
 
     E = K - sqrt(K^2 - L^2 / 4)
 
-so the longest chord for a tolerance E is (eq. 13, with K for the seed's r)
+so the longest chord for a tolerance E is (eq. 13, with K for the paper's r)
 
     L = sqrt(8 K E - 4 E^2).
 
@@ -48,7 +48,7 @@ MAX_CHORDS = 2_000_000
 
 
 def chord_error(chord_length: Any, radius: Any) -> np.ndarray | float:
-    """Sagitta of a chord on a circle (seed 003, eq. 11).
+    """Sagitta of a chord on a circle (Chen et al., 2013, eq. 11).
 
     Parameters
     ----------
@@ -79,7 +79,7 @@ def chord_error(chord_length: Any, radius: Any) -> np.ndarray | float:
 
 
 def max_chord_length(radius: Any, tolerance: float) -> np.ndarray | float:
-    """Longest chord whose sagitta is ``tolerance`` (seed 003, eq. 13).
+    """Longest chord whose sagitta is ``tolerance`` (Chen et al., 2013, eq. 13).
 
     Parameters
     ----------
@@ -234,7 +234,7 @@ def discretize(path: Path, tolerance: float, max_chord: float = math.inf) -> Cho
 
     The step from each node is the arc whose circle-of-curvature sagitta is
     ``CHORD_TARGET_FRACTION * tolerance`` for the smallest radius of
-    curvature K over the step (seed 003: L = sqrt(8 K E - 4 E^2)), so steps
+    curvature K over the step (Chen et al., 2013: L = sqrt(8 K E - 4 E^2)), so steps
     are long where the path is straight and short where it bends. Then every
     chord is checked densely (:func:`chord_deviations`) and any chord over
     the tolerance is halved until all hold it. Corners of a composite path
@@ -327,7 +327,7 @@ def uniform_chord_count(path: Path, tolerance: float, n_max: int = 1 << 20, star
     """Smallest number of equal parameter steps whose chords all hold ``tolerance``.
 
     Equal steps of the path's natural parameter (:meth:`Path.uniform_nodes`:
-    equal theta steps on a saddle seam, as in seed 003's "points per turn";
+    equal theta steps on a saddle seam, as in the "points per turn" of Chen et al. (2013);
     equal arc lengths otherwise). Found by bisection on the dense check,
     starting from ``start`` (a guess, e.g. the adaptive chord count).
 

@@ -1,4 +1,4 @@
-"""Straight line segment (seed 002: CP control along a line)."""
+"""Straight line segment (continuous-path control along a line, Jiang 1987)."""
 
 from __future__ import annotations
 
@@ -6,10 +6,9 @@ from typing import Any
 
 import numpy as np
 
-from .._validate import check_array
 from ..errors import InvalidInputError
 from ._tolerances import COINCIDENT_DIST
-from .base import Path
+from .base import Path, check_point, check_size
 
 __all__ = ["Line"]
 
@@ -25,7 +24,8 @@ class Line(Path):
     Raises
     ------
     InvalidInputError
-        For non-finite coordinates or a zero-length line.
+        For coordinates that are not finite or outside +-1e6 m, or a line
+        shorter than 1 nm (see :mod:`trajkit.paths._tolerances`).
 
     Notes
     -----
@@ -34,8 +34,8 @@ class Line(Path):
     """
 
     def __init__(self, p0: Any, p1: Any) -> None:
-        a = check_array(p0, "line start p0", ndim=1, size=3)
-        b = check_array(p1, "line end p1", ndim=1, size=3)
+        a = check_point(p0, "line start p0")
+        b = check_point(p1, "line end p1")
         d = b - a
         length = float(np.linalg.norm(d))
         if length <= COINCIDENT_DIST:
@@ -43,6 +43,7 @@ class Line(Path):
                 f"line has zero length: p0={a.tolist()} and p1={b.tolist()} coincide "
                 f"(distance {length!r} m <= {COINCIDENT_DIST})"
             )
+        check_size(length, "line length", a, b)
         self.p0 = a
         self.p1 = b
         self.length = length

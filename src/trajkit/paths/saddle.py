@@ -1,6 +1,6 @@
-"""Saddle curves: the seam where a branch pipe meets a main pipe (seed 003).
+"""Saddle curves: the seam where a branch pipe meets a main pipe (Chen et al., 2013).
 
-Convention (issue 3): the branch axis is the z axis, the seam is
+Convention: the branch axis is the z axis, the seam is
 parameterised by the angle theta around it, measured from the +y axis
 towards +x. The main pipe's axis passes through ``(offset, 0, 0)`` with
 direction ``m = (0, sin(angle), cos(angle))``: ``angle`` is the angle between
@@ -16,7 +16,7 @@ root is exact:
 
     z(theta) = r cos(theta) cot(angle) + sqrt(R^2 - (r sin(theta) - offset)^2) / sin(angle)
 
-For ``angle = pi/2, offset = 0`` this is the seed's equation
+For ``angle = pi/2, offset = 0`` this is the equation of Chen et al. (2013)
 ``z = sqrt(R^2 - r^2 sin^2 theta)``. The branch meets the main pipe all the
 way round iff ``|offset| + r < R``.
 """
@@ -32,6 +32,7 @@ from scipy.special import roots_legendre
 from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError
 from ._tolerances import (
+    MAX_COORDINATE,
     ARC_INVERSION_MAX_ITER,
     ARC_INVERSION_RTOL,
     GAUSS_ORDER,
@@ -39,7 +40,7 @@ from ._tolerances import (
     SADDLE_LENGTH_RTOL,
     THETA_RANGE_ATOL,
 )
-from .base import Path
+from .base import Path, check_size
 
 __all__ = ["SaddleCurve"]
 
@@ -50,6 +51,10 @@ _TABLE_START = 32
 _TABLE_MAX = 1 << 16
 #: Intervals of the inverse table theta(s) (first guesses for Newton).
 _INVERSE_TABLE = 4096
+
+#: Points evaluated at once by the arc-length inversions (bounds their memory:
+#: the quadrature holds GAUSS_ORDER values per point).
+_CHUNK = 1 << 15
 
 
 class SaddleCurve(Path):
@@ -63,7 +68,7 @@ class SaddleCurve(Path):
         r [m], > 0.
     angle : float
         Angle between the branch axis and the main axis [rad], in (0, pi);
-        ``pi/2`` (default) is the orthogonal tee of seed 003.
+        ``pi/2`` (default) is the orthogonal tee of Chen et al. (2013).
     offset : float
         Distance [m] along x between the main axis and the branch axis
         (0: the axes meet).
@@ -97,10 +102,13 @@ class SaddleCurve(Path):
         offset: float = 0.0,
         theta_start: float = 0.0,
     ) -> None:
-        R = check_positive(main_radius, "main pipe radius R")
-        r = check_positive(branch_radius, "branch pipe radius r")
+        R = check_size(check_positive(main_radius, "main pipe radius R"), "main pipe radius R")
+        r = check_size(check_positive(branch_radius, "branch pipe radius r"), "branch pipe radius r")
         a = check_finite(angle, "branch angle")
         d = check_finite(offset, "branch offset")
+        if abs(d) > MAX_COORDINATE:
+            raise InvalidInputError(f"branch offset {d:.6g} m is outside the supported range "
+                                    f"+-{MAX_COORDINATE:g} m")
         th0 = check_finite(theta_start, "theta_start")
         if not 0.0 < a < math.pi:
             raise InvalidInputError(
@@ -240,8 +248,12 @@ class SaddleCurve(Path):
                 f"[{float(np.min(th))!r}, {float(np.max(th))!r}]"
             )
         th = np.clip(th, lo, hi)
-        k = np.clip(np.searchsorted(self._edges, th, side="right") - 1, 0, len(self._edges) - 2)
-        return self._partial(k, th)
+        out = np.empty_like(th)
+        for i in range(0, th.size, _CHUNK):
+            part = th[i:i + _CHUNK]
+            k = np.clip(np.searchsorted(self._edges, part, side="right") - 1, 0, len(self._edges) - 2)
+            out[i:i + _CHUNK] = self._partial(k, part)
+        return out
 
     def _partial(self, k: np.ndarray, th: np.ndarray) -> np.ndarray:
         a = self._edges[k]
@@ -257,7 +269,11 @@ class SaddleCurve(Path):
         ndarray, shape (n,)
         """
         ss, _ = self._prep(s)
-        return self._newton(ss, self._guess(ss))
+        out = np.empty_like(ss)
+        for i in range(0, ss.size, _CHUNK):
+            part = ss[i:i + _CHUNK]
+            out[i:i + _CHUNK] = self._newton(part, self._guess(part))
+        return out
 
     def _guess(self, ss: np.ndarray) -> np.ndarray:
         g = getattr(self, "_inv", None)
@@ -310,7 +326,7 @@ class SaddleCurve(Path):
         return self.s_of_theta(th), self.curvature_theta(th)
 
     def uniform_nodes(self, n: int) -> np.ndarray:
-        """Arc lengths of ``n`` equal theta steps (seed 003's "points per turn")."""
+        """Arc lengths of ``n`` equal theta steps (the "points per turn" of Chen et al., 2013)."""
         th = self.theta_start + np.linspace(0.0, _TWO_PI, int(n) + 1)
         out = self.s_of_theta(th)
         out[0], out[-1] = 0.0, self.length
@@ -336,7 +352,11 @@ class SaddleCurve(Path):
             value, d/ds, d2/ds2, d3/ds3 (per metre of seam, exact).
         """
         ss, _ = self._prep(s)
-        th = self.theta_of_s(ss)
+        return self.machine_axes_theta(self.theta_of_s(ss))
+
+    def machine_axes_theta(self, theta: Any) -> np.ndarray:
+        """:meth:`machine_axes` at the angles ``theta`` [rad] (n,) instead of arc lengths."""
+        th = np.asarray(theta, dtype=float)
         z = self.z_derivatives(th)
         r2 = self.branch_radius ** 2
         sig = np.sqrt(r2 + z[1] ** 2)

@@ -1,4 +1,4 @@
-"""Figures for palletizing plans (seed 000 figures 6, 8, 12 and a 3-D path view).
+"""Figures for palletizing plans (Cao et al., 2012, figures 6, 8, 12, and a 3-D path view).
 
 Every function takes planned objects, returns a matplotlib Figure, and writes
 it (atomically) when given ``path``. Units on the axes: mm, mm/s, s.
@@ -49,7 +49,7 @@ def _cycle_window(plan, box: int):
 def plot_b_velocity(plans: Mapping[str, object], box: int = 0, path=None):
     """B-axis velocity and height over one cycle (load + return) of ``box``, per plan.
 
-    One column per plan (seed 000 figure 6 for ``ptp``, figure 8 for
+    One column per plan (Cao et al., 2012, figure 6 for ``ptp``, figure 8 for
     ``merged``); the shaded spans are the windows where A, C, D move.
     """
     plt = require_matplotlib()
@@ -87,7 +87,7 @@ def plot_b_velocity(plans: Mapping[str, object], box: int = 0, path=None):
 
 
 def plot_zmax_curve(scenario, box: int = 0, kind: str = "load", n: int = 201, path=None):
-    """Trip time against B's highest point ``Zmax`` for one trip (seed 000 figure 12).
+    """Trip time against B's highest point ``Zmax`` for one trip (Cao et al., 2012, figure 12).
 
     Shows ``f' + g'`` (B alone), ``t1 + tH + t3`` (horizontal window) and
     their maximum (the trip time), with the optimum found by the planner.
@@ -139,27 +139,43 @@ def _joined(edges):
 
 
 def plot_gripper_path_3d(plans: Mapping[str, object] | object, boxes: Sequence[int] | None = None,
-                         path=None):
-    """3-D view of the gripper path (forward kinematics) over the stack.
+                         path=None, reports: Mapping[str, object] | None = None):
+    """3-D view of the gripper path (forward kinematics) over the stack, in its cell.
+
+    Equal scales on the three axes. With a cell: its obstacles, and for
+    every plan with a cell check (``reports[name].cell``, run here when
+    missing) the point of its tightest clearance, marked and labelled.
 
     Parameters
     ----------
     plans : CyclePlan or mapping name -> CyclePlan
     boxes : sequence of int, optional
         Boxes whose cycles are drawn; default: all.
+    reports : mapping name -> VerificationReport, optional
     """
     plt = require_matplotlib()
     if not isinstance(plans, Mapping):
         plans = {getattr(plans, "planner", "plan"): plans}
     first = next(iter(plans.values()))
     sc = first.scenario
-    fig = plt.figure(figsize=(8.0, 7.0))
+    fig = plt.figure(figsize=(9.0, 8.0))
     ax = fig.add_subplot(111, projection="3d")
     size = (sc.box.length, sc.box.width, sc.box.height)
+    pts = [np.zeros((1, 3))]
     stack = _joined([e for pose in sc.place_poses() for e in _box_edges(pose, size)])
     ax.plot(*(stack.T * 1000), color="0.6", lw=0.5, label="boxes on the pallet")
     pick = _joined(_box_edges(sc.pick, size))
-    ax.plot(*(pick.T * 1000), color="C2", lw=0.8, label="box at the pick")
+    ax.plot(*(pick.T * 1000), color="C8", lw=0.8, label="box at the pick")
+    pts += [stack[np.isfinite(stack[:, 0])], pick[np.isfinite(pick[:, 0])]]
+    cell = getattr(sc, "cell", None)
+    if cell is not None and cell.obstacles:
+        edges = []
+        for o in cell.obstacles:
+            pose = (0.5 * (o.x[0] + o.x[1]), 0.5 * (o.y[0] + o.y[1]), o.z[1], 0.0)
+            edges += _box_edges(pose, (o.x[1] - o.x[0], o.y[1] - o.y[0], o.z[1] - o.z[0]))
+        cj = _joined(edges)
+        ax.plot(*(cj.T * 1000), color="0.3", lw=0.9, label="cell obstacles")
+        pts.append(cj[np.isfinite(cj[:, 0])])
     for k, (name, plan) in enumerate(plans.items()):
         tl = plan.timeline
         if boxes is None:
@@ -169,14 +185,36 @@ def plot_gripper_path_3d(plans: Mapping[str, object] | object, boxes: Sequence[i
         q = tl.sample(t).position
         xyz = plan.scenario.robot.pose_from_joints(q)[:, :3] * 1000
         ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], color=f"C{k}", lw=0.9, label=f"{name} gripper path")
+        pts.append(xyz / 1000)
+        if cell is not None:
+            rep = (reports or {}).get(name)
+            cr = getattr(rep, "cell", None)
+            if cr is None:
+                from ..palletizing.cellcheck import check_cell
+
+                cr = check_cell(plan)
+            if cr.min_clearance_at:
+                t_c, _, obst, qc = cr.min_clearance_at
+                pc = plan.scenario.robot.pose_from_joints(np.asarray(qc))[:3] * 1000
+                ax.scatter([pc[0]], [pc[1]], [pc[2]], color=f"C{k}", marker="X", s=70,
+                           edgecolors="k", zorder=5,
+                           label=f"{name}: tightest clearance {cr.min_clearance * 1000:.1f} mm "
+                                 f"({obst}, t={t_c:.2f} s)")
     ax.scatter([0], [0], [0], color="k", marker="^", label="robot base")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]")
     ax.set_title(f"{sc.name}: gripper path over the stack ({sc.n_boxes} boxes)")
-    ax.legend(fontsize=8, loc="upper left")
+    ax.legend(fontsize=7, loc="upper left")
+    # equal scales: a cube around everything drawn
+    allp = np.vstack(pts) * 1000
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    mid, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) * 1.05
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_zlim(max(0.0, mid[2] - half), max(0.0, mid[2] - half) + 2 * half)
     try:
-        ax.set_box_aspect((np.ptp(ax.get_xlim3d()), np.ptp(ax.get_ylim3d()), np.ptp(ax.get_zlim3d())))
+        ax.set_box_aspect((1.0, 1.0, 1.0))
     except Exception:  # pragma: no cover - older matplotlib
         pass
     fig.tight_layout()
@@ -184,8 +222,12 @@ def plot_gripper_path_3d(plans: Mapping[str, object] | object, boxes: Sequence[i
     return fig
 
 
-def write_pallet_plots(plans: Mapping[str, object], out_dir, box: int = 0) -> list[Path]:
+def write_pallet_plots(plans: Mapping[str, object], out_dir, box: int = 0,
+                       reports: Mapping[str, object] | None = None) -> list[Path]:
     """Write the palletizing figures into ``out_dir`` (created if missing).
+
+    ``reports`` (name -> VerificationReport) give the 3-D figure its
+    tightest-clearance marks on a job with a cell.
 
     Returns
     -------
@@ -199,7 +241,7 @@ def write_pallet_plots(plans: Mapping[str, object], out_dir, box: int = 0) -> li
     written = []
     for key, fn in (("b_velocity", lambda p: plot_b_velocity(plans, box, p)),
                     ("zmax", lambda p: plot_zmax_curve(sc, box, "load", path=p)),
-                    ("path3d", lambda p: plot_gripper_path_3d(plans, path=p))):
+                    ("path3d", lambda p: plot_gripper_path_3d(plans, path=p, reports=reports))):
         p = out / PLOT_FILES[key]
         fig = fn(p)
         plt.close(fig)

@@ -1,5 +1,5 @@
 """Figures for paths and seams: the 3-D curve with its coarse chords, and the
-axis positions and speeds against time (seed 003, figures 6 and 7)."""
+axis positions and speeds against time (Chen et al., 2013, figures 6 and 7)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from . import require_matplotlib, save_figure
+from . import require_matplotlib, save_figure, set_equal_3d
 
 __all__ = ["plot_chords_3d", "plot_saddle_plan", "plot_path_plan"]
 
@@ -32,8 +32,7 @@ def plot_chords_3d(ax, path, chords, title: str = "") -> None:
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
     ax.set_zlabel("z [mm]", labelpad=4)
-    span = np.ptp(p, axis=0)
-    ax.set_box_aspect(np.maximum(span, span.max() * 0.25))
+    set_equal_3d(ax, np.vstack([p, q]))
     if title:
         ax.set_title(title)
     ax.legend(loc="upper left", fontsize=8)

@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..profiles.profile import Profile
 from ..trajectory import Trajectory
-from . import require_matplotlib, save_figure
+from . import line_colors, require_matplotlib, save_figure
 
 __all__ = ["plot_profile", "plot_trajectory", "QUANTITIES"]
 
@@ -91,18 +91,20 @@ def _save(fig: Any, path: str | None) -> None:
     save_figure(fig, path, dpi=_DPI)
 
 
-def _new_figure(title: str) -> tuple[Any, Any]:
+def _new_figure(title: str, ncols: int = 1) -> tuple[Any, Any]:
+    """Figure with 4 stacked rows (position .. jerk) in ``ncols`` columns; axes (4,) or (4, ncols)."""
     require_matplotlib()  # Agg backend, clear ImportError otherwise
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=_FIGSIZE, layout="constrained")
-    axs = fig.subplots(4, 1, sharex=True)
+    fig = Figure(figsize=(_FIGSIZE[0] * (1 + 0.6 * (ncols - 1)), _FIGSIZE[1]), layout="constrained")
+    axs = fig.subplots(4, ncols, sharex=True, squeeze=False)
     fig.suptitle(title)
-    for ax in axs:
+    for ax in axs.ravel():
         ax.grid(True, color="#cccccc", linewidth=0.5)
         ax.axhline(0.0, color="#888888", linewidth=0.6)
-    axs[-1].set_xlabel("time [s]")
-    return fig, axs
+    for ax in axs[-1]:
+        ax.set_xlabel("time [s]")
+    return fig, (axs[:, 0] if ncols == 1 else axs)
 
 
 def _limit_lines(ax: Any, values: Sequence[float], color: str, label: str | None) -> None:
@@ -226,8 +228,9 @@ def plot_trajectory(
     path : str or os.PathLike, optional
         Where to write the figure (``.png``, ``.pdf`` or ``.svg``), atomically.
     units : str or sequence of str
-        Position unit of every axis, or one per axis; when they differ the
-        y labels say ``[unit]`` and the legend gives each axis' unit.
+        Position unit of every axis, or one per axis; axes with different
+        units are drawn in separate columns of panels, so that every y axis
+        has one unit.
     title : str, optional
         Figure title; by default the axis count, duration and sync mode.
 
@@ -249,40 +252,42 @@ def plot_trajectory(
         raise InvalidInputError(
             f"units has {len(ulist)} entries but the trajectory has {n} axes"
         )
-    same_unit = len(set(ulist)) == 1
+    groups = list(dict.fromkeys(ulist))  # one column of panels per position unit
     if title is None:
         title = f"{n}-axis PTP, sync={traj.sync}: T = {traj.duration:.6g} s"
-    fig, axs = _new_figure(title)
-    colors = [f"C{i % 10}" for i in range(n)]
+    fig, axs = _new_figure(title, max(len(groups), 1))
+    axs = axs.reshape(4, -1)
+    colors = line_colors(n)
     if traj.sync == "phase" and n > 0:
         tb = traj.axes[0].phase_times
-        for ax in axs:
+        for ax in axs.ravel():
             for k in range(7):
                 if tb[k + 1] > tb[k]:
                     ax.axvspan(tb[k], tb[k + 1], color=_PHASE_COLORS[k], alpha=0.6, linewidth=0)
-        for k in range(7):
-            if tb[k + 1] > tb[k]:
-                axs[0].text(0.5 * (tb[k] + tb[k + 1]), 1.02, _PHASE_LABELS[k],
-                            transform=axs[0].get_xaxis_transform(), ha="center",
-                            va="bottom", fontsize=8, color="#444444")
+        for col in range(axs.shape[1]):
+            for k in range(7):
+                if tb[k + 1] > tb[k]:
+                    axs[0, col].text(0.5 * (tb[k] + tb[k + 1]), 1.02, _PHASE_LABELS[k],
+                                     transform=axs[0, col].get_xaxis_transform(), ha="center",
+                                     va="bottom", fontsize=8, color="#444444")
     for i, (prof, name) in enumerate(zip(traj.axes, traj.names)):
+        col = axs[:, groups.index(ulist[i])]
         t, smp = _profile_curve(prof)
-        label = name if same_unit else f"{name} [{ulist[i]}]"
-        for ax, (attr, _, _) in zip(axs, QUANTITIES):
+        for ax, (attr, _, _) in zip(col, QUANTITIES):
             ax.plot(t, getattr(smp, attr), color=colors[i], linewidth=1.4,
-                    label=label if ax is axs[0] else None)
+                    label=str(name) if ax is col[0] else None)
             if traj.sync != "phase":
                 for x in np.unique(prof.phase_times)[1:-1]:
                     ax.axvline(x, color=colors[i], linewidth=0.5, linestyle=":", alpha=0.7)
         vel_l, acc_l, _ = _limit_values(prof)
-        _limit_lines(axs[1], vel_l, colors[i], None)
-        _limit_lines(axs[2], acc_l, colors[i], None)
-    ylabel_unit = ulist[0] if (n and same_unit) else "unit"  # mixed: units in the legend
-    for ax, (_, name, power) in zip(axs, QUANTITIES):
-        ax.set_ylabel(f"{name}\n{_unit_label(ylabel_unit, power)}")
-    if n:
-        axs[0].legend(loc="best", fontsize=8, ncol=min(n, 6))
-    axs[0].set_xlim(0.0, traj.duration if traj.duration > 0 else 1.0)
+        _limit_lines(col[1], vel_l, colors[i], None)
+        _limit_lines(col[2], acc_l, colors[i], None)
+    for g, unit in enumerate(groups):
+        for ax, (_, name, power) in zip(axs[:, g], QUANTITIES):
+            ax.set_ylabel(f"{name}\n{_unit_label(unit, power)}")
+        members = sum(1 for u in ulist if u == unit)
+        axs[0, g].legend(loc="best", fontsize=8, ncol=min(members, 6))
+    axs[0, 0].set_xlim(0.0, traj.duration if traj.duration > 0 else 1.0)
     _save(fig, out)
     return fig
 

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import math
 import os
 from typing import Any
 
-from . import require_matplotlib, save_figure
+from . import line_colors, require_matplotlib, save_figure, set_equal_3d
 
 __all__ = ["plot_robot_run"]
 
@@ -28,18 +27,25 @@ def plot_robot_run(run: Any, samples: Any, path: str | os.PathLike | None = None
     """
     plt = require_matplotlib()
     robot = run.robot
+    units = [robot.joint_unit(j) for j in range(robot.n_joints)]
+    groups = list(dict.fromkeys(u for u, _ in units))  # one position panel per unit
     fig = plt.figure(figsize=(13, 8))
-    ax_q = fig.add_subplot(2, 2, 1)
-    ax_v = fig.add_subplot(2, 2, 3, sharex=ax_q)
-    ax_p = fig.add_subplot(2, 2, 2, projection="3d")
-    ax_s = fig.add_subplot(2, 2, 4, sharex=ax_q)
+    gs = fig.add_gridspec(len(groups) + 2, 2)
+    ax_q = [fig.add_subplot(gs[0, 0])]
+    ax_q += [fig.add_subplot(gs[g, 0], sharex=ax_q[0]) for g in range(1, len(groups))]
+    ax_v = fig.add_subplot(gs[len(groups):, 0], sharex=ax_q[0])
+    ax_p = fig.add_subplot(gs[: len(groups) + 1, 1], projection="3d")
+    ax_s = fig.add_subplot(gs[len(groups) + 1, 1], sharex=ax_q[0])
     t = samples.t
-    for j, (nm, kind, lim) in enumerate(zip(robot.joint_names, robot.joint_kinds, robot.limits)):
-        sc, unit = (180.0 / math.pi, "deg") if kind == "revolute" else (1e3, "mm")
-        ax_q.plot(t, samples.q[:, j] * sc, label=f"{nm} [{unit}]")
-        ax_v.plot(t, samples.qd[:, j] / lim.v_max, label=nm)
-    ax_q.set_ylabel("joint position")
-    ax_q.legend(fontsize=7, ncol=2)
+    colors = line_colors(robot.n_joints)
+    for j, (nm, lim) in enumerate(zip(robot.joint_names, robot.limits)):
+        unit, sc = units[j]
+        ax_q[groups.index(unit)].plot(t, samples.q[:, j] * sc, color=colors[j], label=nm)
+        ax_v.plot(t, samples.qd[:, j] / lim.v_max, color=colors[j], label=nm)
+    for ax, unit in zip(ax_q, groups):
+        ax.set_ylabel(f"joint position [{unit}]")
+        ax.legend(fontsize=7, ncol=2)
+    ax_v.legend(fontsize=7, ncol=3)
     ax_v.axhline(1.0, color="k", lw=0.7, ls="--")
     ax_v.axhline(-1.0, color="k", lw=0.7, ls="--")
     ax_v.set_ylabel("joint velocity / v_max")
@@ -51,6 +57,7 @@ def plot_robot_run(run: Any, samples: Any, path: str | os.PathLike | None = None
     ax_p.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], color="C0", lw=1.2)
     ax_p.scatter(*xyz[0], color="g", s=20)
     ax_p.scatter(*xyz[-1], color="r", s=20)
+    set_equal_3d(ax_p, xyz)
     ax_p.set_xlabel("x [mm]")
     ax_p.set_ylabel("y [mm]")
     ax_p.set_zlabel("z [mm]")

@@ -4,8 +4,11 @@
 (``pip install trajkit[fast]``) and falls back to the numpy formulation in
 :mod:`trajkit.profiles.batch` otherwise. The kernel is not a second
 implementation: it calls the functions of :mod:`trajkit.profiles._scalar`
-(their code compiled, see :func:`._compile.compiled_twins`), so each move agrees
-with :func:`trajkit.plan_move` (the tests check it to a few ulps).
+(their code compiled, see :func:`._compile.compiled_twins`: same operations in
+the same order, IEEE arithmetic without fast-math). Its transcendental
+functions (``cbrt``, ``pow``) come from LLVM rather than the C library, so each
+move agrees with :func:`trajkit.plan_move` to a few ulps; the tests check that
+on random and boundary cases.
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ __all__ = ["MoveBatch", "plan_moves"]
 #: Batches at least this large use the compiled kernel (:mod:`._jit`) when numba
 #: is installed (``pip install trajkit[fast]``) and ``TRAJKIT_NO_JIT`` is unset;
 #: smaller ones (and installs without numba) use the numpy formulation below.
-#: Both give the same bits as :func:`plan_move`.
+#: Both agree with :func:`plan_move` to a few ulps (numpy may use SIMD ``pow``/``cbrt``).
 JIT_MIN_MOVES = 4096
 
 _inf = np.inf

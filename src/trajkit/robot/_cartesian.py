@@ -1,13 +1,14 @@
-"""Cartesian motion chains (LIN/CIRC with blends): path, IK grid, speed limits, feed.
+"""Cartesian motion chains (LIN/CIRC with blends): path, joints by inverse kinematics, timing.
 
-Steps: build the pieces (lines, arcs, Bezier corner blends, orientation by
-slerp); solve IK on a dense grid of the path parameter, each seeded by the
-previous one (the configuration stays pinned); get dq/ds, d2q/ds2 and
-d3q/ds3; cap the feed speed and choose each run's path acceleration and jerk
-so that every joint stays within its velocity, acceleration and jerk limits;
-plan the jerk-limited feed (:mod:`trajkit.robot._feed`). Corners are blended
-by curvature-continuous curves, so the joint accelerations never step.
-Sampling then solves IK at every sample.
+Steps: build the pieces (lines, arcs, curvature-continuous Bezier corner
+blends, orientation by slerp); walk the inverse kinematics along the path
+(each solution seeded by the previous one, so the configuration stays pinned,
+and any joint jump bisected to tell a steep stretch from a singularity that
+cannot be passed); then time the joint path with the path-timing engine
+(:func:`trajkit.timing.plan_path_timing`): minimum time under every joint's
+velocity, acceleration and jerk limits, the programmed tool speed, the
+orientation rate and the tool's acceleration (tangential and centripetal) and
+jerk. Sampling solves IK at every sample.
 """
 
 from __future__ import annotations
@@ -23,7 +24,9 @@ from ..kinematics.base import Pose, RobotModel
 from ..paths._tolerances import COINCIDENT_DIST
 from ..paths.arc import Arc3
 from ..paths.line import Line
-from ._feed import Feed, Run, plan_feed
+from ..timing import PathTiming, plan_path_timing
+from ..interpolation.feed import ramp_mask, stretch_speed
+from ._jointpath import ChainJointPath
 from ._pieces import (
     BezierBlend,
     Piece,
@@ -37,65 +40,32 @@ from .motion import Circ, JointTarget
 
 __all__ = ["CartesianChain", "plan_chain"]
 
-#: Fraction of each joint's velocity limit the feed may use (margin for the
-#: difference between the IK grid and IK at the samples).
-VEL_USE = 0.95
+#: Fraction of the velocity limit above which a joint counts as "at its velocity limit"
+#: in a run's summary.
+VEL_USE = 0.999
 
-#: Fraction of each joint's acceleration limit used by the centripetal term
-#: (d2q/ds2) v^2; the rest (ACC_PATH_USE) is left to the path acceleration.
-ACC_CURVE_USE = 0.5
+#: A stretch runs below its programmed speed (a slow-down) when its planned
+#: speed is below this fraction of it.
+SLOWDOWN_FRACTION = 0.999
 
-#: Fraction of each joint's acceleration limit used by (dq/ds) s''.
-ACC_PATH_USE = 0.45
+#: Slow-down stretches are split where their limiting speed changes by this factor.
+SLOWDOWN_BAND = 1.25
 
-#: Joint jerk along the path: ``d3q/ds3 v^3 + 3 d2q/ds2 v a + dq/ds j`` (v, a, j:
-#: path speed, acceleration, jerk). Fraction of each joint's jerk limit
-#: (``min(j_max, j_max_decel)``) the three terms may use together; the rest
-#: covers the finite differences (the derivatives between grid points).
-JERK_USE = 0.9
-
-#: Fraction of each joint's jerk limit used by the first term, ``|d3q/ds3| v^3``:
-#: a speed cap at every grid point, like the velocity and acceleration caps.
-JERK_CURVE_USE = 0.5
-
-#: Share of what the first term leaves of JERK_USE (at the run's speed level)
-#: that ``3 |d2q/ds2| v |a|`` may use at most; it bounds the run's path
-#: acceleration. ``|dq/ds| |j|`` gets the rest, which bounds the run's path jerk.
-JERK_ACC_SHARE = 0.5
-
-#: The path derivatives used for the jerk bound at a grid point are the
-#: largest over this many grid points on either side, so that the bound
-#: holds between the grid points too.
-DERIV_WINDOW = 1
-
-#: Grid refinement for the derivatives (:func:`_refine_derivatives`): a cell
-#: whose second derivative changes by more than REFINE_RTOL of its size, where
-#: the jerk cap would bind if the third derivative were REFINE_D3_FACTOR times
-#: the grid's, is re-sampled REFINE_FACTOR times finer.
-REFINE_RTOL = 0.1
-REFINE_D3_FACTOR = 1000.0
-REFINE_FACTOR = 16
-
-#: Fraction of the tool acceleration limit used by the path curvature (v^2 kappa).
-CART_CURVE_USE = 0.5
-
-#: A run capped less than this fraction below its programmed speed is not a slow-down.
+#: Kept for the summary's "at the velocity limit" test (relative round-off).
 SLOWDOWN_RTOL = 1e-9
-
-#: Speed levels of the feed: the programmed speed times LEVEL_RATIO**k.
-LEVEL_RATIO = 0.85
 
 #: A required speed below this fraction of the programmed speed makes the
 #: path impassable (a singularity on the path).
 MIN_SPEED_FRACTION = 1e-3
 
-#: Target spacing of the IK grid [m of path parameter].
-GRID_DS = 5e-4
+#: Spacing of the inverse-kinematics walk along the path [m of path parameter]
+#: (seeds of the solutions, and where joint jumps are looked for).
+GRID_DS = 1e-3
 
 #: Fewest grid cells per piece.
 GRID_MIN_CELLS = 16
 
-#: Most grid cells per chain.
+#: Most grid cells per piece.
 GRID_MAX_CELLS = 20000
 
 #: A joint change [rad or m] between grid neighbours above which the cell is
@@ -163,26 +133,23 @@ class CartesianChain:
     robot: RobotModel
     pieces: list[Piece]
     offsets: np.ndarray
-    grid_s: np.ndarray
-    grid_q: np.ndarray
-    grid_dq: np.ndarray
-    grid_ddq: np.ndarray
-    feed: Feed
+    path: ChainJointPath
+    timing: PathTiming
     labels: list[str]
     motion_ids: list[int]
     slowdowns: list[Slowdown] = field(default_factory=list)
 
     @property
     def duration(self) -> float:
-        return self.feed.duration
+        return self.timing.duration
 
     @property
     def q_start(self) -> np.ndarray:
-        return self.grid_q[0]
+        return self.path.table_q[0]
 
     @property
     def q_end(self) -> np.ndarray:
-        return self.grid_q[-1]
+        return self.path.table_q[-1]
 
     def locate(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         k = np.clip(np.searchsorted(self.offsets, s, side="right") - 1, 0, len(self.pieces) - 1)
@@ -206,16 +173,15 @@ class CartesianChain:
 
     def sample(self, t: np.ndarray) -> dict[str, np.ndarray]:
         """IK at every sample time ``t`` (n,) [s] (local to the chain)."""
-        s, v, a = self.feed.sample(t)
+        s, v, a, _ = self.timing.sample(t)
         pos, quat, rate, mid = self.geometry(s)
         rots = matrix_from_quat(quat)
         nj = self.robot.n_joints
         q = np.empty((s.size, nj))
-        seeds = np.column_stack([np.interp(s, self.grid_s, self.grid_q[:, j]) for j in range(nj)])
+        seeds = self.path.seeds(s)
         for i in range(s.size):
             q[i] = self._ik(Pose.trusted(pos[i], rots[i]), seeds[i], int(mid[i]), pos[i])
-        dq = np.column_stack([np.interp(s, self.grid_s, self.grid_dq[:, j]) for j in range(nj)])
-        ddq = np.column_stack([np.interp(s, self.grid_s, self.grid_ddq[:, j]) for j in range(nj)])
+        dq, ddq, _ = self.timing.grid_interpolated(s)
         qd = dq * v[:, None]
         qdd = dq * a[:, None] + ddq * (v * v)[:, None]
         return {"q": q, "qd": qd, "qdd": qdd, "xyz": pos, "quat": quat,
@@ -405,110 +371,6 @@ def _check_continuous(robot: RobotModel, pieces: list[Piece], offsets: np.ndarra
         )
 
 
-def _window_max(x: np.ndarray, w: int) -> np.ndarray:
-    """Largest value of ``x`` (n, m) over rows i - w .. i + w, per row and column."""
-    out = x.copy()
-    for k in range(1, w + 1):
-        out[k:] = np.maximum(out[k:], x[:-k])
-        out[:-k] = np.maximum(out[:-k], x[k:])
-    return out
-
-
-def _run_accel_jerk(robot: RobotModel, d1: np.ndarray, d2: np.ndarray, d3: np.ndarray,
-                    speed: float, amax: np.ndarray, jmax: np.ndarray) -> tuple[float, float]:
-    """Path acceleration [m/s^2] and path jerk [m/s^3] of a run.
-
-    Parameters
-    ----------
-    d1, d2, d3 : ndarray, shape (n_joints,)
-        Largest |dq/ds| [/m], |d2q/ds2| [/m^2] and |d3q/ds3| [/m^3] of each
-        joint over the run.
-    speed : float
-        The run's speed level [m/s] (the largest path speed inside the run).
-    amax, jmax : ndarray, shape (n_joints,)
-        Joint acceleration [/s^2] and jerk [/s^3] limits.
-
-    Notes
-    -----
-    With ``rest = JERK_USE j_max - |d3q/ds3| v^3`` (>= (JERK_USE -
-    JERK_CURVE_USE) j_max, as the speed caps keep the first term within
-    JERK_CURVE_USE j_max), the acceleration ``a`` obeys ``|dq/ds| a <=
-    ACC_PATH_USE a_max``, ``3 |d2q/ds2| v a <= JERK_ACC_SHARE rest`` and the
-    tool's ``cartesian_accel``; the jerk ``j`` is the tool's ``cartesian_jerk``
-    scaled like ``a``, and at most ``(rest - 3 |d2q/ds2| v a) / |dq/ds|``. So
-    every joint's jerk stays within JERK_USE j_max wherever the speed is at
-    most ``v`` (the feed's speed changes happen inside the faster run).
-    """
-    rest = np.maximum(JERK_USE * jmax - d3 * speed**3, (JERK_USE - JERK_CURVE_USE) * jmax)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        acc = min(robot.cartesian_accel, float(np.min(ACC_PATH_USE * amax / d1)),
-                  float(np.min(JERK_ACC_SHARE * rest / (3.0 * d2 * speed))))
-        jerk = min(robot.cartesian_jerk * acc / robot.cartesian_accel,
-                   float(np.min((rest - 3.0 * d2 * speed * acc) / d1)))
-    return acc, jerk
-
-
-def _refine_derivatives(robot, pieces, offsets, s, q, ddq, a1, a2, a3, jmax, top_speed):
-    """Re-estimate |dq/ds|, |d2q/ds2|, |d3q/ds3| on a finer grid where the grid misses features.
-
-    Near a singularity the joint path can bend within one grid cell: the
-    third derivative from finite differences on the grid is then too small
-    (measured: 15-25x near the palletizer's axis) and so would be its jerk
-    cap. A cell is re-sampled :data:`REFINE_FACTOR` times finer (IK seeded
-    from the cell's start) when the second derivative changes across it by
-    more than :data:`REFINE_RTOL` of its size and the jerk cap could bind
-    there even if the third derivative were :data:`REFINE_D3_FACTOR` times
-    the grid's. The largest derivatives found in the cell raise its two
-    nodes' values (never lower them).
-    """
-    h = np.diff(s)
-    nj = q.shape[1]
-    dd = np.abs(np.diff(ddq, axis=0))  # signed: a sign change of d2q/ds2 counts
-    scale = np.maximum(np.abs(ddq[:-1]), np.abs(ddq[1:]))
-    g3 = np.maximum(a3[:-1], a3[1:])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        could_bind = np.cbrt(JERK_CURVE_USE * jmax[None, :] / (REFINE_D3_FACTOR * g3)) < top_speed
-        sharp = dd > REFINE_RTOL * scale
-    cells = np.nonzero(np.any(could_bind & sharp, axis=1))[0]
-    # not the cells at the chain's ends: one-sided differences there are not
-    # derivatives of the path (the path does not go on beyond its ends)
-    cells = cells[(cells >= 3) & (cells <= h.size - 4)]
-    if cells.size == 0:
-        return a1, a2, a3
-    a1, a2, a3 = a1.copy(), a2.copy(), a3.copy()
-    total = float(offsets[-1])
-    for c in cells:
-        hf = h[c] / REFINE_FACTOR
-        sf = s[c] + hf * np.arange(-3, REFINE_FACTOR + 4)
-        if sf[0] < 0.0 or sf[-1] > total:  # pragma: no cover - cells near the ends are skipped
-            continue
-        kk = np.clip(np.searchsorted(offsets, sf, side="right") - 1, 0, len(pieces) - 1)
-        pos = np.empty((sf.size, 3))
-        quat = np.empty((sf.size, 4))
-        for i in np.unique(kk):
-            m = kk == i
-            pos[m] = pieces[i].point(sf[m] - offsets[i])
-            quat[m] = pieces[i].quat(sf[m] - offsets[i])
-        rots = matrix_from_quat(quat)
-        qf = np.empty((sf.size, nj))
-        seed = q[c]
-        try:
-            for i in range(sf.size):
-                seed = qf[i] = robot.ik_near(Pose.trusted(pos[i], rots[i]), seed)
-        except UnreachableError:  # the grid itself was reachable: keep its estimate
-            continue
-        f1 = np.abs(np.gradient(qf, sf, axis=0))
-        f2 = np.gradient(np.gradient(qf, sf, axis=0), sf, axis=0)
-        f3 = np.abs(np.gradient(f2, sf, axis=0))
-        # nested differences: the one-sided ends spoil 3 points on each side
-        inner = slice(3, -3)
-        for arr, f in ((a1, f1), (a2, np.abs(f2)), (a3, f3)):
-            m = f[inner].max(axis=0)
-            arr[c] = np.maximum(arr[c], m)
-            arr[c + 1] = np.maximum(arr[c + 1], m)
-    return a1, a2, a3
-
-
 def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str],
                motion_ids: Sequence[int]) -> CartesianChain:
     """Plan LIN/CIRC ``motions`` from joints ``q0`` as one chain (rest to rest).
@@ -581,92 +443,140 @@ def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels
                 f"but the path arrives in {robot.config_of(q[last[-1]])!r} "
                 "(a LIN/CIRC cannot change configuration; use PTP)"
             )
-    # ---- derivatives along the path
-    dq = np.gradient(q, s, axis=0)
-    ddq = np.gradient(dq, s, axis=0)
-    dddq = np.gradient(ddq, s, axis=0)
-    vmax = np.array([lim.v_max for lim in robot.limits])
-    amax = np.array([min(lim.a_max, lim.a_max_decel) for lim in robot.limits])
-    jmax = np.array([min(lim.j_max, lim.j_max_decel) for lim in robot.limits])
-    a1, a2, a3 = _refine_derivatives(robot, pieces, offsets, s, q, ddq, np.abs(dq), np.abs(ddq),
-                                     np.abs(dddq), jmax, float(max(p.cap for p in pieces)))
-    d1, d2, d3 = (_window_max(x, DERIV_WINDOW) for x in (a1, a2, a3))
-    with np.errstate(divide="ignore"):
-        vel_cap = VEL_USE * vmax[None, :] / np.abs(dq)
-        acc_cap = np.sqrt(ACC_CURVE_USE * amax[None, :] / np.abs(ddq))
-        jerk_cap = np.cbrt(JERK_CURVE_USE * jmax[None, :] / d3)
-        dpos = np.gradient(pos, s, axis=0)
-        ddpos = np.gradient(dpos, s, axis=0)
-        curv = np.linalg.norm(ddpos, axis=1)
-        cart_cap = np.sqrt(CART_CURVE_USE * robot.cartesian_accel / curv)
-    prog = np.array([pieces[i].cap for i in k])
-    cand = np.column_stack([prog, vel_cap.min(axis=1), acc_cap.min(axis=1), cart_cap,
-                            jerk_cap.min(axis=1)])
-    node_cap = cand.min(axis=1)
-    programmed = np.array([pieces[i].programmed for i in k])
-    worst = int(np.argmin(node_cap / programmed))
-    if node_cap[worst] < MIN_SPEED_FRACTION * programmed[worst]:
-        jv = int(np.argmin(vel_cap[worst]))
-        raise UnreachableError(
-            f"{labels[mot[worst]]}: the path passes through a singularity at {_mm(pos[worst])} "
-            f"that cannot be passed: joint {robot.joint_names[jv]} would need "
-            f"{np.abs(dq[worst, jv]):.4g} rad per m of path, allowing only "
-            f"{1e3 * node_cap[worst]:.4g} mm/s (< {100 * MIN_SPEED_FRACTION:g} % of the programmed "
-            f"{1e3 * programmed[worst]:.4g} mm/s)"
-        )
-    # ---- runs: cells with quantised caps
-    cell_cap = np.minimum(node_cap[:-1], node_cap[1:])
-    cell_piece = k[:-1]
-    cell_prog = np.array([pieces[i].cap for i in cell_piece])
-    # a cell at the end of a piece also obeys the next piece's programmed cap
-    cell_prog = np.minimum(cell_prog, np.array([pieces[i].cap for i in k[1:]]))
-    # quantise strictly downwards: a level never exceeds its cell cap
-    with np.errstate(divide="ignore"):
-        steps = np.ceil(np.log(cell_cap / cell_prog) / math.log(LEVEL_RATIO))
-    level_speed = np.where(cell_cap >= cell_prog, cell_prog, cell_prog * LEVEL_RATIO**steps)
-    runs: list[Run] = []
-    run_cells: list[tuple[int, int]] = []
-    i0 = 0
-    ncell = s.size - 1
-    for c in range(1, ncell + 1):
-        if c == ncell or level_speed[c] != level_speed[i0]:
-            acc, jerk = _run_accel_jerk(robot, d1[i0:c + 1].max(axis=0), d2[i0:c + 1].max(axis=0),
-                                        d3[i0:c + 1].max(axis=0), float(level_speed[i0]),
-                                        amax, jmax)
-            runs.append(Run(float(s[i0]), float(s[c]), float(level_speed[i0]), acc, jerk))
-            run_cells.append((i0, c))
-            i0 = c
-    feed = plan_feed(runs)
-    chain = CartesianChain(robot, pieces, offsets, s, q, dq, ddq, feed, labels,
-                           list(motion_ids))
-    # ---- slow-downs caused by limits (not by the programmed speed)
-    last_cell = -1
-    for run, (c0, c1) in zip(runs, run_cells):
-        prog_run = float(np.min(programmed[c0:c1 + 1]))
-        if run.cap >= prog_run * (1.0 - SLOWDOWN_RTOL):
-            continue
-        nodes = np.arange(c0, c1 + 1)
-        j = nodes[int(np.argmin(node_cap[nodes]))]
-        col = int(np.argmin(cand[j]))
-        if col == 0:
-            reason = pieces[k[j]].cap_reason or "programmed speed"
-        elif col == 1:
-            reason = f"velocity of joint {robot.joint_names[int(np.argmin(vel_cap[j]))]}"
-        elif col == 2:
-            reason = f"acceleration of joint {robot.joint_names[int(np.argmin(acc_cap[j]))]}"
-        elif col == 3:
-            reason = "path curvature (tool acceleration)"
-        else:
-            reason = f"jerk of joint {robot.joint_names[int(np.argmin(jerk_cap[j]))]}"
-        mi = int(mot[j])
-        if (chain.slowdowns and chain.slowdowns[-1].motion == mi and last_cell == c0
-                and chain.slowdowns[-1].reason == reason):
-            sd = chain.slowdowns[-1]
-            sd.end_xyz = pos[c1]
-            sd.speed = min(sd.speed, run.speed)
-            last_cell = c1
-            continue
-        last_cell = c1
-        chain.slowdowns.append(Slowdown(mi, labels[mi], pos[c0], pos[c1], run.speed,
-                                        float(programmed[j]), reason))
+    # ---- timing: the engine, under the joint limits and the tool's own limits
+    path = ChainJointPath(robot, pieces, offsets, s, q, labels)
+    caps = np.array([pc.cap for pc in pieces])
+
+    def speed(ss: np.ndarray) -> np.ndarray:
+        # at a junction the slower of the two pieces
+        return np.minimum(caps[path.piece_of(ss)], caps[path.piece_of(ss, side="left")])
+
+    def curvature(ss: np.ndarray) -> np.ndarray:
+        return _tool_curvature(path, ss)
+
+    from ..errors import InfeasibleError
+
+    try:
+        timing = plan_path_timing(path, robot.limits, speed=speed, accel=robot.cartesian_accel,
+                                  jerk=robot.cartesian_jerk, curvature=curvature)
+    except InfeasibleError as exc:
+        raise UnreachableError(f"{labels[pieces[0].motion]}: {exc}") from None
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{labels[pieces[0].motion]}: {exc}") from None
+    chain = CartesianChain(robot, pieces, offsets, path, timing, labels, list(motion_ids))
+    chain.slowdowns = _slowdowns(chain, specs)
     return chain
+
+
+def _tool_curvature(path: ChainJointPath, s: np.ndarray) -> np.ndarray:
+    """Curvature [1/m] of the tool path at ``s`` (0 on orientation-only pieces): second
+    differences of the piece's own points (one-sided at its ends)."""
+    k = path.piece_of(s)
+    lo, hi = path.offsets[k], path.offsets[k + 1]
+    h = np.minimum(1e-4 * float(path.robot.length_scale), (hi - lo) / 4.0)
+    a = np.clip(s - h, lo, hi - 2 * h)
+    out = np.zeros(s.size)
+    for i in np.unique(k):
+        pc = path.pieces[i]
+        m = k == i
+        if pc.tool_rate == 0.0:
+            continue
+        loc = a[m] - path.offsets[i]
+        hh = h[m]
+        p0, p1, p2 = pc.point(loc), pc.point(loc + hh), pc.point(loc + 2 * hh)
+        out[m] = np.linalg.norm(p0 - 2 * p1 + p2, axis=1) / hh**2
+    return out
+
+
+def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
+    """Stretches whose planned speed is below the programmed one because of a limit.
+
+    At every grid node the static speed limits are compared with the
+    programmed speed: the joints' velocity (``v_max / |q'|``), acceleration
+    (``sqrt(a / |d2q/ds2|)``) and jerk (``cbrt(j / |d3q/ds3|)``) limits at constant
+    speed, the orientation rate and the tool's centripetal acceleration. Nodes
+    whose planned speed is below the programmed one where such a limit is
+    below it too form the reported stretches, split wherever the limit's level
+    changes by more than :data:`SLOWDOWN_BAND` (neighbours of the same reason
+    whose speeds stay within that band are one stretch again); each reports
+    the slowest planned speed inside it, off the ramps from and to rest.
+    """
+    tm = chain.timing
+    robot = chain.robot
+    path = chain.path
+    s = tm.grid
+    v = tm.grid_speed
+    _, d1, d2, d3 = tm.grid_derivatives
+    k = path.piece_of(s)
+    prog = np.array([chain.pieces[i].programmed for i in k])
+    piece_cap = np.array([chain.pieces[i].cap for i in k])
+    vmax = np.array([lm.v_max for lm in robot.limits])
+    amax = np.array([min(lm.a_max, lm.a_max_decel) for lm in robot.limits])
+    jmax = np.array([min(lm.j_max, lm.j_max_decel) for lm in robot.limits])
+    kap = _tool_curvature(path, s)
+    with np.errstate(divide="ignore"):
+        caps = np.column_stack([
+            np.where(piece_cap < prog, piece_cap, np.inf),
+            np.min(vmax / np.abs(d1), axis=1),
+            np.min(np.sqrt(amax / np.abs(d2)), axis=1),
+            np.min(np.cbrt(jmax / np.abs(d3)), axis=1),
+            np.sqrt(robot.cartesian_accel / kap),
+        ])
+    cap = caps.min(axis=1)
+    col = np.argmin(caps, axis=1)
+    ramp = ramp_mask(v)
+    limited = cap < SLOWDOWN_FRACTION * prog
+    # bands of the limiting speed: a stretch is split where its cap changes by
+    # more than SLOWDOWN_BAND, so each reports a speed that holds over it
+    band = np.floor(np.log(np.maximum(cap, 1e-300) / prog) / math.log(SLOWDOWN_BAND))
+
+    def reason_at(i: int) -> str:
+        c = int(col[i])
+        if c == 0:
+            return chain.pieces[k[i]].cap_reason or "programmed speed"
+        if c == 4:
+            return "path curvature (tool acceleration)"
+        with np.errstate(divide="ignore"):
+            ratio = (vmax / np.abs(d1[i]), np.sqrt(amax / np.abs(d2[i])),
+                     np.cbrt(jmax / np.abs(d3[i])))
+            j = int(np.argmin(ratio[c - 1]))
+        return f"{('velocity', 'acceleration', 'jerk')[c - 1]} of joint {robot.joint_names[j]}"
+
+    pos, _, _, _ = chain.geometry(s)
+    out: list[tuple[int, int, Slowdown]] = []
+    i = 0
+    while i < s.size:
+        if not limited[i]:
+            i += 1
+            continue
+        j = i
+        while (j + 1 < s.size and limited[j + 1] and band[j + 1] == band[i]
+               and chain.pieces[k[j + 1]].motion == chain.pieces[k[i]].motion):
+            j += 1
+        seg = slice(i, j + 1)
+        speed = stretch_speed(v[seg], ramp[seg])
+        # the reason that holds over the longest part of the stretch
+        lo = np.concatenate([[s[i]], 0.5 * (s[i:j] + s[i + 1:j + 1])])
+        hi = np.concatenate([0.5 * (s[i:j] + s[i + 1:j + 1]), [s[j]]])
+        weight: dict[str, float] = {}
+        for n, ln in zip(range(i, j + 1), hi - lo):
+            nm = reason_at(n)
+            weight[nm] = weight.get(nm, 0.0) + float(ln)
+        reason = max(weight, key=weight.get)
+        mi = chain.motion_ids[chain.pieces[k[i]].motion]
+        lab = chain.labels[chain.pieces[k[i]].motion]
+        if speed < SLOWDOWN_FRACTION * float(prog[i]):
+            prev = out[-1] if out else None
+            # a neighbouring stretch of the same instruction and reason whose speed is
+            # within one band of this one's: one stretch (its cap changed, the speed not)
+            if (prev is not None and prev[1] == i - 1 and prev[2].motion == mi
+                    and prev[2].reason == reason
+                    and max(prev[2].speed, speed) <= SLOWDOWN_BAND * min(prev[2].speed, speed)):
+                z = prev[2]
+                out[-1] = (prev[0], j, Slowdown(mi, lab, z.start_xyz, pos[j].copy(), min(z.speed, speed),
+                                                z.programmed, reason))
+            else:
+                out.append((i, j, Slowdown(mi, lab, pos[i].copy(), pos[j].copy(), speed, float(prog[i]),
+                                           reason)))
+        i = j + 1
+    return [z for _, _, z in out]

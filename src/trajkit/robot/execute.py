@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 import os
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -12,7 +9,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._atomicio import atomic_write
-from .._validate import check_positive
+from .._csvio import csv_text
+from .._sampling import MAX_SAMPLES, period_times
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import RobotModel
 from ..limits import AxisLimits
@@ -22,7 +20,7 @@ from ._cartesian import SLOWDOWN_RTOL, VEL_USE, CartesianChain, Slowdown, plan_c
 from ._rotations import quat_from_matrix
 from .motion import Circ, JointTarget, Lin, Ptp, Wait
 
-__all__ = ["RobotRun", "RobotSamples", "Segment", "run_motions", "SAMPLE_ENDPOINT_RTOL"]
+__all__ = ["RobotRun", "RobotSamples", "Segment", "run_motions"]
 
 #: Joint-space step [rad or m] of the central difference that gives the
 #: tool speed of a PTP motion from FK (truncation error ~ step^2).
@@ -42,9 +40,6 @@ PTP_BLEND_CHECKS = 200
 
 #: Bisection steps when shrinking a PTP blend overlap.
 PTP_BLEND_BISECT = 25
-
-#: A sample time within this fraction of the period from the end is the end.
-SAMPLE_ENDPOINT_RTOL = 1e-9
 
 
 @dataclass
@@ -139,14 +134,10 @@ class RobotRun:
         self.duration = segments[-1].t0 + segments[-1].duration if segments else 0.0
         self.slowdowns = slowdowns
 
-    def times(self, period: float) -> np.ndarray:
-        """0, dt, 2 dt, ... and the end time [s]."""
-        dt = check_positive(period, "period")
-        n = int(math.floor(self.duration / dt * (1 + SAMPLE_ENDPOINT_RTOL)))
-        t = np.arange(n + 1) * dt
-        if t[-1] < self.duration:
-            t = np.append(t, self.duration)
-        return t
+    def times(self, period: float, max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
+        """0, dt, 2 dt, ... and the end time [s]; at most ``max_samples`` samples
+        (see :func:`trajkit._sampling.period_times`)."""
+        return period_times(self.duration, period, end="exact", max_samples=max_samples)
 
     def _tool_speed(self, q: np.ndarray, qd: np.ndarray) -> float:
         """|d FK(q)/dt| [m/s] for joint velocity ``qd``: central difference of FK
@@ -225,24 +216,15 @@ class RobotRun:
 
     def to_csv(self, samples: RobotSamples, path: str | os.PathLike | None = None) -> str:
         """Samples as CSV: t [s], joints (deg for revolute, mm for prismatic), tool x/y/z [mm], speed [mm/s]."""
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
         names = []
-        scale = []
-        for nm, kind in zip(self.robot.joint_names, self.robot.joint_kinds):
-            if kind == "revolute":
-                names.append(f"{nm}_deg")
-                scale.append(180.0 / math.pi)
-            else:
-                names.append(f"{nm}_mm")
-                scale.append(1e3)
-        w.writerow(["t_s", *names, "x_mm", "y_mm", "z_mm", "tool_speed_mm_s", "instruction"])
-        sc = np.array(scale)
-        for i in range(samples.t.size):
-            w.writerow([repr(float(samples.t[i])), *(repr(float(x)) for x in samples.q[i] * sc),
-                        *(repr(float(x)) for x in 1e3 * samples.xyz[i]),
-                        repr(float(1e3 * samples.tool_speed[i])), int(samples.motion[i])])
-        text = buf.getvalue()
+        cols = [samples.t]
+        for k, nm in enumerate(self.robot.joint_names):
+            unit, sc = self.robot.joint_unit(k)
+            names.append(f"{nm}_{unit}")
+            cols.append(samples.q[:, k] * sc)
+        cols += [1e3 * samples.xyz[:, 0], 1e3 * samples.xyz[:, 1], 1e3 * samples.xyz[:, 2],
+                 1e3 * samples.tool_speed, samples.motion]
+        text = csv_text(["t_s", *names, "x_mm", "y_mm", "z_mm", "tool_speed_mm_s", "instruction"], cols)
         if path is not None:
             atomic_write(path, text)
         return text

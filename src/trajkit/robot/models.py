@@ -2,7 +2,7 @@
 
 ``robot_by_name("arm6" | "scara" | "palletizer")`` returns the default model.
 :class:`PalletizerRobot` adapts :class:`trajkit.kinematics.CylindricalPalletizer`
-(issue 4) to the program interface: the tool pose is ``(x, y, z)`` with the
+(the default palletizer) to the program interface: the tool pose is ``(x, y, z)`` with the
 gripper yaw about the vertical, ``R = Rz(theta + d)``.
 """
 

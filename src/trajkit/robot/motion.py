@@ -127,7 +127,7 @@ class Lin:
 
 @dataclass(frozen=True)
 class Circ:
-    """Circular arc through the start, an auxiliary point and the target (seed 002).
+    """Circular arc through the start, an auxiliary point and the target (Jiang, 1987).
 
     Attributes
     ----------

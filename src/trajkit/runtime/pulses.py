@@ -1,4 +1,4 @@
-"""Step/direction pulse output (seed 001): commanded positions -> pulses per period.
+"""Step/direction pulse output (patent CN105892402): commanded positions -> pulses per period.
 
 The count is computed from the *absolute* commanded position every period,
 ``count = floor(position / pulse_equivalent + 1/2)`` (:func:`pulse_count`), and the pulses of a period are the difference to the

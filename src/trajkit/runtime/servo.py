@@ -55,7 +55,7 @@ class ServoParams:
         Feedforward fractions in [0, 1].
     inertia_ratio : float
         Actual / nominal inertia (> 0); 1 is a perfectly known load, > 1 a
-        heavier one (e.g. the 100 kg payload of seed 000).
+        heavier one (e.g. the 100 kg payload of Cao et al., 2012).
     a_drive : float
         Largest acceleration the drive can command [unit/s^2] (``inf``: none).
     brake_deceleration : float
@@ -273,7 +273,7 @@ class ServoBank:
 
 
 def seed000_servo(robot: Any = None, inertia_ratio: float = 1.3) -> list[ServoParams]:
-    """Servo parameters used for the seed-000 palletizing comparison (joints A, B, C, D).
+    """Servo parameters for the palletizing comparison with Cao et al. (2012) (joints A, B, C, D).
 
     The paper gives none. These describe a moderately tuned industrial drive:
     position gain 20 1/s, velocity loop 200 1/s with integral 5000 1/s^2,

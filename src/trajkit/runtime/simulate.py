@@ -6,9 +6,9 @@
 in-position window for ``settle_cycles`` periods). The simulated time of a
 motion runs from the end of the previous motion (after its settling) to the
 end of this one (after its settling), so the sum over the motions is the
-simulated run time of the program. This is seed 000's "measured run time":
-longer than the planned time because the servos need time to remove the
-following error.
+simulated run time of the program. This is the "measured run time" of
+Cao et al. (2012, table 1): longer than the planned time because the servos
+need time to remove the following error (see docs/references.md).
 """
 
 from __future__ import annotations

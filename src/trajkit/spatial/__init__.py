@@ -86,7 +86,7 @@ def rotation_from_axis_angle(axis: Any, angle: float) -> np.ndarray:
 def frame_from_normal(normal: Any, x_hint: Any | None = None) -> np.ndarray:
     """Right-handed orthonormal frame whose z axis is ``normal``.
 
-    Seed 002 rotates the plane of a 3-point arc into a frame whose Z' is
+    Jiang (1987) rotates the plane of a 3-point arc into a frame whose Z' is
     the plane normal; this returns that frame.
 
     Parameters
@@ -187,7 +187,7 @@ def matrix_from_quaternion(q: Any) -> np.ndarray:
 def slerp(q0: Any, q1: Any, u: Any) -> np.ndarray:
     """Spherical linear interpolation of orientations, shortest way round.
 
-    Seed 002 interpolates the tool orientation along with the position;
+    Jiang (1987) interpolates the tool orientation along with the position;
     ``slerp`` turns at a constant angular rate about one fixed axis.
 
     Parameters

@@ -8,6 +8,7 @@
   const HISTORY_S = 20;
   let jobLoaded = false, plannedPath = [], trail = [], axesKey = "", charts = null;
   let chartData = null, t0 = null, lastState = null, lastTool = null, steps = [], lastRun = null;
+  let lastJobId = null;
 
   // ------------------------------------------------------------------ API
   function showMsg(text, isError) {
@@ -15,9 +16,18 @@
     m.textContent = text || "";
     m.className = "msg" + (isError ? " error" : "");
   }
-  async function api(method, path, body) {
-    const headers = { "Content-Type": "application/json" };
+  let CSRF = null;  // this server's anti-CSRF value (GET /api/session), sent on every change
+  async function loadSession() {
+    try {
+      const res = await fetch("/api/session", { headers: TOKEN ? { "X-Trajkit-Token": TOKEN } : {} });
+      if (res.ok) CSRF = (await res.json()).csrf_token;
+    } catch (e) { /* offline: the next request says so */ }
+  }
+  async function api(method, path, body, retried) {
+    const headers = {};
+    if (body !== undefined) headers["Content-Type"] = "application/json";
     if (TOKEN) headers["X-Trajkit-Token"] = TOKEN;
+    if (method !== "GET" && CSRF) headers["X-Trajkit-CSRF"] = CSRF;
     let res;
     try {
       res = await fetch(path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
@@ -26,12 +36,19 @@
       return null;
     }
     const data = await res.json().catch(() => ({}));
+    if (res.status === 403 && !retried && String(data.error || "").includes("X-Trajkit-CSRF")) {
+      await loadSession();  // the server restarted: take its new value and send once more
+      return api(method, path, body, true);
+    }
     if (!res.ok) {
       showMsg(data.error || ("HTTP " + res.status), true);
       return null;
     }
     return data;
   }
+  // form text to a JSON number when it is one; anything else goes as typed and the
+  // server names the field ("Input should be a valid number")
+  const num = (text) => { const t = String(text).trim(); const n = Number(t); return t !== "" && Number.isFinite(n) ? n : t; };
 
   // ------------------------------------------------------------------ tabs and forms
   document.querySelectorAll(".tab").forEach((tab) => tab.addEventListener("click", () => selectTab(tab.dataset.tab)));
@@ -43,14 +60,16 @@
     ev.preventDefault();
     const body = { kind: form.dataset.kind };
     for (const el of form.elements) {
-      if (el.name) body[el.name] = el.value.trim();
+      if (!el.name) continue;
+      body[el.name] = el.tagName === "INPUT" && el.inputMode ? num(el.value) : el.value;
     }
     form.querySelectorAll("input").forEach((i) => i.classList.remove("bad"));
     showMsg("planning " + body.kind + " job ...");
     const res = await api("POST", "/api/job", body);
-    if (!res) {
+    if (!res) {  // the server unloaded the previous job: nothing to start until a plan succeeds
       const m = $("msg").textContent;
       form.querySelectorAll("input, textarea").forEach((i) => { if (i.name && m.includes(i.name)) i.classList.add("bad"); });
+      clearJob();
       return;
     }
     showJob(res);
@@ -63,38 +82,63 @@
     trail = [];
     $("job-title").textContent = job.title + "  |  " + job.duration_s.toFixed(3) + " s";
     const dl = $("summary");
-    dl.innerHTML = "";
+    dl.replaceChildren();
     const add = (k, v) => { const dt = document.createElement("dt"); dt.textContent = k; const dd = document.createElement("dd"); dd.textContent = v; dl.append(dt, dd); };
-    add("job", job.title);
-    add("period", (job.period_s * 1e3).toFixed(3) + " ms");
-    for (const [k, v] of Object.entries(job.summary || {})) {
-      if (v !== null && typeof v === "object") {
-        for (const [k2, v2] of Object.entries(v)) {
-          if (v2 !== null && typeof v2 === "object") add(k2 + " limit use v/a/j", Object.values(v2).map((b) => fmt(b)).join(" / ") + " %");
-          else add(k.replace(/_/g, " ") + " " + k2, fmt(v2));
-        }
-      } else add(k.replace(/_/g, " "), fmt(v));
-    }
-    if (!lastRun) setupAxes(job.axes);  // after a run the table shows the machine until the next start
+    add("Job", job.title);
+    for (const row of job.summary_view || []) add(row.label, fmt(row.value) + (row.unit ? " " + row.unit : ""));
+    setupAxes(job.axes);
     drawPath(null);
     updateButtons(lastState || "idle");
+  }
+  function clearJob() {
+    jobLoaded = false;
+    plannedPath = [];
+    trail = [];
+    $("job-title").textContent = "no job loaded";
+    const dl = $("summary");
+    dl.replaceChildren();
+    const dt = document.createElement("dt"); dt.textContent = "Job";
+    const dd = document.createElement("dd"); dd.textContent = "none";
+    dl.append(dt, dd);
+    drawPath(null);
+    updateButtons(lastState || "idle");
+  }
+  async function refreshJob() {
+    const job = await api("GET", "/api/job");
+    if (job && job.axes) showJob(job); else if (job) clearJob();
   }
   const fmt = (v) => (typeof v === "number" ? (Number.isInteger(v) ? String(v) : v.toFixed(3)) : String(v));
 
   // ------------------------------------------------------------------ axes, charts
   const COLORS = ["#1f6feb", "#d9480f", "#2b8a3e", "#7048e8", "#c2255c", "#0b7285"];
+  function cell(cls, unit) {
+    const td = document.createElement("td");
+    td.className = cls;
+    td.append("\u2013");
+    const sm = document.createElement("small"); sm.textContent = unit; td.append(sm);
+    return td;
+  }
+  function setValue(td, text) { td.firstChild.nodeValue = text; }
   function setupAxes(axes) {
     const key = axes.map((a) => a.name + a.unit).join("|");
     const tb = $("axes").querySelector("tbody");
-    tb.innerHTML = "";
+    tb.replaceChildren();
     axes.forEach((a, i) => {
       const tr = document.createElement("tr");
       tr.dataset.axis = a.name;
-      tr.innerHTML = `<td class="name" style="color:${COLORS[i % COLORS.length]}">${a.name}</td>` +
-        `<td class="axis-pos">&ndash;<small>${a.unit}</small></td><td class="axis-act">&ndash;<small>${a.unit}</small></td>` +
-        `<td class="axis-vel">&ndash;<small>${a.unit}/s</small></td><td class="axis-fe">&ndash;<small>${a.unit}</small></td>`;
+      const name = document.createElement("td");
+      name.className = "name";
+      name.textContent = a.name;
+      name.style.color = COLORS[i % COLORS.length];
+      tr.append(name, cell("axis-pos", a.unit), cell("axis-act", a.unit), cell("axis-vel", a.unit + "/s"),
+                cell("axis-fe", a.unit));
       tb.append(tr);
     });
+    if (!axes.length) {
+      const tr = document.createElement("tr"), td = document.createElement("td");
+      td.colSpan = 5; td.className = "muted"; td.textContent = "no job loaded";
+      tr.append(td); tb.append(tr);
+    }
     if (key === axesKey && charts) return;
     axesKey = key;
     buildCharts(axes);
@@ -104,7 +148,7 @@
     chartData = { pos: [[], ...axes.map(() => [])], vel: [[], ...axes.map(() => [])] };
     const width = $("chart-pos").clientWidth || 600;
     const mk = (el, title, unitFn, data) => new uPlot({
-      title, width, height: 170, legend: { show: true, live: false },
+      title, width, height: CHART_HEIGHT, legend: { show: true, live: false },
       scales: { x: { time: false } },
       axes: [{ label: "t [s]", size: 34 }, { size: 56 }],
       series: [{ label: "t" }, ...axes.map((a, i) => ({ label: a.name + " [" + unitFn(a.unit) + "]", stroke: COLORS[i % COLORS.length], width: 1.6, points: { show: false } }))],
@@ -114,6 +158,16 @@
       vel: mk($("chart-vel"), "speed", (u) => u + "/s", chartData.vel),
     };
   }
+  // the charts follow their panel's width (a narrow window, a resized one)
+  const CHART_HEIGHT = window.innerHeight < 900 ? 130 : 170;
+  new ResizeObserver(() => {
+    if (!charts) return;
+    const w = $("chart-pos").clientWidth;
+    if (w > 0 && Math.abs(w - charts.pos.width) > 2) {
+      charts.pos.setSize({ width: w, height: CHART_HEIGHT });
+      charts.vel.setSize({ width: w, height: CHART_HEIGHT });
+    }
+  }).observe($("chart-pos"));
   function ensureAxes(axes) {
     const key = axes.map((a) => a.name + a.unit).join("|");
     if (key !== axesKey) { setupAxes(axes); clearCharts(); }
@@ -190,6 +244,11 @@
       if (st === "idle" && lastState !== null) refreshRobot();
       lastState = st;
     }
+    if (snap.job_id !== lastJobId) {  // another job loaded or unloaded (this page or another)
+      lastJobId = snap.job_id;
+      refreshJob();
+    }
+    if (jobLoaded !== (snap.job !== null)) { jobLoaded = snap.job !== null; updateButtons(st); }
     if (snap.trail_reset) trail = [];
     if (snap.trail && snap.trail.length) trail = trail.concat(snap.trail);
     if (snap.run_id !== lastRun) { lastRun = snap.run_id; t0 = null; clearCharts(); }
@@ -198,17 +257,22 @@
       const rows = $("axes").querySelectorAll("tbody tr");
       snap.axes.forEach((a, i) => {
         const r = rows[i];
-        if (!r) return;
-        r.querySelector(".axis-pos").innerHTML = a.position.toFixed(3) + `<small>${a.unit}</small>`;
-        r.querySelector(".axis-vel").innerHTML = a.velocity.toFixed(3) + `<small>${a.unit}/s</small>`;
-        if (a.actual !== undefined) {
-          r.querySelector(".axis-act").innerHTML = a.actual.toFixed(3) + `<small>${a.unit}</small>`;
-          r.querySelector(".axis-fe").innerHTML = a.following_error.toExponential(1) + `<small>${a.unit}</small>`;
-        }
+        if (!r || !r.dataset.axis) return;
+        setValue(r.querySelector(".axis-pos"), a.position.toFixed(3));
+        setValue(r.querySelector(".axis-vel"), a.velocity.toFixed(3));
+        setValue(r.querySelector(".axis-act"), a.actual.toFixed(3));
+        setValue(r.querySelector(".axis-fe"), a.following_error.toExponential(1));
       });
       pushChart(snap);
+    } else if (axesKey !== "") {
+      setupAxes([]);
     }
-    if (snap.progress !== undefined) {
+    $("tool-speed").textContent = snap.tool_speed_mm_s === undefined ? "\u2013" : snap.tool_speed_mm_s.toFixed(1);
+    if (snap.progress === undefined) {
+      $("progress-bar").style.width = "0%";
+      $("progress-text").textContent = "";
+      $("plan-time").textContent = "t = \u2013";
+    } else {
       const pct = Math.max(0, Math.min(100, 100 * snap.progress));
       $("progress-bar").style.width = pct.toFixed(1) + "%";
       $("progress-text").textContent = pct.toFixed(1) + " %";
@@ -226,8 +290,9 @@
     const li = document.createElement("li");
     li.className = e.level;
     const d = new Date(e.time * 1000);
-    li.innerHTML = `<time>${d.toLocaleTimeString()}</time>`;
-    li.append(document.createTextNode(e.text));
+    const tm = document.createElement("time");
+    tm.textContent = d.toLocaleTimeString();
+    li.append(tm, document.createTextNode(e.text));
     $("events").prepend(li);
   }
   function connect() {
@@ -247,7 +312,7 @@
     });
   }
   $("override").addEventListener("input", () => { $("override-val").textContent = $("override").value + " %"; });
-  $("override").addEventListener("change", async () => { await api("POST", "/api/override", { percent: $("override").value }); });
+  $("override").addEventListener("change", async () => { await api("POST", "/api/override", { percent: num($("override").value) }); });
 
   // ------------------------------------------------------------------ jog and teach
   async function refreshRobot() {
@@ -255,29 +320,33 @@
     if (!info) return;
     $("robot").value = info.robot;
     const sel = $("jog-joint"), keep = sel.value;
-    sel.innerHTML = "";
+    sel.replaceChildren();
     const tb = $("joints").querySelector("tbody");
-    tb.innerHTML = "";
+    tb.replaceChildren();
+    const td = (text, cls) => { const c = document.createElement("td"); c.textContent = text; if (cls) c.className = cls; return c; };
     for (const j of info.joints) {
       const o = document.createElement("option");
       o.value = j.name; o.textContent = j.name + " [" + j.unit + "]"; o.dataset.unit = j.unit;
       sel.append(o);
       const tr = document.createElement("tr");
-      tr.innerHTML = `<td>${j.name}</td><td>${j.value.toFixed(3)} ${j.unit}</td><td class="muted">${j.min.toFixed(0)} .. ${j.max.toFixed(0)}</td>`;
+      tr.append(td(j.name), td(j.value.toFixed(3) + " " + j.unit), td(j.min.toFixed(0) + " .. " + j.max.toFixed(0), "muted"));
       tb.append(tr);
     }
     if ([...sel.options].some((o) => o.value === keep)) sel.value = keep;
     $("jog-unit").textContent = sel.selectedOptions[0] ? sel.selectedOptions[0].dataset.unit : "";
     for (const id of ["step-point", "step-via"]) {
-      const s = $(id), first = id === "step-via" ? '<option value="">via &ndash;</option>' : "";
-      s.innerHTML = first + Object.keys(info.points).map((p) => `<option>${p}</option>`).join("");
+      const s = $(id);
+      s.replaceChildren();
+      if (id === "step-via") s.append(new Option("via \u2013", ""));
+      for (const p of Object.keys(info.points)) s.append(new Option(p, p));
     }
   }
   $("jog-joint").addEventListener("change", () => { $("jog-unit").textContent = $("jog-joint").selectedOptions[0].dataset.unit; });
   $("robot").addEventListener("change", async () => { if (await api("POST", "/api/robot", { robot: $("robot").value })) { steps = []; renderSteps(); } refreshRobot(); });
   async function jog(sign) {
-    const step = $("jog-step").value.trim();
-    const body = { joint: $("jog-joint").value, step: sign < 0 ? "-" + step : step, speed_pct: $("jog-speed").value.trim() };
+    const step = num($("jog-step").value);
+    const body = { joint: $("jog-joint").value, step: typeof step === "number" ? sign * step : step,
+                   speed_pct: num($("jog-speed").value) };
     if (await api("POST", "/api/jog", body)) showMsg("jogging " + body.joint);
   }
   $("jog-minus").addEventListener("click", () => jog(-1));
@@ -292,7 +361,7 @@
     }
   });
   function renderSteps() {
-    $("steps").innerHTML = steps.map((s) => `<li>${s.op} ${s.point}${s.via ? " via " + s.via : ""}</li>`).join("");
+    $("steps").replaceChildren(...steps.map((s) => { const li = document.createElement("li"); li.textContent = s.op + " " + s.point + (s.via ? " via " + s.via : ""); return li; }));
   }
   $("btn-add-step").addEventListener("click", () => {
     const s = { op: $("step-op").value, point: $("step-point").value };
@@ -311,7 +380,7 @@
   async function refreshPrograms() {
     const res = await api("GET", "/api/programs");
     if (!res) return;
-    $("program-list").innerHTML = res.programs.map((p) => `<option>${p}</option>`).join("");
+    $("program-list").replaceChildren(...res.programs.map((p) => new Option(p, p)));
   }
   $("btn-save").addEventListener("click", async () => {
     const name = $("program-name").value.trim();
@@ -330,9 +399,10 @@
   (async function init() {
     updateButtons("idle");
     drawPath(null);
+    await loadSession();
     const job = await api("GET", "/api/job");
     if (job && job.axes) showJob(job);
-    else buildCharts([]);
+    else { clearJob(); setupAxes([]); }
     refreshRobot();
     refreshPrograms();
     connect();

@@ -1,0 +1,143 @@
+"""The joint path of a Cartesian chain, ``q(s)`` by inverse kinematics, with its derivatives.
+
+The chain's pieces (lines, arcs, corner blends, orientation-only turns) give
+the tool pose at every path parameter ``s``; the joints are the inverse
+kinematics of that pose, on the branch the chain started on (each solution
+seeded from a table of joints walked along the path). The derivatives
+``dq/ds``, ``d2q/ds2``, ``d3q/ds3`` at a point are finite differences of the
+exact inverse kinematics on a small stencil (step :data:`STENCIL_STEP` times
+the robot's length scale) around that point, never across a junction of two
+pieces (a one-sided stencil there and at the path's ends): the numerical
+derivative of the kinematics, not of a sampled grid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import UnreachableError
+from ..kinematics.base import Pose, RobotModel
+from ._rotations import matrix_from_quat
+
+__all__ = ["ChainJointPath", "STENCIL_STEP"]
+
+#: Step of the derivative stencils, as a fraction of the robot's length scale.
+STENCIL_STEP = 1e-4
+
+# central (offsets -3..3) and one-sided forward (offsets 0..6) weights, order
+# 6 and 5 in the step, for the 1st, 2nd and 3rd derivative
+_CENTRAL = (
+    np.array([-1.0, 9.0, -45.0, 0.0, 45.0, -9.0, 1.0]) / 60.0,
+    np.array([2.0, -27.0, 270.0, -490.0, 270.0, -27.0, 2.0]) / 180.0,
+    np.array([1.0, -8.0, 13.0, 0.0, -13.0, 8.0, -1.0]) / 8.0,
+)
+_FORWARD = (
+    np.array([-147.0, 360.0, -450.0, 400.0, -225.0, 72.0, -10.0]) / 60.0,
+    np.array([812.0, -3132.0, 5265.0, -5080.0, 2970.0, -972.0, 137.0]) / 180.0,
+    np.array([-49.0, 232.0, -461.0, 496.0, -307.0, 104.0, -15.0]) / 8.0,
+)
+
+
+class ChainJointPath:
+    """``q(s)`` of a chain of pieces (a :class:`trajkit.timing.JointPath`).
+
+    Parameters
+    ----------
+    robot : RobotModel
+    pieces : list of Piece
+    offsets : ndarray, shape (k + 1,)
+        Start of every piece in ``s``, then the total length.
+    table_s, table_q : ndarray, shapes (n,), (n, m)
+        Joints along the path (the walked branch) used to seed the inverse kinematics.
+    labels : list of str
+        Instruction labels (for messages), indexed by the pieces' ``motion``.
+    """
+
+    def __init__(self, robot: RobotModel, pieces: list, offsets: np.ndarray, table_s: np.ndarray,
+                 table_q: np.ndarray, labels: list) -> None:
+        self.robot = robot
+        self.pieces = pieces
+        self.offsets = np.asarray(offsets, dtype=float)
+        self.length = float(self.offsets[-1])
+        self.n_joints = robot.n_joints
+        self.breakpoints = self.offsets[1:-1].copy()
+        self.table_s = table_s
+        self.table_q = table_q
+        self.labels = labels
+        self.h = STENCIL_STEP * float(robot.length_scale)
+        # seeds from a quintic spline through the walked joints: for a redundant arm
+        # the inverse kinematics keeps the seed's null-space part, so the path is as
+        # smooth as its seeds (a linear interpolation would put kinks in it)
+        from scipy.interpolate import make_interp_spline
+
+        k = min(5, table_s.size - 1)
+        self._seed = make_interp_spline(table_s, table_q, k=k) if k >= 1 else None
+
+    # ---- geometry
+    def piece_of(self, s: np.ndarray, side: str = "right") -> np.ndarray:
+        k = np.searchsorted(self.offsets, s, side=side) - 1
+        return np.clip(k, 0, len(self.pieces) - 1)
+
+    def poses(self, s: np.ndarray, k: np.ndarray):
+        """Positions (n, 3) and rotation matrices (n, 3, 3) at ``s`` on pieces ``k``."""
+        pos = np.empty((s.size, 3))
+        quat = np.empty((s.size, 4))
+        for i in np.unique(k):
+            m = k == i
+            loc = s[m] - self.offsets[i]
+            pos[m] = self.pieces[i].point(loc)
+            quat[m] = self.pieces[i].quat(loc)
+        return pos, matrix_from_quat(quat)
+
+    def seeds(self, s: np.ndarray) -> np.ndarray:
+        if self._seed is None:
+            return np.broadcast_to(self.table_q[0], (np.size(s), self.n_joints)).copy()
+        return self._seed(np.clip(s, self.table_s[0], self.table_s[-1]))
+
+    def ik(self, s: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
+        pos, rot = self.poses(s, k)
+        out = np.empty((s.size, self.n_joints))
+        for i in range(s.size):
+            try:
+                out[i] = self.robot.ik_near(Pose.trusted(pos[i], rot[i]), seeds[i])
+            except UnreachableError as exc:
+                lab = self.labels[self.pieces[int(k[i])].motion]
+                p = pos[i]
+                raise UnreachableError(
+                    f"{lab}: point ({1e3 * p[0]:.3f}, {1e3 * p[1]:.3f}, {1e3 * p[2]:.3f}) mm "
+                    f"of the path is unreachable: {exc}") from None
+        return out
+
+    # ---- the JointPath protocol
+    def derivatives(self, s: np.ndarray):
+        s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length)
+        n = s.size
+        m = self.n_joints
+        h = self.h
+        k = self.piece_of(s)
+        lo = self.offsets[k]
+        hi = self.offsets[k + 1]
+        hk = np.minimum(h, (hi - lo) / 8.0)
+        # stencil direction: central where it fits inside the piece, one-sided otherwise
+        fwd = s - 3 * hk < lo
+        bwd = ~fwd & (s + 3 * hk > hi)
+        off = np.arange(-3, 4)
+        pts = np.where(fwd[:, None], s[:, None] + hk[:, None] * (off + 3),
+                       np.where(bwd[:, None], s[:, None] - hk[:, None] * (off + 3),
+                                s[:, None] + hk[:, None] * off))
+        centre = np.where(fwd | bwd, 0, 3)
+        kk = np.repeat(k, 7)
+        flat = pts.ravel()
+        q_all = self.ik(flat, kk, self.seeds(np.clip(flat, 0.0, self.length))).reshape(n, 7, m)
+        q = np.empty((n, m))
+        d = [np.empty((n, m)) for _ in range(3)]
+        q[:] = q_all[np.arange(n), centre]
+        for order in range(3):
+            wc = _CENTRAL[order]
+            wf = _FORWARD[order]
+            cen = np.einsum("j,njm->nm", wc, q_all)
+            one = np.einsum("j,njm->nm", wf, q_all)
+            sign_b = (-1.0) ** (order + 1)  # backward stencil: mirrored offsets
+            val = np.where(fwd[:, None], one, np.where(bwd[:, None], sign_b * one, cen))
+            d[order] = val / hk[:, None] ** (order + 1)
+        return q, d[0], d[1], d[2]

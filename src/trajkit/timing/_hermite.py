@@ -1,0 +1,82 @@
+"""Exact time pieces through the node states of the grid solution.
+
+Between two nodes with states ``(v0, a0)`` and ``(v1, a1)`` a distance ``D``
+apart, two pieces of constant jerk of equal duration ``h = tau / 2`` pass
+through both states exactly when
+
+    D = (v0 + v1) tau / 2 + (a0 - a1) tau^2 / 12,
+    J1 = (v1 - v0 - (3 a0 + a1) h / 2) / h^2,    J2 = (a1 - a0) / h - J1
+
+(the first line is a quadratic in tau with one positive root whenever the
+states can be joined). An interval that starts or ends at rest is one jerk
+phase: ``tau = (6 D / J)^(1/3)``, ``J = sqrt(a^3 / (6 D))``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["hermite_pieces"]
+
+
+def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
+                   restN: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Durations and jerks of the pieces through the node states.
+
+    Parameters
+    ----------
+    s : ndarray, shape (n,)
+        Grid [path unit].
+    x, u : ndarray, shape (n,)
+        ``sdot^2`` and ``sddot`` at the nodes.
+    rest0, restN : bool
+        Whether the motion starts / ends at rest (one jerk phase there).
+
+    Returns
+    -------
+    durations, jerks : ndarray, shape (k,)
+    interval : ndarray of int, shape (k,)
+        The grid interval of each piece.
+
+    Raises
+    ------
+    ValueError
+        When two node states cannot be joined (no positive duration).
+    """
+    D = np.diff(s)
+    N = D.size
+    v = np.sqrt(np.maximum(x, 0.0))
+    v0, v1, a0, a1 = v[:-1], v[1:], u[:-1], u[1:]
+    qa = (a0 - a1) / 12.0
+    qb = 0.5 * (v0 + v1)
+    disc = qb * qb + 4.0 * qa * D
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = 2.0 * D / (qb + np.sqrt(np.maximum(disc, 0.0)))
+        h = 0.5 * tau
+        J1 = (v1 - v0 - (3.0 * a0 + a1) * h / 2.0) / (h * h)
+        J2 = (a1 - a0) / h - J1
+    special = np.zeros(N, dtype=bool)
+    if rest0:
+        special[0] = True
+    if restN:
+        special[-1] = True
+    bad = ~special & ((disc < 0.0) | ~np.isfinite(tau) | (tau <= 0.0))
+    if bad.any():
+        i = int(np.nonzero(bad)[0][0])
+        raise ValueError(f"grid interval {i} cannot be joined by constant-jerk pieces")
+    dur = np.column_stack([h, h]).ravel()
+    jerk = np.column_stack([J1, J2]).ravel()
+    keep = np.ones(2 * N, dtype=bool)
+    for flag, i, a in ((rest0, 0, a1[0] if N else 0.0), (restN, N - 1, -a0[-1] if N else 0.0)):
+        if not flag:
+            continue
+        a = max(float(a), 0.0)
+        if a > 0.0:
+            Jr = float(np.sqrt(a ** 3 / (6.0 * D[i])))
+            tr = float((6.0 * D[i] / Jr) ** (1.0 / 3.0))
+        else:  # no acceleration at the neighbour node: constant speed is impossible from rest
+            raise ValueError(f"grid interval {i} at rest has no acceleration")
+        dur[2 * i], jerk[2 * i] = tr, Jr  # from rest up, or down to rest: jerk > 0 both
+        keep[2 * i + 1] = False
+    interval = np.repeat(np.arange(N), 2)
+    return dur[keep], jerk[keep], interval[keep]

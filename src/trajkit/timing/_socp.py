@@ -1,0 +1,563 @@
+"""The grid problem of the path-timing engine: sequential convex restriction, one SOCP per round.
+
+On a grid ``s_0 < ... < s_N`` of the path parameter the unknowns are, at
+every node, ``x = sdot^2`` and ``u = sddot``. Between nodes the path
+acceleration is linear in time (one constant path jerk per interval), which
+ties the nodes by
+
+    x_{i+1} - x_i = D_i (u_i + u_{i+1}) + (u_{i+1}^2 - u_i^2) tau_i^2 / 12
+
+(``tau_i`` the interval's duration; exact for a constant-jerk interval) and
+gives the interval's path jerk ``(u_{i+1} - u_i) / tau_i``, with
+``D_i / tau_i = (sqrt(x_i) + sqrt(x_{i+1})) / 2 + (u_i - u_{i+1}) tau_i / 12``.
+For every joint ``k`` (``q'``, ``q''``, ``q'''``: derivatives of the joint path
+in s):
+
+- velocity   ``|q'| sqrt(x) <= v_max``,
+- acceleration ``q'' x + q' u`` within the leg limits (``a_max`` while the
+  joint speeds up, ``a_max_decel`` while it slows down),
+- jerk       ``|q''' x + 3 q'' u + q' w| <= j / v`` with ``w = (u_{i+1} - u_i) / D_i``
+  and ``v`` the interval's mean speed,
+
+and the path's own limits (speed cap per node, tangential acceleration and
+jerk). The time ``sum D_i / mean speed`` is convex in ``x`` (a second-order
+cone program, as in Verscheure et al. 2009); the jerk bound ``j / v`` is a
+convex function of ``x``, so replacing it by its tangent plane at the
+previous round's solution restricts the feasible set: every round's solution
+satisfies the true constraints of the model, the previous solution stays
+feasible, and the time decreases monotonically until the rounds agree
+(sequential convex restriction). The quadratic term of the node relation and
+the mean-speed correction are taken from the previous round (linearised);
+the first round drops the jerk constraints (the jerk-free optimum on the
+grid: a lower bound).
+
+A start or end at rest is exact: the first (last) interval is one jerk
+phase from rest, ``x_1 = 1.5 D_0 u_1`` and path jerk ``sqrt(u_1^3 / (6 D_0))``.
+
+Pure math: arrays in, arrays out. The SOCP solver is Clarabel.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["GridProblem", "GridSolution", "solve_grid"]
+
+#: Stop when a round changes the time by less than this fraction.
+ROUND_RTOL = 5e-4
+
+#: Most rounds (the first is jerk-free).
+MAX_ROUNDS = 6
+
+#: Solver tolerances (relative gap and feasibility).
+SOLVER_TOL = 1e-8
+
+#: A round the solver stopped early is still used when its primal residual is below this.
+PRIMAL_RTOL = 1e-7
+
+#: The cones are scaled by the previous round's x, but not below this fraction of its largest.
+SCALE_FLOOR = 1e-9
+
+#: Screening: an inequality (normalised to coefficients <= 1) whose slack at the
+#: previous round's solution is above this is left out of the next round ...
+SCREEN_SLACK = 1.0
+
+#: ... unless the new solution violates it by more than this; then the round is
+#: solved again with it (at most SCREEN_ROUNDS times).
+SCREEN_TOL = 1e-9
+SCREEN_ROUNDS = 3
+
+#: Node speeds^2 below this fraction of the largest are treated as zero in the
+#: tangent planes (guards a division near a stop in the path's interior).
+TINY_X = 1e-12
+
+
+@dataclass
+class GridProblem:
+    """Data of the grid problem, in the units of the caller.
+
+    Attributes
+    ----------
+    s : ndarray, shape (n,)
+        Grid of the path parameter, increasing.
+    d1, d2, d3 : ndarray, shape (n, m)
+        ``q'``, ``q''``, ``q'''`` of the m joints at the nodes.
+    v_max, a_acc, a_dec : ndarray, shape (m,) or (n, m)
+        Joint velocity and acceleration limits (leg: speeding up / slowing down).
+    j_acc, j_dec : ndarray, shape (m,) or (n, m)
+        Joint jerk limits of the two legs.
+    x_cap : ndarray, shape (n,)
+        Largest ``sdot^2`` at each node from the path's own speed limits.
+    a_path, j_path : float
+        Acceleration and jerk limits of the path (inf: none); with ``kappa``
+        the acceleration limit bounds the norm of ``(sddot, kappa sdot^2)``.
+    kappa : ndarray, shape (n,), optional
+        Curvature of the tool path at the nodes [1/path unit] (normal acceleration).
+    x_cap_mid : ndarray, shape (n - 1,), optional
+        Largest ``sdot^2`` at the middle of every interval (the path's speed cap there).
+    x0, u0, xN, uN : float
+        Boundary states (``sdot^2`` and ``sddot``).
+    """
+
+    s: np.ndarray
+    d1: np.ndarray
+    d2: np.ndarray
+    d3: np.ndarray
+    v_max: np.ndarray
+    a_acc: np.ndarray
+    a_dec: np.ndarray
+    j_acc: np.ndarray
+    j_dec: np.ndarray
+    x_cap: np.ndarray
+    a_path: float = math.inf
+    j_path: float = math.inf
+    x0: float = 0.0
+    u0: float = 0.0
+    xN: float = 0.0
+    uN: float = 0.0
+    kappa: np.ndarray | None = None
+    x_cap_mid: np.ndarray | None = None
+
+
+@dataclass
+class GridSolution:
+    """Node states of the solved grid problem.
+
+    Attributes
+    ----------
+    x, u : ndarray, shape (n,)
+        ``sdot^2`` and ``sddot`` at the nodes.
+    time : float
+        The model's duration [s].
+    jerk_free_time : float
+        Duration of the first (jerk-free) round: a lower bound of the model.
+    rounds : int
+    converged : bool
+    status : str
+        The solver's status of the last round.
+    """
+
+    x: np.ndarray
+    u: np.ndarray
+    time: float
+    jerk_free_time: float
+    rounds: int
+    converged: bool
+    status: str
+    history: list = None  # time of every round [s]
+
+
+class _Rows:
+    """COO assembly of constraint rows ``A z (<= | =) b``."""
+
+    def __init__(self, nv: int) -> None:
+        self.nv = nv
+        self.r: list[np.ndarray] = []
+        self.c: list[np.ndarray] = []
+        self.v: list[np.ndarray] = []
+        self.b: list[np.ndarray] = []
+        self.n = 0
+
+    def add(self, cols: list[np.ndarray], vals: list[np.ndarray], rhs: np.ndarray) -> None:
+        """Rows ``sum_k vals[k] * z[cols[k]] (op) rhs``, all arrays of one length."""
+        m = rhs.size
+        if m == 0:
+            return
+        rows = self.n + np.arange(m)
+        for cc, vv in zip(cols, vals):
+            self.r.append(rows)
+            self.c.append(np.broadcast_to(cc, (m,)))
+            self.v.append(np.broadcast_to(np.asarray(vv, dtype=float), (m,)))
+        self.b.append(rhs)
+        self.n += m
+
+    def matrix(self, normalise: bool = False) -> tuple[sp.csc_matrix, np.ndarray]:
+        """The rows as a sparse matrix and right-hand side; ``normalise`` divides every
+        row by its largest coefficient (inequalities only: the set is unchanged)."""
+        if self.n == 0:
+            return sp.csc_matrix((0, self.nv)), np.zeros(0)
+        A = sp.coo_matrix((np.concatenate(self.v), (np.concatenate(self.r), np.concatenate(self.c))),
+                          shape=(self.n, self.nv)).tocsr()
+        b = np.concatenate(self.b)
+        if normalise:  # by the largest of the coefficients and the right-hand side
+            big = np.maximum(np.maximum(abs(A).max(axis=1).toarray().ravel(), np.abs(b)), 1e-300)
+            A = sp.diags(1.0 / big) @ A
+            b = b / big
+        return A.tocsc(), b
+
+
+def _legs(sig: np.ndarray, acc: np.ndarray, dec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Upper and lower bound of ``sigma * q_ddot`` per node and joint (sigma = sign(q'))."""
+    hi = np.where(sig != 0, acc, np.minimum(acc, dec))
+    lo = np.where(sig != 0, dec, np.minimum(acc, dec))
+    return hi, lo
+
+
+def _interval_tau(x: np.ndarray, u: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """Durations of the constant-jerk intervals between node states (Hermite relation)."""
+    v = np.sqrt(np.maximum(x, 0.0))
+    qa = (u[:-1] - u[1:]) / 12.0
+    qb = 0.5 * (v[:-1] + v[1:])
+    disc = np.maximum(qb * qb + 4.0 * qa * D, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = 2.0 * D / (qb + np.sqrt(disc))
+    return np.where(np.isfinite(tau), tau, 0.0)
+
+
+def _time_scale(p: GridProblem) -> float:
+    """A time unit [s] in which the problem's numbers are of order one."""
+    L = float(p.s[-1] - p.s[0])
+    n, m = p.d1.shape
+    a1 = np.max(np.abs(p.d1), axis=0)
+    with np.errstate(divide="ignore"):
+        v = np.min(np.where(a1 > 0, np.broadcast_to(p.v_max, (n, m)).min(axis=0) / a1, np.inf))
+        a = np.min(np.where(a1 > 0, np.minimum(p.a_acc, p.a_dec).min(axis=0) / a1, np.inf)
+                   if np.ndim(p.a_acc) == 1 else np.inf)
+        j = np.min(np.where(a1 > 0, np.minimum(p.j_acc, p.j_dec).min(axis=0) / a1, np.inf)
+                   if np.ndim(p.j_acc) == 1 else np.inf)
+    v = min(v, float(np.max(np.sqrt(p.x_cap))), p.a_path * math.inf if False else v)
+    cands = [L / v if v > 0 and math.isfinite(v) else 0.0,
+             math.sqrt(L / a) if a > 0 and math.isfinite(a) else 0.0,
+             (L / j) ** (1.0 / 3.0) if j > 0 and math.isfinite(j) else 0.0,
+             math.sqrt(L / p.a_path) if math.isfinite(p.a_path) else 0.0,
+             (L / p.j_path) ** (1.0 / 3.0) if math.isfinite(p.j_path) else 0.0]
+    T = max(cands)
+    return T if T > 0 and math.isfinite(T) else 1.0
+
+
+#: Nodes within this fraction of the path's speed cap are put on it (a cruise
+#: at the programmed speed is exactly at that speed, not a solver tolerance below).
+SNAP_RTOL = 1e-6
+
+
+def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
+    """Put nodes at the path's own speed cap exactly on it; a run of such nodes with one
+    cap is a cruise (no path acceleration)."""
+    x, u = sol.x, sol.u
+    cap = p.x_cap
+    on = np.isfinite(cap) & (x >= cap * (1.0 - 2.0 * SNAP_RTOL))
+    on[0] = on[-1] = False
+    x[on] = cap[on]
+    same = on[:-1] & on[1:] & (cap[:-1] == cap[1:])
+    flat = np.zeros(x.size, dtype=bool)
+    flat[:-1] |= same
+    flat[1:] |= same
+    u[flat & (np.abs(u) * (p.s[-1] - p.s[0]) <= 1e-6 * np.maximum(cap, 1e-300))] = 0.0
+
+
+def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
+               init: tuple[np.ndarray, np.ndarray] | None = None) -> GridSolution:
+    """Solve the grid problem (see the module notes); raises RuntimeError if the solver fails.
+
+    The problem is solved in scaled units (``s / L``, ``t / T0`` with ``T0``
+    from :func:`_time_scale`) and the result returned in the caller's.
+    ``init`` (node ``x`` and ``u``, e.g. a coarser grid's solution interpolated)
+    is the first linearisation point: the jerk-free round is skipped
+    (``jerk_free_time`` is then NaN).
+    """
+    L = float(p.s[-1] - p.s[0])
+    T0 = _time_scale(p)
+    vs, as_, js = T0, T0 * T0, T0**3
+    scaled = GridProblem(
+        s=(p.s - p.s[0]) / L, d1=p.d1 * L, d2=p.d2 * L**2, d3=p.d3 * L**3,
+        v_max=np.asarray(p.v_max) * vs, a_acc=np.asarray(p.a_acc) * as_,
+        a_dec=np.asarray(p.a_dec) * as_, j_acc=np.asarray(p.j_acc) * js,
+        j_dec=np.asarray(p.j_dec) * js, x_cap=p.x_cap * (T0 / L) ** 2,
+        a_path=p.a_path * as_ / L, j_path=p.j_path * js / L,
+        x0=p.x0 * (T0 / L) ** 2, u0=p.u0 * as_ / L, xN=p.xN * (T0 / L) ** 2, uN=p.uN * as_ / L,
+        kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
+        x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
+    init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
+    sol = _solve_scaled(scaled, max_rounds, init_s)
+    sol.x = sol.x * (L / T0) ** 2
+    sol.u = sol.u * L / as_
+    sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
+    _snap_to_caps(sol, p)
+    sol.time *= T0
+    sol.jerk_free_time *= T0
+    sol.history = [t * T0 for t in sol.history]
+    return sol
+
+
+def _solve_scaled(p: GridProblem, max_rounds: int,
+                  init: tuple[np.ndarray, np.ndarray] | None = None) -> GridSolution:
+    import clarabel
+
+    s = p.s
+    n = s.size
+    N = n - 1
+    D = np.diff(s)
+    m = p.d1.shape[1]
+    d1, d2, d3 = p.d1, p.d2, p.d3
+    sig = np.sign(d1)
+    vmax = np.broadcast_to(p.v_max, (n, m))
+    a_hi, a_lo = _legs(sig, np.broadcast_to(p.a_acc, (n, m)), np.broadcast_to(p.a_dec, (n, m)))
+    j_both = np.minimum(np.broadcast_to(p.j_acc, (n, m)), np.broadcast_to(p.j_dec, (n, m)))
+    j_acc = np.broadcast_to(p.j_acc, (n, m))
+    j_dec = np.broadcast_to(p.j_dec, (n, m))
+    rest0 = p.x0 == 0.0 and p.u0 == 0.0
+    restN = p.xN == 0.0 and p.uN == 0.0
+
+    ix = np.arange(n)
+    iu = n + ix
+    ic = 2 * n + ix
+    idd = 3 * n + np.arange(N)
+    nv = 3 * n + N
+
+    with np.errstate(divide="ignore"):
+        xv = np.min(np.where(np.abs(d1) > 0, (vmax / np.abs(d1)) ** 2, np.inf), axis=1)
+    xv = np.minimum(xv, p.x_cap)
+    inner = np.arange(1, N)  # nodes whose state is free
+    d1_mid = 0.5 * (d1[:-1] + d1[1:]) + 0.125 * D[:, None] * (d2[:-1] - d2[1:])
+    with np.errstate(divide="ignore"):
+        xv_mid = np.min(np.where(np.abs(d1_mid) > 0,
+                                 (np.minimum(vmax[:-1], vmax[1:]) / np.abs(d1_mid)) ** 2, np.inf), axis=1)
+
+    # objective: interval time D / mean speed (the rest intervals' constant-jerk phase: 1.5x)
+    q = np.zeros(nv)
+    wts = 2.0 * D.copy()
+    if rest0:
+        wts[0] *= 1.5
+    if restN:
+        wts[-1] *= 1.5
+    q[idd] = wts
+    P = sp.csc_matrix((nv, nv))
+
+    # cones: c_i^2 <= x_i and d_i (c_i + c_{i+1}) >= 1, each scaled by the
+    # previous round's values (sigma ~ x_i, rho ~ 1 / (c_i + c_{i+1})) so that
+    # they stay accurate next to a stop where x is tiny. The end nodes' x is
+    # given: their c is fixed by an equality, no cone, so that the problem
+    # keeps a strictly feasible interior.
+    free = np.arange(1, N)
+    nf = free.size
+    k3 = np.arange(nf)
+    k4 = np.arange(N)
+    base = 3 * nf
+    cone_r = np.concatenate([3 * k3, 3 * k3 + 1, 3 * k3 + 2])
+    cone_c = np.concatenate([ix[free], ix[free], ic[free]])
+    r2 = np.concatenate([base + 3 * k4] * 3 + [base + 3 * k4 + 1] * 3)
+    c2 = np.concatenate([idd, ic[:-1], ic[1:], idd, ic[:-1], ic[1:]])
+    b_cone = np.concatenate([np.tile([1.0, -1.0, 0.0], nf), np.tile([0.0, 0.0, 2.0], N)])
+
+    def cone_matrix(sigma: np.ndarray, rho: np.ndarray) -> sp.csc_matrix:
+        sf = sigma[free]
+        cone_v = np.concatenate([-1.0 / sf, -1.0 / sf, -2.0 / np.sqrt(sf)])
+        v2 = np.concatenate([-1.0 / rho, -rho, -rho, -1.0 / rho, rho, rho])
+        return sp.coo_matrix((np.concatenate([cone_v, v2]), (np.concatenate([cone_r, r2]),
+                                                              np.concatenate([cone_c, c2]))),
+                             shape=(3 * nf + 3 * N, nv)).tocsc()
+
+    sigma = np.ones(n)
+    rho = np.ones(N)
+
+    # the path's acceleration vector: ||(u_i, kappa_i x_i)|| <= a_path
+    if p.kappa is not None and math.isfinite(p.a_path):
+        kn = free[np.asarray(p.kappa)[free] > 0]
+        kr = np.arange(kn.size)
+        A_acc = sp.coo_matrix((np.concatenate([-np.ones(kn.size), -np.asarray(p.kappa)[kn]]),
+                               (np.concatenate([3 * kr + 1, 3 * kr + 2]),
+                                np.concatenate([iu[kn], ix[kn]]))),
+                              shape=(3 * kn.size, nv)).tocsc()
+        b_acc = np.tile([p.a_path, 0.0, 0.0], kn.size)
+    else:
+        kn = np.zeros(0, dtype=int)
+        A_acc = sp.csc_matrix((0, nv))
+        b_acc = np.zeros(0)
+
+    x_bar = None
+    u_bar = np.zeros(n)
+    tau2 = np.zeros(N)
+    ecorr = np.zeros(N)
+    times: list[float] = []
+    times_status: list[str] = []
+    status = ""
+    x = np.zeros(n)
+    u = np.zeros(n)
+    converged = False
+    jerk_free = math.nan
+
+    def linearise_at(xx: np.ndarray, uu: np.ndarray):
+        floor = SCALE_FLOOR * max(float(xx.max()), TINY_X)
+        sg = np.maximum(xx, floor)
+        rh = 1.0 / (np.sqrt(sg[:-1]) + np.sqrt(sg[1:]))
+        ta = _interval_tau(xx, uu, D)
+        return sg, rh, ta * ta, (uu[:-1] - uu[1:]) * ta / 12.0
+
+    jerk_rounds = 0
+    best = None
+    z_prev = None
+    if init is not None:
+        x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
+        sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
+    for rnd in range(max_rounds):
+        eq = _Rows(nv)
+        eq.add([ix[0:1]], [np.ones(1)], np.array([p.x0]))
+        eq.add([iu[0:1]], [np.ones(1)], np.array([p.u0]))
+        eq.add([ix[N:]], [np.ones(1)], np.array([p.xN]))
+        eq.add([iu[N:]], [np.ones(1)], np.array([p.uN]))
+        eq.add([ic[0:1]], [np.ones(1)], np.array([math.sqrt(p.x0)]))
+        eq.add([ic[N:]], [np.ones(1)], np.array([math.sqrt(p.xN)]))
+        mid = np.arange(N)
+        special = np.zeros(N, dtype=bool)
+        if rest0:
+            special[0] = True
+            eq.add([ix[1:2], iu[1:2]], [np.ones(1), np.array([-1.5 * D[0]])], np.zeros(1))
+        if restN:
+            special[N - 1] = True
+            eq.add([ix[N - 1:N], iu[N - 1:N]], [np.ones(1), np.array([1.5 * D[N - 1]])], np.zeros(1))
+        g = mid[~special]
+        eq.add([ix[g + 1], ix[g], iu[g], iu[g + 1]],
+               [np.ones(g.size), -np.ones(g.size), -(D[g] - u_bar[g] * tau2[g] / 6.0),
+                -(D[g] + u_bar[g + 1] * tau2[g] / 6.0)],
+               -(u_bar[g + 1] ** 2 - u_bar[g] ** 2) * tau2[g] / 12.0)
+
+        ineq = _Rows(nv)
+        ineq.add([ix[inner]], [np.ones(inner.size)], xv[inner])
+        # joint velocities in the middle of every interval too (x_mid as for the cap below;
+        # q' there from its cubic Hermite interpolation)
+        ivm = np.isfinite(xv_mid)
+        if ivm.any():
+            im = np.nonzero(ivm)[0]
+            ineq.add([ix[im], ix[im + 1], iu[im], iu[im + 1]],
+                     [0.5 * np.ones(im.size), 0.5 * np.ones(im.size), 0.25 * D[im], -0.25 * D[im]],
+                     xv_mid[im])
+        # the path's speed cap also in the middle of every interval (the speed
+        # between nodes, not only at them): x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4
+        capm = np.minimum(p.x_cap[:-1], p.x_cap[1:])
+        if p.x_cap_mid is not None:
+            capm = np.minimum(capm, p.x_cap_mid)
+        cm = np.nonzero(np.isfinite(capm))[0]
+        if cm.size:
+            ineq.add([ix[cm], ix[cm + 1], iu[cm], iu[cm + 1]],
+                     [0.5 * np.ones(cm.size), 0.5 * np.ones(cm.size), 0.25 * D[cm], -0.25 * D[cm]],
+                     capm[cm])
+        # joint accelerations at the free nodes, both legs
+        nn, kk = np.meshgrid(inner, np.arange(m), indexing="ij")
+        nn, kk = nn.ravel(), kk.ravel()
+        sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
+        # when the leg is known from the previous round, use its own limit on both sides
+        ineq.add([ix[nn], iu[nn]], [sg * d2[nn, kk], sg * d1[nn, kk]], a_hi[nn, kk])
+        ineq.add([ix[nn], iu[nn]], [-sg * d2[nn, kk], -sg * d1[nn, kk]], a_lo[nn, kk])
+        if math.isfinite(p.a_path):
+            ineq.add([iu[inner]], [np.ones(inner.size)], np.full(inner.size, p.a_path))
+            ineq.add([iu[inner]], [-np.ones(inner.size)], np.full(inner.size, p.a_path))
+        if x_bar is not None:
+            sq = np.sqrt(np.maximum(x_bar, TINY_X * max(float(x_bar.max()), TINY_X)))
+            ii = g  # intervals with a free jerk (not the rest intervals)
+            S = sq[ii] + sq[ii + 1] + 2.0 * ecorr[ii]
+            S = np.maximum(S, 0.5 * (sq[ii] + sq[ii + 1]))
+            # jerk leg from the previous round: accel leg where the joint speeds up
+            qdd_bar = d2 * x_bar[:, None] + d1 * u_bar[:, None]
+            for node_of in (ii, ii + 1):
+                nn, kk = np.meshgrid(node_of, np.arange(m), indexing="ij")
+                it, _ = np.meshgrid(ii, np.arange(m), indexing="ij")
+                nn, kk, it = nn.ravel(), kk.ravel(), it.ravel()
+                speeding = sig[nn, kk] * qdd_bar[nn, kk]
+                jl = np.where(speeding > 0, j_acc[nn, kk],
+                              np.where(speeding < 0, j_dec[nn, kk], j_both[nn, kk]))
+                Sv = np.repeat(S, m)
+                f = 2.0 * jl / Sv
+                gi = -jl / (Sv * Sv * sq[it])
+                gj = -jl / (Sv * Sv * sq[it + 1])
+                rhs = f - gi * x_bar[it] - gj * x_bar[it + 1]
+                for sgn in (1.0, -1.0):
+                    w = sgn * d1[nn, kk] / D[it]
+                    ineq.add([ix[nn], iu[nn], iu[it + 1], iu[it], ix[it], ix[it + 1]],
+                             [sgn * d3[nn, kk], sgn * 3.0 * d2[nn, kk], w, -w, -gi, -gj], rhs)
+            if math.isfinite(p.j_path):
+                f = 2.0 * p.j_path / S
+                gi = -p.j_path / (S * S * sq[ii])
+                gj = -p.j_path / (S * S * sq[ii + 1])
+                rhs = f - gi * x_bar[ii] - gj * x_bar[ii + 1]
+                for sgn in (1.0, -1.0):
+                    w = sgn / D[ii]
+                    ineq.add([iu[ii + 1], iu[ii], ix[ii], ix[ii + 1]], [w, -w, -gi, -gj], rhs)
+            # the rest intervals: one jerk phase, |q'| J <= j with J = sqrt(u^3 / (6 D))
+            for flag, node, dd, sgn in ((rest0, 1, D[0], 1.0), (restN, N - 1, D[N - 1], -1.0)):
+                if not flag:
+                    continue
+                qa = np.maximum(np.abs(d1[node]), np.abs(d1[0 if node == 1 else N]))
+                # from rest the joints speed up (accel leg), to rest they slow down
+                jl = np.where(qa > 0, (j_acc if node == 1 else j_dec)[node], np.inf)
+                with np.errstate(divide="ignore"):
+                    ub = float(np.min((6.0 * dd) ** (1.0 / 3.0) * (jl / qa) ** (2.0 / 3.0)))
+                if math.isfinite(p.j_path):
+                    ub = min(ub, (6.0 * dd) ** (1.0 / 3.0) * p.j_path ** (2.0 / 3.0))
+                if math.isfinite(ub):
+                    ineq.add([iu[node:node + 1]], [np.array([sgn])], np.array([ub]))
+        nonneg = _Rows(nv)
+        both = np.concatenate([ic[free], idd])
+        nonneg.add([both], [-np.ones(both.size)], np.zeros(both.size))
+
+        A_eq, b_eq = eq.matrix()
+        A_in_all, b_in_all = ineq.matrix(normalise=True)
+        A_nn, b_nn = nonneg.matrix()
+        A_cn = cone_matrix(sigma, rho)
+        # screening: rows with a wide margin at the previous round's solution are
+        # left out; rows the new solution violates are put back and it is solved again
+        if z_prev is not None:
+            keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK
+        else:
+            keep = np.ones(b_in_all.size, dtype=bool)
+        for _screen in range(SCREEN_ROUNDS + 1):
+            A_in, b_in = A_in_all[keep], b_in_all[keep]
+            A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc]).tocsc()
+            b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
+            cones = [clarabel.ZeroConeT(A_eq.shape[0]),
+                     clarabel.NonnegativeConeT(A_in.shape[0] + A_nn.shape[0])]
+            cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
+            settings = clarabel.DefaultSettings()
+            settings.verbose = False
+            settings.tol_gap_abs = SOLVER_TOL
+            settings.tol_gap_rel = SOLVER_TOL
+            settings.tol_feas = SOLVER_TOL
+            sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
+            if keep.all():
+                break
+            viol = (A_in_all @ np.asarray(sol.x) - b_in_all) > SCREEN_TOL
+            if not (viol & ~keep).any():
+                break
+            keep |= viol
+        status = str(sol.status).split(".")[-1]
+        times_status.append(status)
+        usable = status in ("Solved", "AlmostSolved") or (
+            status == "InsufficientProgress" and float(getattr(sol, "r_prim", 1.0)) < PRIMAL_RTOL)
+        if not usable:
+            if x_bar is None:
+                raise RuntimeError(f"path timing: the jerk-free grid problem failed ({status})")
+            break  # keep the previous round's solution
+        z = np.asarray(sol.x)
+        z_prev = z
+        x = np.maximum(z[ix], 0.0)
+        u = z[iu].copy()
+        x[0], u[0], x[N], u[N] = p.x0, p.u0, p.xN, p.uN
+        # the rest intervals' relation exactly (the solver meets it only to its tolerance,
+        # which is large relative to the tiny states next to a stop)
+        if rest0:
+            u[1] = x[1] / (1.5 * D[0])
+        if restN:
+            u[N - 1] = -x[N - 1] / (1.5 * D[N - 1])
+        t = float(q @ z)
+        times.append(t)
+        if x_bar is None:
+            jerk_free = t
+        else:
+            jerk_rounds += 1
+            if best is None or t < best[0]:
+                best = (t, x.copy(), u.copy())
+            if jerk_rounds >= 2 and abs(times[-2] - t) <= ROUND_RTOL * t:
+                converged = True
+                break
+            if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
+                break  # the rounds got slower (the linearised terms moved): keep the best
+        x_bar, u_bar = x, u
+        sigma, rho, tau2, ecorr = linearise_at(x, u)
+    if best is not None:  # every round's solution keeps the constraints: the fastest
+        t, x, u = best
+    return GridSolution(x=x, u=u, time=t if times else math.nan,
+                        jerk_free_time=jerk_free, rounds=len(times), converged=converged,
+                        status=status, history=times)

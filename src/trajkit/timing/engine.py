@@ -1,0 +1,829 @@
+"""The path-timing engine: minimum-time, jerk-limited motion along a geometric path.
+
+Given a joint path ``q(s)`` (:class:`~trajkit.timing.paths.JointPath`), the
+joints' velocity, acceleration and jerk limits (accel and decel legs) and the
+path's own limits (speed cap along the path, tangential acceleration and
+jerk), :func:`plan_path_timing` returns the fastest ``s(t)`` it finds as
+exact pieces of constant path jerk (:class:`PathTiming`).
+
+Steps:
+
+1. a grid of ``s`` (refined at the path's ends, at its breakpoints and
+   wherever the joint-path derivatives change faster than their cubic
+   interpolation follows);
+2. the grid problem (:mod:`trajkit.timing._socp`): the jerk-free optimum
+   first (a lower bound), then rounds of convex restriction of the jerk
+   constraints until the time settles;
+3. exact constant-jerk pieces through the node states
+   (:mod:`trajkit.timing._hermite`);
+4. a dense check of every limit on the pieces (every piece boundary plus
+   :data:`CHECK_PER_PIECE` points inside, path derivatives by their cubic
+   interpolation on the grid); where a limit is exceeded the limit of that
+   joint is lowered at the nearby nodes and the problem solved again
+   (:data:`MAX_TIGHTEN` times), and any excess left is removed by slowing the
+   whole motion down uniformly (time scaled by ``k``: velocities / k,
+   accelerations / k^2, jerks / k^3), which always succeeds.
+
+Optimality: the result is a stationary point of the grid problem (the rounds
+stop when the time changes by less than :data:`ROUND_RTOL`); the
+jerk-free optimum on the same grid is reported beside it as a lower bound
+(``PathTiming.jerk_free_time``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from .._validate import check_positive
+from ..errors import InfeasibleError, InvalidInputError
+from ..limits import AxisLimits
+from ..profiles._pieces import eval_pieces
+from ._hermite import hermite_pieces
+from ..profiles import plan_move
+from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, solve_grid
+from .paths import JointPath
+
+__all__ = ["PathTiming", "plan_path_timing", "CHECK_PER_PIECE", "MAX_TIGHTEN", "LimitUse"]
+
+#: Longest motion the engine plans [s] (about 116 days); a longer one is refused
+#: before any work.
+MAX_DURATION = 1e7
+
+#: Grid nodes to start from (before refinement).
+GRID_START = 48
+
+#: Most grid nodes.
+GRID_MAX = 1200
+
+#: Refinement: a cell is split while the interpolated derivative at its middle
+#: misses the true one by more than this fraction of the limit it feeds.
+GRID_RTOL = 2e-3
+
+#: The same for a path whose derivatives are cheap to evaluate exactly
+#: (``cheap_derivatives``): the limit check uses the exact ones.
+GRID_RTOL_CHEAP = 2e-2
+
+#: Samples of a speed-cap function searched for its steps.
+CAP_GRID = 4097
+
+#: A change of the speed cap between two samples that counts as a step (fraction).
+CAP_STEP = 0.01
+
+#: Refinement passes.
+GRID_PASSES = 6
+
+#: Nodes added near each end of the path at geometrically growing spacing
+#: (the motion from rest goes like s ~ t^3 there).
+END_NODES = 6
+
+#: Distance of a breakpoint's twin node before it, as a fraction of the regular spacing.
+BREAK_TWIN = 1e-3
+
+#: The first of them, as a fraction of the regular spacing.
+END_FIRST = 0.02
+
+#: Rounds of the first solve (it only finds where the jerk phases are and
+#: where the second solve starts from).
+FIRST_ROUNDS = 3
+
+#: After the first solve, an interval whose path acceleration changes by more
+#: than this fraction of the acceleration's range is split (in 2 to 4).
+SWING_SPLIT = 0.02
+
+#: The grid problem plans with this fraction of every jerk limit: its pieces'
+#: jerks differ from the model's by a fraction of a per cent (two pieces per
+#: interval), which this absorbs instead of a slow-down of the whole motion.
+JERK_MARGIN = 0.998
+
+#: Points checked inside every piece (besides its ends).
+CHECK_PER_PIECE = 16
+
+#: A joint whose |velocity| is below this fraction of its limit is at rest for the
+#: choice of the leg (speeding up or slowing down) in the limit check.
+REST_RTOL = 1e-9
+
+#: Points checked inside every piece by the final check of the chosen timing.
+FINAL_CHECK_PER_PIECE = 64
+
+#: The final check looks again, with ZOOM_PER_PIECE points, at the ZOOM_PIECES
+#: pieces that come closest to a limit (within ZOOM_ABOVE of it).
+ZOOM_PIECES = 24
+ZOOM_PER_PIECE = 2000
+ZOOM_ABOVE = 1e-3
+
+#: Rounds of lowering a limit locally after the check found an excess.
+MAX_TIGHTEN = 2
+
+#: The check's largest excess above which a limit is lowered locally and the
+#: problem solved again (below it the uniform slow-down is cheaper).
+TIGHTEN_ABOVE = 1e-6
+
+#: A timing that had to be slowed down uniformly counts this fraction longer
+#: when the attempts are compared.
+SCALED_PENALTY = 2e-3
+
+#: Rounds of a solve after a limit was lowered locally (it starts from the previous one).
+TIGHTEN_ROUNDS = 3
+
+#: Margin kept under a limit that was lowered locally (fraction).
+TIGHTEN_MARGIN = 1e-4
+
+#: Relative slack of the final check (round-off).
+CHECK_RTOL = 1e-9
+
+
+@dataclass
+class LimitUse:
+    """Largest |value| / limit of each joint over the checked samples.
+
+    Attributes
+    ----------
+    velocity, acceleration, jerk : ndarray, shape (m,)
+    path_acceleration, path_jerk : float
+        Largest |s''| / a_path and |s'''| / j_path (0 when unlimited).
+    path_speed : float
+        Largest sdot / speed cap.
+    """
+
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray
+    path_acceleration: float = 0.0
+    path_jerk: float = 0.0
+    path_speed: float = 0.0
+
+    @property
+    def worst(self) -> float:
+        return float(max(self.velocity.max(initial=0.0), self.acceleration.max(initial=0.0),
+                         self.jerk.max(initial=0.0), self.path_acceleration, self.path_jerk,
+                         self.path_speed))
+
+
+@dataclass
+class PathTiming:
+    """The planned motion ``s(t)`` along a path: exact pieces of constant path jerk.
+
+    Attributes
+    ----------
+    path : JointPath
+    limits : list of AxisLimits
+    duration : float
+        [s].
+    t : ndarray, shape (k + 1,)
+        Piece boundaries [s].
+    state : ndarray, shape (k + 1, 3)
+        ``s``, ``sdot``, ``sddot`` at every boundary (exact integration).
+    jerk : ndarray, shape (k,)
+        Path jerk of every piece [path unit / s^3].
+    grid : ndarray, shape (n,)
+        The grid of ``s`` the timing was planned on.
+    grid_speed : ndarray, shape (n,)
+        Planned ``sdot`` at the grid nodes.
+    speed_cap : ndarray, shape (n,)
+        The largest ``sdot`` the velocity limits and the path's speed cap allow
+        at each node (the jerk-free speed limit curve's velocity part).
+    jerk_free_time : float
+        Minimum time on the same grid without the jerk limits (a lower bound) [s].
+    time_scale : float
+        Uniform slow-down applied after the check (1 when none was needed).
+    limit_use : LimitUse
+        Largest use of every limit over the dense check.
+    rounds : int
+        Rounds of the grid problem (last solve).
+    grid_derivatives : tuple of 4 ndarray, shape (n, m)
+        ``q``, ``q'``, ``q''``, ``q'''`` at the grid nodes.
+    info : dict
+        Grid size, tightening rounds, solver status.
+    """
+
+    path: Any
+    limits: list
+    duration: float
+    t: np.ndarray
+    state: np.ndarray
+    jerk: np.ndarray
+    grid: np.ndarray
+    grid_speed: np.ndarray
+    speed_cap: np.ndarray
+    jerk_free_time: float
+    time_scale: float
+    limit_use: LimitUse
+    rounds: int
+    grid_derivatives: tuple = ()
+    info: dict = field(default_factory=dict)
+
+    @property
+    def length(self) -> float:
+        return float(self.path.length)
+
+    def sample(self, time: Any) -> np.ndarray:
+        """Path state at ``time`` [s]: array (4, n) of ``s``, ``sdot``, ``sddot``, ``sdddot``.
+
+        Before 0 the start state holds (position only, moving states are
+        extrapolated by the first piece), after the end the end state.
+        """
+        tt = np.atleast_1d(np.asarray(time, dtype=np.float64))
+        out = np.empty((4, tt.size))
+        if self.jerk.size == 0:
+            out[0] = self.state[0, 0]
+            out[1:] = 0.0
+            return out
+        tc = np.clip(tt, 0.0, self.duration)
+        st = self.state[:-1]
+        out[0], out[1], out[2], out[3] = eval_pieces(tc, self.t, st[:, 0], st[:, 1], st[:, 2],
+                                                     self.jerk)
+        end = tt >= self.duration
+        out[0] = np.clip(out[0], 0.0, self.length)
+        out[0, end] = self.state[-1, 0]
+        out[1, end] = self.state[-1, 1]
+        out[2, end] = self.state[-1, 2]
+        out[3, end] = 0.0
+        return out
+
+    def grid_interpolated(self, s: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """First, second and third joint-path derivatives at ``s`` (n,), interpolated from
+        the grid nodes (each (n, m)): cubic Hermite for the first two (the next
+        derivative as the slope), linear for the third. The engine's limit check uses
+        the same interpolation."""
+        ss = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), self.grid[0], self.grid[-1])
+        return _interp_derivatives(self.grid, self.grid_derivatives, ss)
+
+    def joint_states(self, time: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Joint position, velocity, acceleration and jerk at ``time`` (each (n, m)), from
+        the path's derivatives at ``s(t)`` and the chain rule."""
+        s, v, a, j = self.sample(time)
+        q, d1, d2, d3 = self.path.derivatives(s)
+        qd = d1 * v[:, None]
+        qdd = d2 * (v * v)[:, None] + d1 * a[:, None]
+        qddd = d3 * (v ** 3)[:, None] + 3.0 * d2 * (v * a)[:, None] + d1 * j[:, None]
+        return q, qd, qdd, qddd
+
+    def __repr__(self) -> str:
+        return (f"PathTiming(length={self.length!r}, duration={self.duration!r}, "
+                f"pieces={self.jerk.size}, jerk_free_time={self.jerk_free_time!r})")
+
+
+# --------------------------------------------------------------------------- input
+def _limit_arrays(limits: Sequence[AxisLimits], m: int):
+    if len(limits) != m:
+        raise InvalidInputError(f"limits has {len(limits)} entries but the path has {m} joints")
+    lims = []
+    for k, lm in enumerate(limits):
+        if not isinstance(lm, AxisLimits):
+            raise InvalidInputError(f"limits[{k}] must be an AxisLimits, got {type(lm).__name__}")
+        lims.append(lm)
+    v = np.array([lm.v_max for lm in lims])
+    aa = np.array([lm.a_max for lm in lims])
+    ad = np.array([lm.a_max_decel for lm in lims])
+    ja = np.array([lm.j_max for lm in lims])
+    jd = np.array([lm.j_max_decel for lm in lims])
+    for name, arr in (("a_max", aa), ("a_max_decel", ad), ("j_max", ja), ("j_max_decel", jd)):
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise InvalidInputError(f"path timing needs finite {name} on every joint; "
+                                    f"axis {lims[k].name if lims[k].name is not None else k} has inf")
+    return lims, v, aa, ad, ja, jd
+
+
+def _speed_cap(speed: Any, s: np.ndarray) -> np.ndarray:
+    if callable(speed):
+        cap = np.asarray(speed(s), dtype=float)
+        if cap.shape != s.shape or np.any(~(cap > 0)):
+            raise InvalidInputError("speed(s) must return positive caps of the shape of s")
+        return cap
+    return np.full(s.shape, check_positive(speed, "speed", allow_inf=True))
+
+
+# --------------------------------------------------------------------------- grid
+def _initial_grid(L: float, breaks: np.ndarray) -> np.ndarray:
+    base = np.linspace(0.0, L, GRID_START + 1)
+    h = L / GRID_START
+    ends = h * np.geomspace(END_FIRST, 0.5, END_NODES)
+    # a breakpoint gets a twin just before it: the joint path's third derivative
+    # may step there, and the twin carries the incoming piece's values
+    twins = breaks - BREAK_TWIN * h
+    pts = np.concatenate([base, ends, L - ends, breaks, twins])
+    pts = np.unique(np.clip(pts, 0.0, L))
+    # nodes of the regular grid too close to a breakpoint or its twin are dropped
+    near = np.zeros(pts.size, dtype=bool)
+    for b in np.concatenate([breaks, twins]):
+        near |= (np.abs(pts - b) < 0.25 * h) & (pts != b) & ~np.isin(pts, breaks) & ~np.isin(pts, twins)
+    return pts[~near]
+
+
+def _mid_caps(s: np.ndarray, cap_fn, speed) -> np.ndarray:
+    """Squared speed cap at the middle of every grid interval (inf when the cap is a number)."""
+    if not callable(speed):
+        return np.full(s.size - 1, np.inf)
+    return cap_fn(0.5 * (s[:-1] + s[1:])) ** 2
+
+
+def _cap_edges(cap_fn, L: float) -> np.ndarray:
+    """Parameter values on both sides of every place where the speed cap changes by more
+    than CAP_STEP between neighbours of a CAP_GRID-point sampling (a dip of the cap then
+    always has nodes inside it)."""
+    g = np.linspace(0.0, L, CAP_GRID)
+    c = cap_fn(g)
+    fin = np.isfinite(c)
+    a, b = c[:-1], c[1:]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        jump = (fin[:-1] != fin[1:]) | (fin[:-1] & fin[1:] & (np.abs(b - a) > CAP_STEP * np.minimum(a, b)))
+    k = np.nonzero(jump)[0]
+    return np.unique(np.concatenate([g[k], g[k + 1]]))
+
+
+def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
+    """Cubic Hermite value at ``sm`` from values f and slopes g at s0, s1 (broadcast over joints)."""
+    h = (s1 - s0)[:, None]
+    t = ((sm - s0) / (s1 - s0))[:, None]
+    h00 = 2 * t**3 - 3 * t**2 + 1
+    h10 = t**3 - 2 * t**2 + t
+    h01 = -2 * t**3 + 3 * t**2
+    h11 = t**3 - t**2
+    return h00 * f0 + h10 * h * g0 + h01 * f1 + h11 * h * g1
+
+
+def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
+            breaks: np.ndarray = np.zeros(0), rtol: float = GRID_RTOL) -> tuple:
+    for _ in range(GRID_PASSES):
+        if s.size >= GRID_MAX:
+            break
+        q, d1, d2, d3 = der
+        sm = 0.5 * (s[:-1] + s[1:])
+        qm, m1, m2, m3 = path.derivatives(sm)
+        i1 = _hermite_interp(s[:-1], s[1:], d1[:-1], d1[1:], d2[:-1], d2[1:], sm)
+        i2 = _hermite_interp(s[:-1], s[1:], d2[:-1], d2[1:], d3[:-1], d3[1:], sm)
+        i3 = 0.5 * (d3[:-1] + d3[1:])
+        # the speed the cell could run at: the velocity limits, the path's cap, and
+        # the speeds at which the curvature of the joint path alone uses the joints'
+        # acceleration and jerk limits
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vcap = np.min(np.where(np.abs(m1) > 0, vlim / np.abs(m1), np.inf), axis=1)
+            vcap = np.minimum(vcap, np.min(np.where(np.abs(m2) > 0, np.sqrt(alim / np.abs(m2)),
+                                                    np.inf), axis=1))
+            vcap = np.minimum(vcap, np.min(np.where(np.abs(m3) > 0, np.cbrt(jlim / np.abs(m3)),
+                                                    np.inf), axis=1))
+        vcap = np.minimum(vcap, cap_fn(sm))
+        vcap = np.where(np.isfinite(vcap), vcap, 0.0)
+        e1 = np.max(np.abs(i1 - m1) * vcap[:, None] / vlim, axis=1)
+        e2 = np.max(np.abs(i2 - m2) * (vcap**2)[:, None] / alim, axis=1)
+        e3 = np.max(np.abs(i3 - m3) * (vcap**3)[:, None] / jlim, axis=1)
+        split = np.maximum(np.maximum(e1, e2), e3) > rtol
+        split &= ~np.isin(s[1:], breaks)  # the twin interval before a breakpoint stays whole
+        if not split.any():
+            break
+        room = GRID_MAX - s.size
+        idx = np.nonzero(split)[0]
+        if idx.size > room:
+            err = np.maximum(np.maximum(e1, e2), e3)[idx]
+            idx = idx[np.argsort(-err)[:room]]
+        new = np.sort(np.concatenate([s, sm[idx]]))
+        order = np.argsort(np.concatenate([s, sm[idx]]), kind="stable")
+        parts = [np.concatenate([a, b[idx]]) for a, b in zip(der, (qm, m1, m2, m3))]
+        der = tuple(p[order] for p in parts)
+        s = new
+    return s, der
+
+
+# --------------------------------------------------------------------------- check
+def _node_states(s: np.ndarray, x: np.ndarray, u: np.ndarray, dur: np.ndarray, jerk: np.ndarray,
+                 interval: np.ndarray, k: float = 1.0):
+    """Piece boundaries and start states: every interval's first piece starts exactly at
+    its node state (no round-off carried along the path), the second from the first.
+
+    ``k`` is the uniform time scale (durations already multiplied by it).
+    """
+    n_p = dur.size
+    t = np.concatenate([[0.0], np.cumsum(dur)])
+    st = np.zeros((n_p + 1, 3))
+    v = np.sqrt(np.maximum(x, 0.0)) / k
+    a = u / (k * k)
+    first = np.ones(n_p, dtype=bool)
+    first[1:] = interval[1:] != interval[:-1]
+    st[:-1][first] = np.column_stack([s[interval[first]], v[interval[first]], a[interval[first]]])
+    for i in np.nonzero(~first)[0]:
+        p0, v0, a0 = st[i - 1]
+        h = dur[i - 1]
+        jk = jerk[i - 1]
+        st[i] = (p0 + h * (v0 + h * (0.5 * a0 + h * jk / 6.0)), v0 + h * (a0 + 0.5 * h * jk), a0 + h * jk)
+    st[-1] = (s[-1], v[-1], a[-1])
+    return t, st
+
+
+def _pieces_state(dur: np.ndarray, jerk: np.ndarray, s0: float, v0: float, a0: float):
+    k = dur.size
+    t = np.zeros(k + 1)
+    st = np.zeros((k + 1, 3))
+    st[0] = (s0, v0, a0)
+    for i in range(k):
+        p, v, a = st[i]
+        h = dur[i]
+        jk = jerk[i]
+        st[i + 1] = (p + h * (v + h * (0.5 * a + h * jk / 6.0)), v + h * (a + 0.5 * h * jk), a + h * jk)
+        t[i + 1] = t[i] + h
+    return t, st
+
+
+def _solution_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Midpoints of the intervals where the path acceleration swings by more than
+    :data:`SWING_SPLIT` of its range: the jerk phases get enough nodes to be rounded."""
+    span = float(np.ptp(u))
+    if span <= 0.0:
+        return np.zeros(0)
+    du = np.abs(np.diff(u)) / span
+    out = []
+    for parts in (2, 3, 4):
+        sel = (du > SWING_SPLIT * (parts - 1)) & (du <= SWING_SPLIT * parts) if parts < 4 \
+            else du > SWING_SPLIT * (parts - 1)
+        k = np.nonzero(sel)[0]
+        for f in range(1, parts):
+            out.append(s[k] + (s[k + 1] - s[k]) * f / parts)
+    pts = np.concatenate(out) if out else np.zeros(0)
+    room = GRID_MAX - s.size
+    return pts[:max(room, 0)]
+
+
+def _interp_derivatives(s_grid: np.ndarray, der: tuple, S: np.ndarray):
+    """First three joint-path derivatives at ``S`` from the grid (see PathTiming.grid_interpolated)."""
+    cell = np.clip(np.searchsorted(s_grid, S, side="right") - 1, 0, s_grid.size - 2)
+    _, d1, d2, d3 = der
+    s0g, s1g = s_grid[cell], s_grid[cell + 1]
+    f1 = _hermite_interp(s0g, s1g, d1[cell], d1[cell + 1], d2[cell], d2[cell + 1], S)
+    f2 = _hermite_interp(s0g, s1g, d2[cell], d2[cell + 1], d3[cell], d3[cell + 1], S)
+    w = ((S - s0g) / (s1g - s0g))[:, None]
+    f3 = (1 - w) * d3[cell] + w * d3[cell + 1]
+    return f1, f2, f3
+
+
+def _sample_pieces(t: np.ndarray, st: np.ndarray, jerk: np.ndarray, tt: np.ndarray) -> np.ndarray:
+    """``s``, ``sdot`` at times ``tt`` of the pieces (2, n)."""
+    tc = np.clip(tt, 0.0, t[-1])
+    p, v, _, _ = eval_pieces(tc, t, st[:-1, 0], st[:-1, 1], st[:-1, 2], jerk)
+    return np.vstack([p, v])
+
+
+def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec, cap,
+              a_path: float, j_path: float, kappa):
+    """An always-feasible timing: one rest-to-rest S-curve of the path parameter whose
+    speed, acceleration and jerk are small enough for every joint everywhere on the
+    grid (the largest path derivatives with the smallest limits); what the final
+    check still finds is removed by a uniform slow-down. Far from optimal; used only
+    when the optimisation fails."""
+    _, d1, d2, d3 = der
+    a1 = np.abs(d1).max(axis=0)
+    a2 = np.abs(d2).max(axis=0)
+    a3 = np.abs(d3).max(axis=0)
+    A = np.minimum(aacc, adec)
+    J = np.minimum(jacc, jdec)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = float(np.min(np.where(a1 > 0, vlim / a1, np.inf)))
+        v = min(v, float(np.min(cap)), float(np.min(np.where(a2 > 0, np.sqrt(0.5 * A / a2), np.inf))),
+                float(np.min(np.where(a3 > 0, np.cbrt(0.25 * J / a3), np.inf))))
+        if kappa is not None and math.isfinite(a_path) and kappa.max() > 0:
+            v = min(v, math.sqrt(0.5 * a_path / float(kappa.max())))
+        a = float(np.min(np.where(a1 > 0, (A - a2 * v * v) / a1, np.inf)))
+        a = min(a, 0.5 * a_path) if math.isfinite(a_path) else a
+        j = float(np.min(np.where(a1 > 0, (J - a3 * v**3 - 3.0 * a2 * v * a) / a1, np.inf)))
+        j = min(j, j_path)
+    if not (math.isfinite(v) and v > 0):
+        v = 1.0
+    a = a if (math.isfinite(a) and a > 0) else v
+    j = j if (math.isfinite(j) and j > 0) else a
+    prof = plan_move(0.0, L, AxisLimits(v, a, j, name="path"))
+    keep = np.asarray(prof.phase_durations) > 0.0
+    return np.asarray(prof.phase_durations)[keep], np.asarray(prof.jerks)[keep]
+
+
+def _uniform_scale(use: LimitUse) -> float:
+    """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3)."""
+    k = max(1.0, float(use.velocity.max(initial=0.0)), use.path_speed,
+            math.sqrt(max(float(use.acceleration.max(initial=0.0)), use.path_acceleration)),
+            max(float(use.jerk.max(initial=0.0)), use.path_jerk) ** (1.0 / 3.0))
+    return k * (1.0 + 4.0 * CHECK_RTOL) if k > 1.0 + CHECK_RTOL else 1.0
+
+
+def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_path, j_path,
+           kappa=None, cap=None, cap_fn=None, path=None, per_piece=None):
+    """Limit use at every piece boundary and CHECK_PER_PIECE points inside each piece.
+
+    Returns the LimitUse and, per sample, the grid cell and the joint ratios."""
+    k = jerk.size
+    # both ends of every piece with its own jerk (the jerk steps at a boundary)
+    frac = np.linspace(0.0, 1.0, (per_piece or CHECK_PER_PIECE) + 2)
+    dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
+    piece = np.repeat(np.arange(k), frac.size)
+    p0, v0, a0, jk = st[piece, 0], st[piece, 1], st[piece, 2], jerk[piece]
+    S = p0 + dt * (v0 + dt * (0.5 * a0 + dt * jk / 6.0))
+    V = v0 + dt * (a0 + 0.5 * dt * jk)
+    A = a0 + dt * jk
+    # the end state too
+    S = np.append(S, st[-1, 0])
+    V = np.append(V, st[-1, 1])
+    A = np.append(A, st[-1, 2])
+    jk = np.append(jk, jerk[-1] if k else 0.0)
+    S = np.clip(S, s_grid[0], s_grid[-1])
+    # the end of a piece belongs to that piece: where it ends on a grid node (a
+    # breakpoint of the path, where q''' may step), the derivatives are the limits
+    # from below (the value from above is the next piece's start sample)
+    S_eval = S.copy()
+    if k:
+        npp = frac.size
+        ends = np.arange(npp - 1, k * npp, npp)
+        c0 = np.clip(np.searchsorted(s_grid, st[:-1, 0], side="right") - 1, 0, s_grid.size - 2)
+        S_eval[ends] = np.minimum(S[ends], np.nextafter(s_grid[c0 + 1], -np.inf))
+        S_eval[-1] = np.nextafter(S[-1], -np.inf)
+        S_eval = np.maximum(S_eval, s_grid[0])
+    cell = np.clip(np.searchsorted(s_grid, S_eval, side="right") - 1, 0, s_grid.size - 2)
+    if path is not None:  # a path whose derivatives are cheap: the exact ones
+        _, f1, f2, f3 = path.derivatives(S_eval)
+    else:
+        f1, f2, f3 = _interp_derivatives(s_grid, der, S_eval)
+    w = ((S_eval - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell]))[:, None]
+    qd = f1 * V[:, None]
+    qdd = f2 * (V * V)[:, None] + f1 * A[:, None]
+    qddd = f3 * (V**3)[:, None] + 3.0 * f2 * (V * A)[:, None] + f1 * jk[:, None]
+    # the leg: speeding up (accel limits) or slowing down (decel limits); at rest,
+    # where the product vanishes, the leg of the piece's middle (a jerk phase that
+    # ends at rest is the end of a braking, one that starts there speeds up)
+    prod = qd * qdd
+    if k:
+        npp = frac.size
+        mid = np.repeat(prod[:-1].reshape(k, npp, -1)[:, npp // 2], npp, axis=0)
+        mid = np.vstack([mid, mid[-1:]])
+        at_rest = np.abs(qd) <= REST_RTOL * vlim
+        prod = np.where(at_rest, mid, prod)
+    speeding = prod > 0
+    alim = np.where(speeding, alim_acc, np.where(prod < 0, alim_dec, np.minimum(alim_acc, alim_dec)))
+    jl = np.where(speeding, jacc, np.where(prod < 0, jdec, np.minimum(jacc, jdec)))
+    rv = np.abs(qd) / vlim
+    ra = np.abs(qdd) / alim
+    rj = np.abs(qddd) / jl
+    if kappa is not None:
+        kap = (1 - w[:, 0]) * kappa[cell] + w[:, 0] * kappa[cell + 1]
+        acc_norm = np.hypot(A, kap * V * V)
+    else:
+        acc_norm = np.abs(A)
+    if cap is not None:
+        # the cap between two nodes: the smaller of the two (a cap may step at a node),
+        # and the cap function itself at the sample when it is a function
+        cp = np.minimum(cap[cell], cap[cell + 1])
+        if cap_fn is not None:
+            cp = np.minimum(cp, cap_fn(S))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rs = np.where(np.isfinite(cp), V / cp, 0.0)
+        path_speed = float(rs.max(initial=0.0))
+    else:
+        rs = np.zeros(S.size)
+        path_speed = 0.0
+    use = LimitUse(rv.max(axis=0), ra.max(axis=0), rj.max(axis=0),
+                   float(acc_norm.max() / a_path) if math.isfinite(a_path) else 0.0,
+                   float(np.abs(jk).max() / j_path) if math.isfinite(j_path) else 0.0,
+                   path_speed)
+    return use, cell, rv, ra, rj, S, rs
+
+
+# --------------------------------------------------------------------------- public
+def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
+                     speed: float | Callable[[np.ndarray], np.ndarray] = math.inf,
+                     accel: float = math.inf, jerk: float = math.inf,
+                     curvature: Callable[[np.ndarray], np.ndarray] | None = None,
+                     start_speed: float = 0.0, start_accel: float = 0.0,
+                     end_speed: float = 0.0, end_accel: float = 0.0) -> PathTiming:
+    """Minimum-time jerk-limited motion along a joint path (see the module notes).
+
+    Parameters
+    ----------
+    path : JointPath
+        ``q(s)`` with its derivatives, ``s`` in ``[0, path.length]``.
+    limits : sequence of AxisLimits, length n_joints
+        Joint limits (velocity, acceleration and jerk of both legs; finite
+        acceleration and jerk).
+    speed : float or callable
+        Cap on ``sdot`` [path unit/s]: a number, or a function of ``s`` (n,)
+        returning the cap at each ``s`` (the programmed tool speed, an
+        orientation-rate cap...).
+    accel, jerk : float
+        Limits of the path's acceleration and jerk [path unit/s^2, /s^3]:
+        ``|sddot| <= accel`` (with ``curvature``: the norm of the acceleration
+        vector ``(sddot, curvature * sdot^2)``), ``|sdddot| <= jerk``.
+    curvature : callable, optional
+        Curvature of the tool path at ``s`` (n,) -> (n,) [1/path unit].
+    start_speed, start_accel, end_speed, end_accel : float
+        Path state at the ends (``sdot`` >= 0, ``sddot``); rest by default.
+
+    Returns
+    -------
+    PathTiming
+
+    Raises
+    ------
+    InvalidInputError
+        Bad limits or boundary states.
+    InfeasibleError
+        The path cannot be passed (a joint would need infinite speed: a
+        singularity), or the boundary states are outside the limits.
+    """
+    if not isinstance(path, JointPath):
+        raise InvalidInputError(f"path must be a JointPath (length, n_joints, derivatives), "
+                                f"got {type(path).__name__}")
+    L = float(path.length)
+    if not (math.isfinite(L) and L > 0.0):
+        raise InvalidInputError(f"path length must be finite and > 0, got {L!r}")
+    m = int(path.n_joints)
+    lims, vlim, aacc, adec, jacc, jdec = _limit_arrays(limits, m)
+    a_path = check_positive(accel, "accel", allow_inf=True)
+    j_path = check_positive(jerk, "jerk", allow_inf=True)
+    for nm, val in (("start_speed", start_speed), ("end_speed", end_speed)):
+        if not (math.isfinite(val) and val >= 0.0):
+            raise InvalidInputError(f"{nm} must be finite and >= 0, got {val!r}")
+    for nm, val in (("start_accel", start_accel), ("end_accel", end_accel)):
+        if not math.isfinite(val):
+            raise InvalidInputError(f"{nm} must be finite, got {val!r}")
+
+    def cap_fn(ss):
+        return _speed_cap(speed, ss)
+
+    breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
+    breaks = breaks[(breaks > 0.0) & (breaks < L)]
+    s = _initial_grid(L, breaks)
+    if callable(speed):  # nodes on both sides of every step of the speed cap
+        s = np.unique(np.concatenate([s, _cap_edges(cap_fn, L)]))
+    der = path.derivatives(s)
+    alim = np.minimum(aacc, adec)
+    jlim = np.minimum(jacc, jdec)
+    # a path with cheap exact derivatives is checked with them: its grid only
+    # needs to resolve the motion, not to interpolate the derivatives exactly
+    cheap = bool(getattr(path, "cheap_derivatives", False))
+    exact = path if cheap else None
+    s, der = _refine(path, s, der, vlim, alim, jlim, cap_fn, breaks,
+                     GRID_RTOL_CHEAP if cheap else GRID_RTOL)
+    q, d1, d2, d3 = der
+    if not (np.isfinite(d1).all() and np.isfinite(d2).all() and np.isfinite(d3).all()):
+        raise InfeasibleError("the joint path has no finite derivative somewhere (a singularity)")
+    cap = cap_fn(s)
+    kappa = None
+    if curvature is not None:
+        kappa = np.abs(np.asarray(curvature(s), dtype=float))
+        if kappa.shape != s.shape or not np.isfinite(kappa).all():
+            raise InvalidInputError("curvature(s) must return finite values of the shape of s")
+    with np.errstate(divide="ignore"):
+        vcap = np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1)
+    vcap = np.minimum(vcap, cap)
+    n = s.size
+    # the work has to be worth it: a motion that cannot be shorter than MAX_DURATION
+    with np.errstate(divide="ignore"):
+        floor = float(np.sum(np.diff(s) / np.maximum(vcap[:-1], vcap[1:])))
+    if not floor <= MAX_DURATION:
+        raise InvalidInputError(
+            f"the motion along this path would take at least {floor:.3g} s, more than the "
+            f"{MAX_DURATION:g} s the path timing supports (a speed cap or limit far too low)")
+    x_cap = cap ** 2  # lowered locally where the check finds the cap exceeded
+    rest0 = start_speed == 0.0 and start_accel == 0.0
+    restN = end_speed == 0.0 and end_accel == 0.0
+
+    best = None
+    try:
+        # per-node limits, lowered where the check finds an excess
+        scale_v = np.ones((n, m))
+        scale_a = np.ones((n, m))
+        scale_j = np.ones((n, m))
+        # a first solve on the derivative-refined grid, then the grid refined where the
+        # path acceleration swings (the jerk phases) and solved again from there
+        first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
+                                       j_acc=jacc * JERK_MARGIN, j_dec=jdec * JERK_MARGIN,
+                                       x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
+                                       kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
+                                       x0=start_speed**2, u0=start_accel,
+                                       xN=end_speed**2, uN=end_accel), max_rounds=FIRST_ROUNDS)
+        jerk_free_time = first.jerk_free_time
+        init = (first.x, first.u)
+        add = _solution_splits(s, first.x, first.u)
+        if add.size:
+            s_new = np.unique(np.concatenate([s, add]))
+            der_new = path.derivatives(s_new)
+            init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
+            s, der = s_new, der_new
+            q, d1, d2, d3 = der
+            cap = cap_fn(s)
+            with np.errstate(divide="ignore"):
+                vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1), cap)
+            if kappa is not None:
+                kappa = np.abs(np.asarray(curvature(s), dtype=float))
+            n = s.size
+            x_cap = cap ** 2
+            scale_v = np.ones((n, m))
+            scale_a = np.ones((n, m))
+            scale_j = np.ones((n, m))
+        tightened = 0
+        best = None
+        xmid_scale = np.ones(s.size - 1)
+        for attempt in range(MAX_TIGHTEN + 1):
+            prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
+                               a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
+                               j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
+                               j_dec=jdec[None, :] * scale_j * JERK_MARGIN,
+                               x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
+                               x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
+                               x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
+            sol = first if (attempt == 0 and not add.size) else solve_grid(
+                prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init)
+            init = (sol.x, sol.u)  # a tightened attempt starts from this one
+            try:
+                dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
+            except ValueError:
+                if best is None:
+                    raise
+                break
+            t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
+            use, cell, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
+                                                   a_path, j_path, kappa, cap,
+                                                   cap_fn if callable(speed) else None, exact)
+            k = _uniform_scale(use)
+            # a timing that needs no uniform slow-down keeps its exact cruise speeds:
+            # preferred unless a slowed one is clearly faster
+            score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
+            if best is None or score < best[0]:
+                best = (score, sol, dur, jk, use, k, piv)
+            if use.worst <= 1.0 + TIGHTEN_ABOVE:
+                break  # a small excess costs less as a uniform slow-down than as another round
+            tightened += 1
+            for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
+                over = ratio > 1.0 + CHECK_RTOL
+                if not over.any():
+                    continue
+                rows, cols = np.nonzero(over)
+                c = cell[rows]
+                f = (1.0 - TIGHTEN_MARGIN) / ratio[rows, cols]
+                for node in (c, c + 1):
+                    np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
+            over = rs > 1.0 + CHECK_RTOL
+            if over.any():
+                c = cell[over]
+                f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
+                for node in (c, c + 1):
+                    np.minimum.at(x_cap, node, f * x_cap[node])
+                np.minimum.at(xmid_scale, c, f * xmid_scale[c])
+    except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
+        best = None
+    fallback = best is None
+    if fallback:
+        if not (rest0 and restN):
+            raise InfeasibleError("no timing found for a path with a moving boundary state")
+        dur0, jk0 = _fallback(s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
+        sol, piv, k_scale, tightened = None, None, 1.0, 0
+        jerk_free_time = math.nan
+    else:
+        _, sol, dur0, jk0, use, k_scale, piv = best
+    for _final in range(4):
+        if k_scale > 1.0 and not (rest0 and restN):
+            raise InfeasibleError(
+                f"the timing exceeds a limit by {100 * (use.worst - 1):.3g} % and cannot be slowed "
+                "down uniformly with a moving boundary state")
+        dur = dur0 * k_scale
+        jk = jk0 / k_scale**3
+        if fallback:
+            t, st = _pieces_state(dur, jk, 0.0, 0.0, 0.0)
+            st[-1] = (L, 0.0, 0.0)
+        else:
+            t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
+        # the final check, denser than the rounds' (any excess left: a uniform slow-down)
+        cfn = cap_fn if callable(speed) else None
+        use, _c, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
+                                             a_path, j_path, kappa, cap, cfn, exact,
+                                             FINAL_CHECK_PER_PIECE)
+        # the pieces that come closest to a limit, again with many more points: the
+        # largest value inside a piece, not only at the sampled points
+        npp = FINAL_CHECK_PER_PIECE + 2
+        worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)[:-1]
+        per_piece = worst.reshape(-1, npp).max(axis=1)
+        close = np.argsort(-per_piece)[:ZOOM_PIECES]
+        for i in close[per_piece[close] > 1.0 - ZOOM_ABOVE]:
+            zu, *_ = _check(s, der, t[i:i + 2], st[i:i + 2], jk[i:i + 1], vlim, aacc, adec, jacc,
+                            jdec, a_path, j_path, kappa, cap, cfn, exact, ZOOM_PER_PIECE)
+            use = LimitUse(np.maximum(use.velocity, zu.velocity),
+                           np.maximum(use.acceleration, zu.acceleration),
+                           np.maximum(use.jerk, zu.jerk),
+                           max(use.path_acceleration, zu.path_acceleration),
+                           max(use.path_jerk, zu.path_jerk), max(use.path_speed, zu.path_speed))
+        extra = _uniform_scale(use)
+        if extra <= 1.0:
+            break
+        k_scale *= extra
+    if fallback:
+        tt = np.linspace(0.0, t[-1], 20 * s.size)
+        sv = _sample_pieces(t, st, jk, tt)
+        grid_speed = np.interp(s, sv[0], sv[1])
+    else:
+        grid_speed = np.sqrt(sol.x) / k_scale
+    return PathTiming(path=path, limits=lims, duration=float(t[-1]), t=t, state=st, jerk=jk,
+                      grid=s, grid_speed=grid_speed, speed_cap=vcap, jerk_free_time=jerk_free_time,
+                      time_scale=k_scale, limit_use=use, rounds=0 if fallback else sol.rounds,
+                      grid_derivatives=der,
+                      info={"nodes": int(s.size), "tightened": tightened,
+                            "status": "fallback" if fallback else sol.status,
+                            "converged": (not fallback) and sol.converged, "round_rtol": ROUND_RTOL})

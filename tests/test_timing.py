@@ -1,0 +1,243 @@
+"""The path-timing engine against exact oracles and lower bounds, and its guarantees.
+
+- a straight line in joint space is a one-dimensional problem: its optimum is
+  ``plan_ptp(sync="phase")``; the engine lands within 0.5 % above it, never below;
+- a path where one joint moves alone is that joint's 7-phase optimum;
+- TOPP-RA's jerk-free time on the same path is a lower bound nothing may beat;
+- every result keeps every limit, checked exactly on its pieces (the chain rule
+  at dense points of every piece, both piece ends included);
+- waypoints: passed within the blend tolerance, ends exact, limits kept.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import sweep_size
+
+from trajkit import AxisLimits, InvalidInputError, plan_move, plan_ptp
+from trajkit.timing import LinearJointPath, plan_path_timing, plan_waypoints
+
+LIMIT_RTOL = 1e-9
+
+
+def _random_limits(rng, m, asym=True):
+    out = []
+    for _ in range(m):
+        v = float(rng.uniform(0.5, 3.0))
+        a = v * float(rng.uniform(2.0, 10.0))
+        j = a * float(rng.uniform(5.0, 30.0))
+        if asym and rng.random() < 0.5:
+            out.append(AxisLimits(v, a, j, a_max_decel=a * float(rng.uniform(0.5, 1.5)),
+                                  j_max_decel=j * float(rng.uniform(0.5, 1.5))))
+        else:
+            out.append(AxisLimits(v, a, j))
+    return out
+
+
+def _dense_use(timing, n_per_piece=200):
+    """Largest |joint v|, |a|, |j| over limit, from the exact path derivatives on dense
+    points of every piece (both ends of each piece with its own jerk)."""
+    frac = np.linspace(0.0, 1.0, n_per_piece)
+    t = (timing.t[:-1, None] + np.diff(timing.t)[:, None] * frac[None, :]).ravel()
+    t = np.minimum(t, np.nextafter(np.repeat(timing.t[1:], n_per_piece), -np.inf))
+    _, qd, qdd, qddd = timing.joint_states(t)
+    lims = timing.limits
+    v = np.array([lm.v_max for lm in lims])
+    # at rest (product 0) the leg of the middle of the same piece
+    prod = qd * qdd
+    mid = np.repeat(prod.reshape(-1, n_per_piece, prod.shape[1])[:, n_per_piece // 2],
+                    n_per_piece, axis=0)
+    prod = np.where(np.abs(qd) <= 1e-9 * v, mid, prod)
+    speeding = prod > 0
+    acc = np.array([lm.a_max for lm in lims])
+    dec = np.array([lm.a_max_decel for lm in lims])
+    jac = np.array([lm.j_max for lm in lims])
+    jde = np.array([lm.j_max_decel for lm in lims])
+    alim = np.where(speeding, acc, np.where(prod < 0, dec, np.minimum(acc, dec)))
+    jlim = np.where(speeding, jac, np.where(prod < 0, jde, np.minimum(jac, jde)))
+    return (np.abs(qd) / v).max(), (np.abs(qdd) / alim).max(), (np.abs(qddd) / jlim).max()
+
+
+@pytest.mark.parametrize("seed", range(sweep_size(6)))
+def test_joint_space_line_equals_phase_synchronised_ptp(seed):
+    rng = np.random.default_rng(500 + seed)
+    m = int(rng.integers(1, 7))
+    lims = _random_limits(rng, m)
+    start = rng.uniform(-1.0, 1.0, m)
+    goal = start + rng.uniform(-2.0, 2.0, m) * (10.0 ** rng.uniform(-1.5, 0.5))
+    ref = plan_ptp(start, goal, lims, sync="phase").duration
+    tm = plan_path_timing(LinearJointPath(start, goal), lims)
+    assert ref * (1 - 1e-9) <= tm.duration <= ref * 1.005, (tm.duration, ref)
+    use = _dense_use(tm)
+    assert max(use) <= 1 + LIMIT_RTOL, use
+    q, qd, qdd, _ = tm.joint_states([0.0, tm.duration])
+    np.testing.assert_allclose(q[-1], goal, rtol=0, atol=1e-12 * (1 + np.abs(goal).max()))
+    assert np.abs(qd).max() <= 1e-12 and np.abs(qdd).max() <= 1e-9
+
+
+def test_one_joint_alone_is_its_seven_phase_optimum():
+    """Only joint 2 of 3 moves: the engine's time is the 7-phase optimum of that joint."""
+    lim = AxisLimits(1.2, 5.0, 40.0, a_max_decel=3.0, j_max_decel=25.0)
+    others = AxisLimits(0.3, 1.0, 5.0)
+    for dist in (0.02, 0.3, 2.5):
+        tm = plan_path_timing(LinearJointPath([0.5, 0.0, -0.2], [0.5, dist, -0.2]),
+                              [others, lim, others])
+        ref = plan_move(0.0, dist, lim).duration
+        assert ref * (1 - 1e-9) <= tm.duration <= ref * 1.005, (dist, tm.duration, ref)
+
+
+def test_toppra_jerk_free_time_is_a_lower_bound():
+    toppra = pytest.importorskip("toppra")
+    import toppra.algorithm as algo
+    import toppra.constraint as constraint
+
+    toppra.setup_logging("WARNING")
+    rng = np.random.default_rng(17)
+    for _ in range(sweep_size(3)):
+        W = np.cumsum(rng.uniform(-0.8, 0.8, (5, 4)), axis=0)
+        lims = [AxisLimits(2.0, 10.0, 100.0) for _ in range(4)]
+        tr = plan_waypoints(W, lims, blend=0.2)
+        for tm in tr.segments:
+            ss = np.linspace(0.0, tm.length, 3001)
+            path = toppra.SplineInterpolator(ss, tm.path.derivatives(ss)[0])
+            v = np.full(4, 2.0)
+            a = np.full(4, 10.0)
+            inst = algo.TOPPRA([constraint.JointVelocityConstraint(np.column_stack([-v, v])),
+                                constraint.JointAccelerationConstraint(np.column_stack([-a, a]))],
+                               path, gridpoints=np.linspace(0.0, tm.length, 2001))
+            bound = inst.compute_trajectory().duration
+            assert tm.duration >= bound * (1 - 2e-3), (tm.duration, bound)
+            # and the engine's own jerk-free round is a bound of it too
+            assert tm.duration >= tm.jerk_free_time * (1 - 1e-6)
+
+
+@pytest.mark.parametrize("shape", ["spline", "lines"])
+@pytest.mark.parametrize("seed", range(sweep_size(4)))
+def test_waypoints_pass_within_the_blend_and_keep_every_limit(seed, shape):
+    rng = np.random.default_rng(900 + seed)
+    n = int(rng.integers(3, 9))
+    m = int(rng.integers(2, 7))
+    W = np.cumsum(rng.uniform(-0.7, 0.7, (n, m)), axis=0)
+    lims = _random_limits(rng, m)
+    blend = float(rng.uniform(0.02, 0.3))
+    tr = plan_waypoints(W, lims, blend=blend, shape=shape)
+    assert tr.deviation.max() <= blend * (1 + 1e-12)
+    assert tr.deviation[0] == tr.deviation[-1] == 0.0
+    # the path really passes that close: distance from every waypoint to dense samples
+    t = np.linspace(0.0, tr.duration, 20001)
+    smp = tr.sample(t)
+    for i in range(1, n - 1):
+        d = np.linalg.norm(smp.position - W[i], axis=1).min()
+        assert d <= tr.deviation[i] + 1e-3 * blend
+    np.testing.assert_array_equal(smp.position[0], W[0])
+    np.testing.assert_array_equal(smp.position[-1], W[-1])
+    for tm in tr.segments:
+        assert max(_dense_use(tm, 64)) <= 1 + LIMIT_RTOL
+    # continuous joint velocity and acceleration between the stretches and pieces
+    dt = t[1] - t[0]
+    assert np.abs(np.diff(smp.velocity, axis=0)).max() <= 1.01 * max(
+        max(lm.a_max, lm.a_max_decel) for lm in lims) * dt + 1e-12
+
+
+@pytest.mark.parametrize("shape", ["spline", "lines"])
+def test_waypoints_stop_only_where_the_path_reverses(shape):
+    lims = [AxisLimits(1.0, 4.0, 40.0)] * 2
+    W = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 1.0 + 1e-12]]
+    tr = plan_waypoints(np.array(W[:4]), lims, blend=0.1, shape=shape)
+    assert tr.stops == [0, 3] and len(tr.segments) == 1
+    tr = plan_waypoints(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]]), lims, blend=0.1, shape=shape)
+    assert tr.stops == [0, 1, 2]
+    smp = tr.sample(tr.offsets[1])
+    assert np.abs(smp.velocity).max() <= 1e-9  # at rest at the reversal
+
+
+@pytest.mark.parametrize("shape, blend, share", [("spline", 0.0, 0.8), ("spline", 0.2, 0.7),
+                                                   ("lines", 0.2, 0.85)])
+def test_waypoints_are_faster_than_stopping_at_each(shape, blend, share):
+    lims = [AxisLimits(2.0, 10.0, 100.0)] * 3
+    W = np.array([[0, 0, 0], [1, 0.2, 0], [1.5, 1, 0.3], [2.5, 1.2, 0.2], [3, 2, 1.0]], dtype=float)
+    tr = plan_waypoints(W, lims, blend=blend, shape=shape)
+    stop = sum(plan_ptp(W[i], W[i + 1], lims).duration for i in range(len(W) - 1))
+    assert tr.duration < share * stop
+
+
+def test_spline_waypoints_pass_every_waypoint_exactly_without_blend():
+    rng = np.random.default_rng(5)
+    W = np.cumsum(rng.uniform(-0.6, 0.6, (7, 4)), axis=0)
+    tr = plan_waypoints(W, AxisLimits(2.0, 10.0, 100.0))
+    assert tr.stops == [0, 6] and np.all(tr.deviation == 0.0)
+    path = tr.segments[0].path
+    q = path.derivatives(path.knots)[0]
+    np.testing.assert_allclose(q, W, rtol=0, atol=1e-12)
+    # the spline is C2 at the knots: left and right first and second derivatives agree
+    eps = 1e-9
+    for order in (1, 2):
+        left = path.derivatives(path.knots[1:-1] - eps)[order]
+        right = path.derivatives(path.knots[1:-1] + eps)[order]
+        np.testing.assert_allclose(left, right, atol=1e-5 * (1 + np.abs(left).max()))
+
+
+def test_least_bending_spline_uses_the_tolerance_and_bends_less():
+    rng = np.random.default_rng(8)
+    W = np.cumsum(rng.uniform(-0.6, 0.6, (9, 3)), axis=0)
+    lims = AxisLimits(2.0, 10.0, 100.0)
+    exact = plan_waypoints(W, lims)
+    loose = plan_waypoints(W, lims, blend=0.1)
+    assert loose.deviation.max() <= 0.1 * (1 + 1e-12) and loose.deviation.max() > 0.05
+
+    def bending(path):
+        s = np.linspace(0.0, path.length, 20001)
+        return float(np.sum(path.derivatives(s)[2] ** 2) * (s[1] - s[0]))
+
+    assert bending(loose.segments[0].path) < 0.8 * bending(exact.segments[0].path)
+    assert loose.duration < exact.duration
+
+
+def test_spline_waypoints_stop_where_the_spline_would_leave_a_joint_range():
+    # a spline through these overshoots 1.0 on joint 0 between waypoints 1 and 2
+    W = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.2]])
+    free = plan_waypoints(W, AxisLimits(1.0, 4.0, 40.0))
+    assert free.segments[0].path.joint_range()[1][:, 0].max() > 1.0 + 1e-3
+    lims = [AxisLimits(1.0, 4.0, 40.0, position_min=-1.0, position_max=1.0),
+            AxisLimits(1.0, 4.0, 40.0)]
+    tr = plan_waypoints(W, lims)
+    assert tr.stops == [0, 1, 2, 3]
+    smp = tr.sample(np.linspace(0.0, tr.duration, 20001))
+    assert smp.position[:, 0].max() <= 1.0 + 1e-12
+    for path in (sg.path for sg in tr.segments):
+        assert path.joint_range()[1][:, 0].max() <= 1.0 + 1e-12
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(waypoints=[[0.0, 0.0]]), r"at least two different joint positions"),
+    (dict(waypoints=[[0.0, 0.0], [0.0, 0.0]]), r"at least two different joint positions"),
+    (dict(blend=0.0, shape="lines"), r"blend should be larger than zero"),
+    (dict(blend=-0.1), r"blend must be >= 0, got -0\.1"),
+    (dict(blend=math.nan), r"blend must be"),
+    (dict(shape="bezier"), r"shape must be one of 'spline', 'lines', got 'bezier'"),
+    (dict(limits=[AxisLimits(1, 2, 10)]), r"limits has 1 entries but the waypoints have 2 joints"),
+    (dict(waypoints=[[0.0, 0.0], [5.0, 0.0]],
+          limits=[AxisLimits(1, 2, 10, position_min=-1, position_max=1)] * 2),
+     r"waypoints\[1\] 5\.0 is outside the position range \[-1\.0, 1\.0\]"),
+])
+def test_waypoint_errors_name_the_field(bad, match):
+    args = dict(waypoints=[[0.0, 0.0], [1.0, 0.5]], limits=[AxisLimits(1, 2, 10)] * 2, blend=0.1,
+                shape="spline")
+    args.update(bad)
+    with pytest.raises(InvalidInputError, match=match):
+        plan_waypoints(args["waypoints"], args["limits"], blend=args["blend"], shape=args["shape"])
+
+
+def test_engine_input_errors():
+    p = LinearJointPath([0.0, 0.0], [1.0, 1.0])
+    with pytest.raises(InvalidInputError, match="limits has 1 entries but the path has 2 joints"):
+        plan_path_timing(p, [AxisLimits(1, 2, 10)])
+    with pytest.raises(InvalidInputError, match="path timing needs finite j_max"):
+        plan_path_timing(p, [AxisLimits(1, 2, math.inf)] * 2)
+    with pytest.raises(InvalidInputError, match="path must be a JointPath"):
+        plan_path_timing(object(), [AxisLimits(1, 2, 10)] * 2)
+    with pytest.raises(InvalidInputError, match="start_speed must be finite and >= 0"):
+        plan_path_timing(p, [AxisLimits(1, 2, 10)] * 2, start_speed=-1.0)

@@ -1,0 +1,171 @@
+"""Robot paths timed by the engine: real arms, independent checks, monotone speed, oracles.
+
+Every limit is checked independently of the engine: the joints are the inverse
+kinematics at samples 0.25 ms apart, their first, second and third
+differences give velocity, acceleration and jerk (the third difference is the
+jerk averaged over three samples, hence the small relative tolerance).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from arms import load_arm
+from conftest import sweep_size
+
+from trajkit import AxisLimits, plan_move
+from trajkit.kinematics.arm6 import default_arm6
+from trajkit.kinematics.base import Pose, rot_x, rot_z
+from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
+
+DT = 2.5e-4
+
+#: Relative slack of the finite-difference checks (three-sample averages, IK round-off).
+FD_RTOL = 1e-5
+
+
+def fd_ratios(robot, run):
+    """Largest |v|, |a|, |j| / limit per joint from differences of IK'd samples."""
+    t = np.arange(0.0, run.duration + 3 * DT, DT)
+    q = run.sample(t).q
+    v = np.diff(q, axis=0) / DT
+    a = np.diff(q, 2, axis=0) / DT**2
+    j = np.diff(q, 3, axis=0) / DT**3
+    V = np.array([lm.v_max for lm in robot.limits])
+    A = np.array([max(lm.a_max, lm.a_max_decel) for lm in robot.limits])
+    J = np.array([max(lm.j_max, lm.j_max_decel) for lm in robot.limits])
+    return np.abs(v).max(0) / V, np.abs(a).max(0) / A, np.abs(j).max(0) / J, q
+
+
+def _random_motion(rng, robot, q0):
+    p = robot.fk(q0)
+    d = rng.normal(size=3)
+    d *= rng.uniform(0.05, 0.3) / np.linalg.norm(d)
+    rot = rot_z(rng.uniform(-0.5, 0.5)) @ rot_x(rng.uniform(-0.3, 0.3)) @ p.rotation
+    target = CartesianTarget(Pose(p.position + d, rot))
+    v = float(rng.uniform(0.2, 2.0))
+    if rng.random() < 0.5:
+        return Lin(target, v, label="L"), target
+    side = np.cross(d, rng.normal(size=3))
+    side *= 0.3 * np.linalg.norm(d) / np.linalg.norm(side)
+    via = CartesianTarget(Pose(p.position + 0.5 * d + side, p.rotation))
+    return Circ(via, target, v, label="C"), target
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_random_paths_on_real_arms_keep_every_limit(name):
+    robot = load_arm(name)
+    q_home = {"ur5": [0.0, -1.2, 1.5, -1.87, -1.57, 0.0],
+              "panda": [0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]}[name]
+    rng = np.random.default_rng({"ur5": 1, "panda": 2}[name])
+    done = 0
+    for _ in range(10 * sweep_size(2)):
+        if done >= sweep_size(2):
+            break
+        q0 = np.array(q_home) + rng.uniform(-0.2, 0.2, robot.n_joints)
+        mot, target = _random_motion(rng, robot, q0)
+        try:
+            run = run_motions(robot, [mot], q0)
+        except Exception as exc:  # unreachable or singular: another one
+            if "unreachable" in str(exc) or "singular" in str(exc):
+                continue
+            raise
+        done += 1
+        rv, ra, rj, q = fd_ratios(robot, run)
+        assert (rv <= 1 + FD_RTOL).all() and (ra <= 1 + FD_RTOL).all(), (rv, ra)
+        assert (rj <= 1 + FD_RTOL).all(), rj
+        # the goal exactly, the tool on its path
+        dp, da = robot.fk(q[-1]).distance(target.pose)
+        assert dp < 1e-9 and da < 1e-9
+        if isinstance(mot, Lin):
+            a, b = robot.fk(q0).position, target.pose.position
+            pts = np.array([robot.fk(qq).position for qq in q[::25]])
+            u = np.clip((pts - a) @ (b - a) / np.dot(b - a, b - a), 0, 1)
+            off = np.linalg.norm(pts - (a + u[:, None] * (b - a)), axis=1)
+            assert off.max() < 1e-9  # 1e-6 mm
+        # TOPP-RA-style bound: the engine's own jerk-free round
+        tm = run.segments[-1].chain.timing
+        assert tm.duration >= tm.jerk_free_time * (1 - 1e-6)
+    assert done >= sweep_size(2)
+
+
+def test_raising_the_programmed_speed_never_lengthens_a_lin():
+    arm = default_arm6()
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p0 = arm.fk(q0)
+    goal = Pose(p0.position + np.array([0.05, 0.30, -0.12]), rot_z(0.4) @ p0.rotation)
+    speeds = [0.1, 0.2, 0.4, 0.7, 1.0, 1.2, 1.5, 2.0, 2.5, 3.0]
+    durations = [run_motions(arm, [Lin(CartesianTarget(goal), v, label="L")], q0).duration
+                 for v in speeds]
+    # never longer than at a lower speed (up to the cone solver's tolerance where the
+    # joints, not the programmed speed, limit both)
+    for lo, hi in zip(durations, durations[1:]):
+        assert hi <= lo * (1 + 1e-6), durations
+    assert durations[-1] < 0.5 * durations[0]
+
+
+def test_an_arc_of_the_base_joint_alone_is_its_seven_phase_optimum():
+    """A CIRC about the base axis moves joint 1 alone (the tool turns with it): the
+    engine's time is that joint's 7-phase optimum."""
+    arm = default_arm6()
+    arm.cartesian_accel = 1e3
+    arm.cartesian_jerk = 1e6
+    arm.orientation_speed = 1e3
+    q0 = np.radians([0.0, 20.0, 10.0, 0.0, 60.0, 0.0])
+    q1 = q0.copy()
+    q1[0] = math.radians(120.0)
+    qm = q0.copy()
+    qm[0] = math.radians(60.0)
+    run = run_motions(arm, [Circ(CartesianTarget(arm.fk(qm)), CartesianTarget(arm.fk(q1)), 50.0,
+                                 label="C")], q0)
+    ref = plan_move(0.0, q1[0], arm.limits[0]).duration
+    assert ref * (1 - 1e-9) <= run.duration <= ref * 1.005, (run.duration, ref)
+    q = run.sample(np.linspace(0, run.duration, 200)).q
+    assert np.abs(q[:, 1:] - q0[1:]).max() < 1e-9  # the other joints stand still
+
+
+def test_no_crawl_at_the_ends_of_a_lin():
+    """The joint path's derivatives at the ends are those of the kinematics: the tool
+    leaves the start as fast as its jerk allows (no slow first millimetres)."""
+    arm = default_arm6()
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p0 = arm.fk(q0)
+    goal = Pose(p0.position + np.array([0.0, 0.3, 0.0]), p0.rotation)
+    run = run_motions(arm, [Lin(CartesianTarget(goal), 1.0, label="L")], q0)
+    tm = run.segments[-1].chain.timing
+    _, d1, d2, d3 = tm.grid_derivatives
+    # the third derivative at s = 0 against the kinematics on the extended line
+    h = 1e-3
+    ext = [arm.ik_near(Pose(p0.position + np.array([0.0, k * h, 0.0]), p0.rotation), q0)
+           for k in (-2, -1, 0, 1, 2)]
+    Q = np.array(ext)
+    d3_ext = (Q[4] - 2 * Q[3] + 2 * Q[1] - Q[0]) / (2 * h**3)
+    scale = np.abs(d3).max()
+    assert np.abs(d3[0] - d3_ext).max() <= 1e-2 * scale
+    # the first 2 mm take no longer than a jerk-limited start of the slowest joint allows
+    t = np.linspace(0, tm.duration, 20001)
+    s = tm.sample(t)[0]
+    t2 = np.interp(0.002, s, t)
+    jmin = min(lm.j_max / max(np.abs(d1[0, k]), 1e-12) for k, lm in enumerate(arm.limits))
+    assert t2 <= 2.0 * (6 * 0.002 / jmin) ** (1 / 3)
+
+
+def test_slow_downs_are_true_stretches():
+    """A LIN past a slow spot: the report covers the slow stretch, not the whole line,
+    and the speed it reports holds there."""
+    arm = default_arm6()
+    sing = arm.fk(np.array([0.0, 0.3, 0.2, 0.0, 0.0, 0.0]))
+    a = Pose(sing.position + [0.0, 0.02, -0.15], sing.rotation)
+    b = Pose(sing.position + [0.0, 0.02, 0.15], sing.rotation)
+    q0 = arm.ik(a, "front-up-noflip")
+    run = run_motions(arm, [Lin(CartesianTarget(b), 0.25, label="L")], q0)
+    assert run.slowdowns
+    slowest = min(run.slowdowns, key=lambda sd: sd.speed)
+    length = np.linalg.norm(slowest.end_xyz - slowest.start_xyz)
+    assert length < 0.5 * 0.3
+    assert slowest.speed < 0.25
+    smp = run.sample(np.linspace(0, run.duration, 4001))
+    inside = np.linalg.norm(smp.xyz - 0.5 * (slowest.start_xyz + slowest.end_xyz), axis=1) < 0.5 * length
+    assert smp.tool_speed[inside].min() == pytest.approx(slowest.speed, rel=2e-2)
