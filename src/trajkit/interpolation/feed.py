@@ -444,10 +444,12 @@ def _stretch_slowdowns(timing: Any, s0: float, F: float, cap, names: list[str], 
         while j + 1 < s.size and limited[j + 1] and band[j + 1] == band[i]:
             j += 1
         seg = slice(i, j + 1)
-        k = i + int(np.argmin(vlim[seg]))
+        # the binding limit off the ramps from and to rest (where the speed is the
+        # start or the stop, not the limit's), like the speed reported
+        off = ~ramp[seg]
+        lim_seg = np.where(off, vlim[seg], np.inf) if off.any() else vlim[seg]
+        k = i + int(np.argmin(lim_seg))
         spd = stretch_speed(v[seg], ramp[seg])
-        if not ramp[k]:
-            spd = min(spd, float(v[k]))
         out.append(Slowdown(s0 + float(s[i]), s0 + float(s[j]), spd, float(vlim[k]), label[k]))
         i = j + 1
     return out

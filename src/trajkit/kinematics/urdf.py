@@ -175,12 +175,18 @@ class UrdfRobot(RobotModel):
         q = np.array(seed, dtype=np.float64)
         lo, hi = self.joint_ranges[:, 0], self.joint_ranges[:, 1]
         scale = np.array([1.0 / self.length_scale] * 3 + [1.0] * 3)
+        polish = False
         for _ in range(IK_MAX_ITER):
             _pin.framesForwardKinematics(self.model, self.data, q)
             cur = self.data.oMf[self.frame_id]
             err = _pin.log6(cur.actInv(target)).vector  # in the tool frame
             if float(np.abs(err * scale).max()) < IK_TOL:
-                return q
+                if polish:
+                    return q
+                # one more Newton step: the error is squared, far below IK_TOL, so
+                # neighbouring solutions along a path differ by round-off only (their
+                # differences are the joint path's derivatives)
+                polish = True
             jac = _pin.computeFrameJacobian(self.model, self.data, q, self.frame_id,
                                             _pin.ReferenceFrame.LOCAL)
             js = jac * scale[:, None]
@@ -190,6 +196,8 @@ class UrdfRobot(RobotModel):
             if step > IK_MAX_STEP:
                 dq *= IK_MAX_STEP / step
             q = np.clip(q + dq, lo, hi)
+            if polish:
+                return q
         return None
 
     def ik_near(self, pose: Pose, seed: Any) -> np.ndarray:

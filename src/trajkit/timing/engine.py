@@ -109,14 +109,21 @@ REST_RTOL = 1e-9
 #: Points checked inside every piece by the final check of the chosen timing.
 FINAL_CHECK_PER_PIECE = 64
 
-#: The final check looks again, with ZOOM_PER_PIECE points, at the ZOOM_PIECES
-#: pieces that come closest to a limit (within ZOOM_ABOVE of it).
-ZOOM_PIECES = 24
-ZOOM_PER_PIECE = 2000
+#: The final check looks again at every piece that comes within ZOOM_ABOVE of a
+#: limit: ZOOM_LEVELS times ZOOM_POINTS points in a bracket narrowing around its
+#: largest values (see ``_zoom``).
 ZOOM_ABOVE = 1e-3
+ZOOM_POINTS = 17
+ZOOM_LEVELS = 4
 
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
+
+#: An excess above this fraction means the grid is too coarse where it happens:
+#: the cells around it are split in two and the problem solved again (at most
+#: MAX_SPLITS times) before any limit is lowered.
+SPLIT_ABOVE = 1e-2
+MAX_SPLITS = 3
 
 #: The check's largest excess above which a limit is lowered locally and the
 #: problem solved again (below it the uniform slow-down is cheaper).
@@ -499,6 +506,17 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
     return np.asarray(prof.phase_durations)[keep], np.asarray(prof.jerks)[keep]
 
 
+def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Node values on a refined grid: kept at the old nodes, the smaller neighbour's
+    at a new node (lowered limits stay lowered around where they were)."""
+    idx = np.clip(np.searchsorted(s_old, s_new, side="right") - 1, 0, s_old.size - 1)
+    nxt = np.minimum(idx + 1, s_old.size - 1)
+    on_old = s_old[idx] == s_new
+    out = np.minimum(values[idx], values[nxt])
+    out[on_old] = values[idx[on_old]]
+    return out
+
+
 def _uniform_scale(use: LimitUse) -> float:
     """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3)."""
     k = max(1.0, float(use.velocity.max(initial=0.0)), use.path_speed,
@@ -507,43 +525,52 @@ def _uniform_scale(use: LimitUse) -> float:
     return k * (1.0 + 4.0 * CHECK_RTOL) if k > 1.0 + CHECK_RTOL else 1.0
 
 
-def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_path, j_path,
-           kappa=None, cap=None, cap_fn=None, path=None, per_piece=None):
-    """Limit use at every piece boundary and CHECK_PER_PIECE points inside each piece.
+@dataclass
+class _Limits:
+    """What the checks compare with: the joints' and the path's limits."""
 
-    Returns the LimitUse and, per sample, the grid cell and the joint ratios."""
-    k = jerk.size
-    # both ends of every piece with its own jerk (the jerk steps at a boundary)
-    frac = np.linspace(0.0, 1.0, (per_piece or CHECK_PER_PIECE) + 2)
-    dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
-    piece = np.repeat(np.arange(k), frac.size)
+    vlim: np.ndarray
+    alim_acc: np.ndarray
+    alim_dec: np.ndarray
+    jacc: np.ndarray
+    jdec: np.ndarray
+    a_path: float
+    j_path: float
+    kappa: np.ndarray | None
+    cap: np.ndarray | None
+    cap_fn: Callable[[np.ndarray], np.ndarray] | None
+
+
+def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None):
+    """Limit ratios at the times ``t[piece] + dt`` of the pieces.
+
+    A sample at the end of its piece (``dt`` = the piece's duration) that lands on
+    a grid node uses the path's derivatives from below: the end belongs to that
+    piece, and at a breakpoint of the path (a grid node) the third derivative may
+    step (the value from above is the next piece's start). ``mid``: the product
+    ``qd * qdd`` at the middle of every piece (the leg where a joint is at rest);
+    computed here when not given.
+
+    Returns ``(rv, ra, rj)`` (n, m), the speed-cap ratio (n,), the path
+    acceleration norm (n,), the path jerk (n,), the grid cell (n,), ``s`` (n,)
+    and ``qd * qdd`` (n, m).
+    """
     p0, v0, a0, jk = st[piece, 0], st[piece, 1], st[piece, 2], jerk[piece]
     S = p0 + dt * (v0 + dt * (0.5 * a0 + dt * jk / 6.0))
     V = v0 + dt * (a0 + 0.5 * dt * jk)
     A = a0 + dt * jk
-    # the end state too
-    S = np.append(S, st[-1, 0])
-    V = np.append(V, st[-1, 1])
-    A = np.append(A, st[-1, 2])
-    jk = np.append(jk, jerk[-1] if k else 0.0)
     S = np.clip(S, s_grid[0], s_grid[-1])
-    # the end of a piece belongs to that piece: where it ends on a grid node (a
-    # breakpoint of the path, where q''' may step), the derivatives are the limits
-    # from below (the value from above is the next piece's start sample)
     S_eval = S.copy()
-    if k:
-        npp = frac.size
-        ends = np.arange(npp - 1, k * npp, npp)
-        c0 = np.clip(np.searchsorted(s_grid, st[:-1, 0], side="right") - 1, 0, s_grid.size - 2)
-        S_eval[ends] = np.minimum(S[ends], np.nextafter(s_grid[c0 + 1], -np.inf))
-        S_eval[-1] = np.nextafter(S[-1], -np.inf)
-        S_eval = np.maximum(S_eval, s_grid[0])
+    end = dt >= np.diff(t)[piece]
+    if end.any():
+        c0 = np.clip(np.searchsorted(s_grid, p0[end], side="right") - 1, 0, s_grid.size - 2)
+        S_eval[end] = np.maximum(np.minimum(S[end], np.nextafter(s_grid[c0 + 1], -np.inf)),
+                                 s_grid[0])
     cell = np.clip(np.searchsorted(s_grid, S_eval, side="right") - 1, 0, s_grid.size - 2)
     if path is not None:  # a path whose derivatives are cheap: the exact ones
         _, f1, f2, f3 = path.derivatives(S_eval)
     else:
         f1, f2, f3 = _interp_derivatives(s_grid, der, S_eval)
-    w = ((S_eval - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell]))[:, None]
     qd = f1 * V[:, None]
     qdd = f2 * (V * V)[:, None] + f1 * A[:, None]
     qddd = f3 * (V**3)[:, None] + 3.0 * f2 * (V * A)[:, None] + f1 * jk[:, None]
@@ -551,40 +578,109 @@ def _check(s_grid, der, t, st, jerk, vlim, alim_acc, alim_dec, jacc, jdec, a_pat
     # where the product vanishes, the leg of the piece's middle (a jerk phase that
     # ends at rest is the end of a braking, one that starts there speeds up)
     prod = qd * qdd
-    if k:
-        npp = frac.size
-        mid = np.repeat(prod[:-1].reshape(k, npp, -1)[:, npp // 2], npp, axis=0)
-        mid = np.vstack([mid, mid[-1:]])
-        at_rest = np.abs(qd) <= REST_RTOL * vlim
-        prod = np.where(at_rest, mid, prod)
+    at_rest = np.abs(qd) <= REST_RTOL * lim.vlim
+    if at_rest.any():
+        if mid is None:
+            uniq = np.unique(piece)
+            mid = np.zeros((jerk.size, qd.shape[1]))
+            mid[uniq] = _evaluate(s_grid, der, t, st, jerk, lim, path, uniq,
+                                  0.5 * np.diff(t)[uniq], mid=np.ones((jerk.size, qd.shape[1])))[-1]
+        prod = np.where(at_rest, mid[piece], prod)
     speeding = prod > 0
-    alim = np.where(speeding, alim_acc, np.where(prod < 0, alim_dec, np.minimum(alim_acc, alim_dec)))
-    jl = np.where(speeding, jacc, np.where(prod < 0, jdec, np.minimum(jacc, jdec)))
-    rv = np.abs(qd) / vlim
+    alim = np.where(speeding, lim.alim_acc, np.where(prod < 0, lim.alim_dec,
+                                                      np.minimum(lim.alim_acc, lim.alim_dec)))
+    jl = np.where(speeding, lim.jacc, np.where(prod < 0, lim.jdec, np.minimum(lim.jacc, lim.jdec)))
+    rv = np.abs(qd) / lim.vlim
     ra = np.abs(qdd) / alim
     rj = np.abs(qddd) / jl
-    if kappa is not None:
-        kap = (1 - w[:, 0]) * kappa[cell] + w[:, 0] * kappa[cell + 1]
+    w = (S_eval - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell])
+    if lim.kappa is not None:
+        kap = (1 - w) * lim.kappa[cell] + w * lim.kappa[cell + 1]
         acc_norm = np.hypot(A, kap * V * V)
     else:
         acc_norm = np.abs(A)
-    if cap is not None:
+    if lim.cap is not None:
         # the cap between two nodes: the smaller of the two (a cap may step at a node),
         # and the cap function itself at the sample when it is a function
-        cp = np.minimum(cap[cell], cap[cell + 1])
-        if cap_fn is not None:
-            cp = np.minimum(cp, cap_fn(S))
+        cp = np.minimum(lim.cap[cell], lim.cap[cell + 1])
+        if lim.cap_fn is not None:
+            cp = np.minimum(cp, lim.cap_fn(S))
         with np.errstate(divide="ignore", invalid="ignore"):
             rs = np.where(np.isfinite(cp), V / cp, 0.0)
-        path_speed = float(rs.max(initial=0.0))
     else:
         rs = np.zeros(S.size)
-        path_speed = 0.0
-    use = LimitUse(rv.max(axis=0), ra.max(axis=0), rj.max(axis=0),
-                   float(acc_norm.max() / a_path) if math.isfinite(a_path) else 0.0,
-                   float(np.abs(jk).max() / j_path) if math.isfinite(j_path) else 0.0,
-                   path_speed)
-    return use, cell, rv, ra, rj, S, rs
+    return rv, ra, rj, rs, acc_norm, jk, cell, S, prod
+
+
+def _use_of(lim: _Limits, rv, ra, rj, rs, acc_norm, jk) -> LimitUse:
+    a_use = float(acc_norm.max(initial=0.0) / lim.a_path) if math.isfinite(lim.a_path) else 0.0
+    j_use = float(np.abs(jk).max(initial=0.0) / lim.j_path) if math.isfinite(lim.j_path) else 0.0
+    return LimitUse(rv.max(axis=0, initial=0.0), ra.max(axis=0, initial=0.0),
+                    rj.max(axis=0, initial=0.0), a_use, j_use, float(rs.max(initial=0.0)))
+
+
+def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None):
+    """Limit use at both ends of every piece and ``per_piece`` (default
+    :data:`CHECK_PER_PIECE`) points inside it.
+
+    Returns the LimitUse and, per sample, the grid cell, the joint ratios
+    ``rv, ra, rj`` (n, m) and the speed-cap ratio (n,); the samples run piece by
+    piece, ``per_piece + 2`` each."""
+    k = jerk.size
+    frac = np.linspace(0.0, 1.0, (per_piece or CHECK_PER_PIECE) + 2)
+    npp = frac.size
+    piece = np.repeat(np.arange(k), npp)
+    dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
+    dt[npp - 1::npp] = np.diff(t)  # the piece's end exactly
+    rv, ra, rj, rs, acc, jk, cell, _S, _p = _evaluate(s_grid, der, t, st, jerk, lim, path, piece, dt)
+    return _use_of(lim, rv, ra, rj, rs, acc, jk), cell, rv, ra, rj, rs
+
+
+def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp: int) -> LimitUse:
+    """The largest limit ratios inside the pieces that come close to a limit, found by
+    repeated bracketing around their largest sampled values.
+
+    ``ratios`` (k * npp,): the largest ratio of every sample of a :func:`_check`
+    with ``npp`` samples per piece. Around the largest and the second largest
+    sample of every piece above ``1 - ZOOM_ABOVE`` the bracket between the two
+    neighbouring samples is sampled again with :data:`ZOOM_POINTS` points,
+    :data:`ZOOM_LEVELS` times, each level narrowing the bracket by ``(ZOOM_POINTS
+    - 1) / 2``: a smooth maximum inside a piece is found to within the square of a
+    tiny fraction of the piece's duration.
+    """
+    k = jerk.size
+    m = lim.vlim.size
+    r = ratios.reshape(k, npp)
+    close = np.nonzero(r.max(axis=1) > 1.0 - ZOOM_ABOVE)[0]
+    if not close.size:
+        z = np.zeros((0, m))
+        return _use_of(lim, z, z, z, np.zeros(0), np.zeros(0), np.zeros(0))
+    rc = r[close]
+    first = np.argmax(rc, axis=1)
+    masked = rc.copy()
+    masked[np.abs(np.arange(npp)[None, :] - first[:, None]) <= 1] = -np.inf
+    second = np.argmax(masked, axis=1)
+    pieces = np.concatenate([close, close])
+    centre = np.concatenate([first, second]).astype(float) / (npp - 1)
+    half = np.full(pieces.size, 1.0 / (npp - 1))
+    dur = np.diff(t)[pieces]
+    u = np.linspace(-1.0, 1.0, ZOOM_POINTS)
+    found = []
+    rows = np.arange(pieces.size)
+    for _level in range(ZOOM_LEVELS):
+        frac = np.clip(centre[:, None] + half[:, None] * u[None, :], 0.0, 1.0)
+        pc = np.repeat(pieces, ZOOM_POINTS)
+        dt = (dur[:, None] * frac).ravel()
+        at_end = frac.ravel() >= 1.0
+        dt[at_end] = np.repeat(dur, ZOOM_POINTS)[at_end]
+        out = _evaluate(s_grid, der, t, st, jerk, lim, path, pc, dt)
+        found.append(out[:6])
+        worst = np.max(np.column_stack([out[0], out[1], out[2], out[3][:, None]]), axis=1)
+        best = np.argmax(worst.reshape(pieces.size, ZOOM_POINTS), axis=1)
+        centre = frac[rows, best]
+        half = half * 2.0 / (ZOOM_POINTS - 1)
+    cat = [np.concatenate([f[i] for f in found]) for i in range(6)]
+    return _use_of(lim, *cat)
 
 
 # --------------------------------------------------------------------------- public
@@ -720,9 +816,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             scale_a = np.ones((n, m))
             scale_j = np.ones((n, m))
         tightened = 0
+        splits = 0
         best = None
         xmid_scale = np.ones(s.size - 1)
-        for attempt in range(MAX_TIGHTEN + 1):
+        attempt = 0
+        while attempt <= MAX_TIGHTEN:
             prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                                j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
@@ -730,7 +828,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
-            sol = first if (attempt == 0 and not add.size) else solve_grid(
+            sol = first if (attempt == 0 and not add.size and not splits) else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init)
             init = (sol.x, sol.u)  # a tightened attempt starts from this one
             try:
@@ -740,18 +838,46 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     raise
                 break
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
-            use, cell, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
-                                                   a_path, j_path, kappa, cap,
-                                                   cap_fn if callable(speed) else None, exact)
+            lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                          cap_fn if callable(speed) else None)
+            use, cell, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, exact)
             k = _uniform_scale(use)
             # a timing that needs no uniform slow-down keeps its exact cruise speeds:
             # preferred unless a slowed one is clearly faster
             score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
             if best is None or score < best[0]:
-                best = (score, sol, dur, jk, use, k, piv)
+                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap))
             if use.worst <= 1.0 + TIGHTEN_ABOVE:
                 break  # a small excess costs less as a uniform slow-down than as another round
+            if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
+                # a large excess: the grid is too coarse for the motion there (the
+                # pieces' jerks differ from the interval's mean): split the cells
+                # around it and solve again from this solution
+                bad = np.zeros(s.size - 1, dtype=bool)
+                for ratio in (rv, ra, rj):
+                    bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
+                bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
+                bad[:-1] |= bad[1:].copy()
+                bad[1:] |= bad[:-1].copy()
+                cells = np.nonzero(bad)[0][:max(GRID_MAX - s.size, 0)]
+                s_new = np.unique(np.concatenate([s, 0.5 * (s[cells] + s[cells + 1])]))
+                init = (np.interp(s_new, s, sol.x), np.interp(s_new, s, sol.u))
+                scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
+                                                    (scale_v, scale_a, scale_j, x_cap))
+                xmid_scale = np.ones(s_new.size - 1)
+                s, der = s_new, path.derivatives(s_new)
+                q, d1, d2, d3 = der
+                cap = cap_fn(s)
+                x_cap = np.minimum(x_cap, cap ** 2)
+                with np.errstate(divide="ignore"):
+                    vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf),
+                                             axis=1), cap)
+                if kappa is not None:
+                    kappa = np.abs(np.asarray(curvature(s), dtype=float))
+                splits += 1
+                continue
             tightened += 1
+            attempt += 1
             for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
                 over = ratio > 1.0 + CHECK_RTOL
                 if not over.any():
@@ -778,7 +904,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         sol, piv, k_scale, tightened = None, None, 1.0, 0
         jerk_free_time = math.nan
     else:
-        _, sol, dur0, jk0, use, k_scale, piv = best
+        _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap) = best
     for _final in range(4):
         if k_scale > 1.0 and not (rest0 and restN):
             raise InfeasibleError(
@@ -792,24 +918,18 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         else:
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
         # the final check, denser than the rounds' (any excess left: a uniform slow-down)
-        cfn = cap_fn if callable(speed) else None
-        use, _c, rv, ra, rj, _S, rs = _check(s, der, t, st, jk, vlim, aacc, adec, jacc, jdec,
-                                             a_path, j_path, kappa, cap, cfn, exact,
-                                             FINAL_CHECK_PER_PIECE)
-        # the pieces that come closest to a limit, again with many more points: the
-        # largest value inside a piece, not only at the sampled points
-        npp = FINAL_CHECK_PER_PIECE + 2
-        worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)[:-1]
-        per_piece = worst.reshape(-1, npp).max(axis=1)
-        close = np.argsort(-per_piece)[:ZOOM_PIECES]
-        for i in close[per_piece[close] > 1.0 - ZOOM_ABOVE]:
-            zu, *_ = _check(s, der, t[i:i + 2], st[i:i + 2], jk[i:i + 1], vlim, aacc, adec, jacc,
-                            jdec, a_path, j_path, kappa, cap, cfn, exact, ZOOM_PER_PIECE)
-            use = LimitUse(np.maximum(use.velocity, zu.velocity),
-                           np.maximum(use.acceleration, zu.acceleration),
-                           np.maximum(use.jerk, zu.jerk),
-                           max(use.path_acceleration, zu.path_acceleration),
-                           max(use.path_jerk, zu.path_jerk), max(use.path_speed, zu.path_speed))
+        lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                      cap_fn if callable(speed) else None)
+        use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, exact, FINAL_CHECK_PER_PIECE)
+        # the pieces that come close to a limit, again: the largest value inside a
+        # piece, not only at the sampled points
+        worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)
+        zu = _zoom(s, der, t, st, jk, lim, exact, worst, FINAL_CHECK_PER_PIECE + 2)
+        use = LimitUse(np.maximum(use.velocity, zu.velocity),
+                       np.maximum(use.acceleration, zu.acceleration),
+                       np.maximum(use.jerk, zu.jerk),
+                       max(use.path_acceleration, zu.path_acceleration),
+                       max(use.path_jerk, zu.path_jerk), max(use.path_speed, zu.path_speed))
         extra = _uniform_scale(use)
         if extra <= 1.0:
             break
