@@ -125,26 +125,3 @@ def random_cases(seed: int, n: int) -> list[Case]:
 def rng() -> np.random.Generator:
     """A seeded generator (each test gets the same stream)."""
     return np.random.default_rng(20261122)
-
-
-#: Floats from two code paths (numba vs Python, numpy SIMD vs libm) agree to this
-#: many units in the last place (never asserted bit for bit).
-PATH_ULPS = 8
-
-
-def assert_ulp_close(actual, desired, ulps: float = PATH_ULPS, err_msg: str = "") -> None:
-    """Assert ``|actual - desired| <= ulps * ulp(max(|actual|, |desired|))`` elementwise.
-
-    Infinite and NaN entries must match exactly.
-    """
-    a = np.asarray(actual, dtype=float)
-    d = np.asarray(desired, dtype=float)
-    assert a.shape == d.shape, (a.shape, d.shape, err_msg)
-    fin = np.isfinite(a) & np.isfinite(d)
-    same = (a == d) | (np.isnan(a) & np.isnan(d))
-    assert np.all(fin | same), f"non-finite mismatch {err_msg}"
-    scale = np.spacing(np.maximum(np.abs(a), np.abs(d)))
-    bad = fin & (np.abs(a - d) > ulps * scale)
-    assert not bad.any(), (
-        f"{err_msg}: {int(bad.sum())} entries differ by more than {ulps} ulp, e.g. "
-        f"{a[bad].ravel()[:3]} vs {d[bad].ravel()[:3]}")

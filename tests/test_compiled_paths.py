@@ -18,13 +18,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import assert_ulp_close
+from floatcmp import assert_ulp_close
 
 from trajkit.profiles import _compile
 
 ROOT = Path(__file__).resolve().parents[1]
 
-pytestmark = pytest.mark.skipif(not _compile.ENABLED, reason="numba is not installed (one path only)")
+pytestmark = [pytest.mark.skipif(not _compile.ENABLED, reason="numba is not installed (one path only)"),
+              pytest.mark.codepaths]
 
 #: Durations of the two paths agree to this many ulps.
 DURATION_ULPS = 64
@@ -82,11 +83,11 @@ def test_state_planner_numba_equals_python():
     same_family = 0
     for i, (a, b) in enumerate(zip(fast, slow)):
         for key in ("d", "tmin", "vel", "brake"):
-            assert_ulp_close(a[key], b[key], DURATION_ULPS, f"case {i} {key}")
+            assert_ulp_close(a[key], b[key], DURATION_ULPS, err_msg=f"case {i} {key}")
         if isinstance(a["fixed"], str) or isinstance(b["fixed"], str):
             assert a["fixed"] == b["fixed"], (i, a["fixed"], b["fixed"])
         else:
-            assert_ulp_close(a["fixed"], b["fixed"], DURATION_ULPS, f"case {i} fixed")
+            assert_ulp_close(a["fixed"], b["fixed"], DURATION_ULPS, err_msg=f"case {i} fixed")
         assert len(a["blk"]) == len(b["blk"]), (i, a["blk"], b["blk"])
         for x, y in zip(a["blk"], b["blk"]):
             np.testing.assert_allclose(x, y, rtol=1e-12)

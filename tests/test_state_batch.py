@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_ulp_close
+from floatcmp import assert_ulp_close
 from state_reference import random_brake_case, random_case
 
 from trajkit import AxisLimits, plan_ptp_states, plan_state_moves
@@ -19,6 +19,8 @@ from trajkit.errors import InfeasibleError, InvalidInputError
 from trajkit.profiles.state import feasible_durations, plan_state_to_state
 from trajkit.sync import states as sync_states
 from trajkit.verify import verify_state_profile, verify_trajectory
+#: Compares two code paths (see floatcmp); CI runs it again with numpy SIMD off.
+pytestmark = pytest.mark.codepaths
 
 
 def _cases(rng, n):
@@ -41,7 +43,7 @@ def test_batch_equals_one_by_one():
     assert len(b) == len(cs)
     for i, (s, g, Lc) in enumerate(cs):
         p = plan_state_to_state(s, g, AxisLimits(*Lc))
-        assert_ulp_close(b.duration[i], p.duration, 4, f"move {i}")
+        assert_ulp_close(b.duration[i], p.duration, 4, err_msg=f"move {i}")
         q = b.profile(i)
         assert q.phase_durations == p.phase_durations
         assert q.jerks == p.jerks
@@ -65,7 +67,7 @@ def test_batch_fixed_durations():
     b = plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2], durations=T)
     for i, (c, lim) in enumerate(zip(cs, lims)):
         p = plan_state_to_state(c[0], c[1], lim, duration=None if np.isnan(T[i]) else T[i])
-        assert_ulp_close(b.duration[i], p.duration, 4, f"move {i}")
+        assert_ulp_close(b.duration[i], p.duration, 4, err_msg=f"move {i}")
         assert b.profile(i).phase_durations == p.phase_durations
 
 
