@@ -38,7 +38,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from state_reference import random_case
 
 from trajkit import AxisLimits, plan_ptp_states, plan_state_moves
-from trajkit.profiles.state import feasible_durations, min_state_duration, plan_state_to_state
+from trajkit.profiles.state import (
+    feasible_durations,
+    min_state_duration,
+    plan_state_to_state,
+)
 
 
 def _ruckig(n_dof):
@@ -118,7 +122,7 @@ def main(argv=None):
     print()
     print("| measurement (median / p99 per call) | trajkit | ruckig 0.19 | trajkit / ruckig |")
     print("|---|---|---|---|")
-    m1 = _row("1 axis: `plan_state_to_state` vs `Ruckig(1).calculate`", tk, rk)
+    _row("1 axis: `plan_state_to_state` vs `Ruckig(1).calculate`", tk, rk)
     rk_move = np.median(rk)
 
     # ---- 6 axes

@@ -25,7 +25,12 @@ from trajkit.profiles.motion import JerkMotion
 from trajkit.profiles.state import plan_state_to_state
 from trajkit.runtime._brake import BrakeProfile, brake_profile
 from trajkit.sync import plan_ptp
-from trajkit.verify import verify_motion, verify_profile, verify_state_profile, verify_trajectory
+from trajkit.verify import (
+    verify_motion,
+    verify_profile,
+    verify_state_profile,
+    verify_trajectory,
+)
 
 LIM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0)
 ASYM = AxisLimits(1.0, 2.0, 10.0, a_max_decel=1.0, j_max_decel=3.0)

@@ -19,6 +19,7 @@ from trajkit.errors import InfeasibleError, InvalidInputError
 from trajkit.profiles.state import feasible_durations, plan_state_to_state
 from trajkit.sync import states as sync_states
 from trajkit.verify import verify_state_profile, verify_trajectory
+
 #: Compares two code paths (see floatcmp); CI runs it again with numpy SIMD off.
 pytestmark = pytest.mark.codepaths
 

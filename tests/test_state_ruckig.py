@@ -171,7 +171,7 @@ def test_asymmetric_never_slower_than_the_references(capsys):
     from scan_oracle.planner import plan_state_to_state as scan_plan
 
     rng = np.random.default_rng(515)
-    n_scan = n_tight = n_scan_faster_than_us = 0
+    n_scan = n_tight = 0
     n_scan_failed = n_scan_bad_brake = 0
     improved = 0
     for i in range(N_ASYMMETRIC):

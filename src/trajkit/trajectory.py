@@ -10,7 +10,6 @@ is kept as an alias of :func:`trajkit.sync.plan_ptp` for existing callers.
 from __future__ import annotations
 
 import json
-import math
 import os
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -188,7 +187,9 @@ def _axis_name(name: Any, i: int) -> str:
 def __getattr__(attr: str):
     """``trajkit.trajectory.plan_ptp``: the planner moved to :mod:`trajkit.sync`."""
     if attr == "plan_ptp":
-        from .sync import plan_ptp  # deferred: trajectory never imports sync at load time
+        from .sync import (
+            plan_ptp,  # deferred: trajectory never imports sync at load time
+        )
 
         return plan_ptp
     raise AttributeError(f"module {__name__!r} has no attribute {attr!r}")

@@ -433,21 +433,9 @@ def verify_profile(
     lim = profile.limits
     axis = lim.name
     w = _Worst(axis, rtol)
-    start, goal, T = float(profile.start), float(profile.goal), float(profile.duration)
-    dist = abs(goal - start)
+    T = float(profile.duration)
     durs = [float(x) for x in profile.phase_durations]
     jerks = [float(x) for x in profile.jerks]
-    s = 1.0 if goal > start else (-1.0 if goal < start else 0.0)
-    # acceleration entering each phase: 0 where a jerk phase builds it up;
-    # for a jerk-free (trapezoid) leg the plateau is entered by a jump.
-    a1 = s * float(profile.peak_acceleration)
-    a2 = -s * float(profile.peak_deceleration)
-    a_enter = (0.0, a1, a1, 0.0, 0.0, a2, a2)
-
-    # scales for relative errors
-    v_scale = max(abs(float(profile.peak_velocity)), dist / T if T > 0 else 0.0)
-    a_scale = max(abs(a1), abs(a2))
-    p_scale = dist if dist > 0.0 else max(abs(start), 1.0)
 
     # duration
     if T < 0.0 or not math.isfinite(T):

@@ -4,7 +4,6 @@ between moving states, all of one motion type (:class:`JerkMotion`)."""
 from .batch import MoveBatch, plan_moves
 from .motion import JerkMotion, MotionExtrema, ProfileSample
 from .profile import PHASE_NAMES, Profile, min_duration, plan_move
-from .state_batch import StateMoveBatch, plan_state_moves
 from .state import (
     BlockedDurationError,
     DurationSet,
@@ -14,6 +13,7 @@ from .state import (
     plan_state_to_state,
     plan_velocity,
 )
+from .state_batch import StateMoveBatch, plan_state_moves
 
 __all__ = [
     "PHASE_NAMES",

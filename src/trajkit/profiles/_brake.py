@@ -27,7 +27,12 @@ checked while outside):
 * ``natural``: the acceleration ramped to zero at each leg's jerk limit
   (through a reversal), then the bump to ``(sign(v) v_max, 0)``;
 * ``hold``: slowing down, the acceleration held (jerk 0) up to the first
-  instant inside, before the velocity reverses.
+  instant inside, before the velocity reverses;
+* ``ruckig``: ruckig's brake (its published rule, at the smaller jerk and
+  acceleration of both legs): an acceleration beyond the limit ramped back
+  and held until ramping it to zero would end at a velocity limit (possibly
+  the far one, through a reversal), then ramped towards zero; cut at the
+  first instant inside.
 
 A candidate whose velocity exceeds what the start state forces (the
 velocity reached by ramping its acceleration to zero, :func:`forced_speed`)
@@ -47,7 +52,7 @@ from ._compile import jit
 from ._phase import phase_end
 
 __all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump", "brake_natural", "brake_hold",
-           "forced_speed", "peak_speed"]
+           "brake_ruckig", "forced_speed", "peak_speed"]
 
 #: Largest number of phases of one brake candidate.
 BRAKE_PHASES = 10
@@ -433,6 +438,104 @@ def brake_hold(v, a, V, A1, K1, A2, K2, out, buf):
     out[0, 1] = 0.0
     out[0, 2] = a
     return 1
+
+
+@jit
+def _rk_acc(v0, a0, vMax, vMin, aMax, J):
+    """ruckig's acceleration brake (``a0`` beyond ``aMax`` in the direction of
+    ``J``'s sign convention): returns (t0, t1, use_velocity_brake)."""
+    t_to_a_max = (a0 - aMax) / J
+    t_to_a_zero = a0 / J
+    v_at_a_max = v0 + t_to_a_max * (a0 - J * t_to_a_max / 2.0)
+    v_at_a_zero = v0 + t_to_a_zero * (a0 - J * t_to_a_zero / 2.0)
+    if (v_at_a_zero > vMax and J > 0.0) or (v_at_a_zero < vMax and J < 0.0):
+        return 0.0, 0.0, True
+    if (v_at_a_max < vMin and J > 0.0) or (v_at_a_max > vMin and J < 0.0):
+        t_to_v_min = -(v_at_a_max - vMin) / aMax
+        t_to_v_max = -aMax / (2.0 * J) - (v_at_a_max - vMax) / aMax
+        return t_to_a_max, max(min(t_to_v_min, t_to_v_max), 0.0), False
+    return t_to_a_max, 0.0, False
+
+
+@jit
+def _rk_vel(v0, a0, vMax, vMin, aMin, J):
+    """ruckig's velocity brake: returns (t0, t1)."""
+    t_to_a_min = (a0 - aMin) / J
+    r1 = a0 * a0 + 2.0 * J * (v0 - vMax)
+    r2 = a0 * a0 / 2.0 + J * (v0 - vMin)
+    t_to_v_max = a0 / J + math.sqrt(r1) / abs(J) if r1 >= 0.0 else math.inf
+    t_to_v_min = a0 / J + math.sqrt(r2) / abs(J) if r2 >= 0.0 else math.inf
+    t_min_to_v_max = min(t_to_v_max, t_to_v_min)
+    if t_to_a_min < t_min_to_v_max:
+        v_at_a_min = v0 + t_to_a_min * (a0 - J * t_to_a_min / 2.0)
+        t_c_max = -(v_at_a_min - vMax) / aMin
+        t_c_min = aMin / (2.0 * J) - (v_at_a_min - vMin) / aMin
+        return max(t_to_a_min, 0.0), max(min(t_c_max, t_c_min), 0.0)
+    if not (t_min_to_v_max < math.inf):
+        return -1.0, 0.0
+    return max(t_min_to_v_max, 0.0), 0.0
+
+
+@jit
+def brake_ruckig(v, a, V, A1, K1, A2, K2, out, buf):
+    """Brake candidate ``ruckig``: ruckig's brake rule at the smaller jerk and
+    acceleration of both legs, then the acceleration ramped towards zero; cut
+    at the first instant inside the limits. Returns the phase count or -1."""
+    Km = max(K1, K2)
+    if Km == 0.0 or not (V < math.inf):
+        return -1
+    J = 1.0 / Km
+    A = min(A1, A2)
+    vza_m = v - a * a / (2.0 * J)   # velocity after ramping a to zero at -J (a > 0)
+    vza_p = v + a * a / (2.0 * J)   # ... at +J (a < 0)
+    if a > A:
+        t0, t1, vb = _rk_acc(v, a, V, -V, A, J)
+        jj = -J
+        if vb:
+            t0, t1 = _rk_vel(v, a, V, -V, -A, J)
+    elif a < -A:
+        t0, t1, vb = _rk_acc(v, a, -V, V, -A, -J)
+        jj = J
+        if vb:
+            t0, t1 = _rk_vel(v, a, -V, V, A, -J)
+    elif (v > V and vza_m > -V) or (a > 0.0 and vza_m > V):
+        t0, t1 = _rk_vel(v, a, V, -V, -A, J)
+        jj = -J
+    elif (v < -V and vza_p < V) or (a < 0.0 and vza_p < -V):
+        t0, t1 = _rk_vel(v, a, -V, V, A, -J)
+        jj = J
+    else:
+        return -1
+    if t0 < 0.0:
+        return -1
+    k = 0
+    if t0 > 0.0:
+        k = _seq(buf, k, t0, jj, a)
+    a1 = a + jj * t0
+    if t1 > 0.0:
+        k = _seq(buf, k, t1, 0.0, a1)
+    if a1 != 0.0:
+        k = _seq(buf, k, abs(a1) / J, -J if a1 > 0.0 else J, a1)
+    fb = buf[:78]
+    n = 0
+    for i in range(k):
+        tt = buf[80 + i]
+        jk = buf[84 + i]
+        ak = buf[88 + i]
+        t = _first_inside(v, ak, jk, tt, V, A1, K1, A2, K2, fb)
+        if t < math.inf:
+            if t > 0.0:
+                out[n, 0] = t
+                out[n, 1] = jk
+                out[n, 2] = ak
+                n += 1
+            return n
+        out[n, 0] = tt
+        out[n, 1] = jk
+        out[n, 2] = ak
+        n += 1
+        _, v, _ = phase_end(0.0, v, ak, jk, tt)
+    return -1
 
 
 @jit

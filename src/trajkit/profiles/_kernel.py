@@ -27,8 +27,16 @@ import math
 
 import numpy as np
 
-from ._brake import (brake_bump, brake_hold, brake_natural, brake_path, forced_speed, inside,
-                     peak_speed)
+from ._brake import (
+    brake_bump,
+    brake_hold,
+    brake_natural,
+    brake_path,
+    brake_ruckig,
+    forced_speed,
+    inside,
+    peak_speed,
+)
 from ._compile import jit
 from ._phase import phase_end
 from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
@@ -57,7 +65,7 @@ ST_SHORT = 4     # the requested duration is below the minimum
 NBLK = 4
 
 #: Brake candidates (see :mod:`._brake`).
-NCAND = 6
+NCAND = 7
 
 #: A brake end state within this fraction of the brake's velocity (and
 #: acceleration) scale outside the limits is round-off and is moved onto them.
@@ -204,7 +212,6 @@ def solve(ws):
     nb_best = 0
     n_best = 0
     nvalid = 0
-    tb_best = 0.0
     res[R_ALL] = 1.0 if (task == TASK_BLOCK or task == TASK_FIXED) else 0.0
     # the goal is the start: the empty profile (duration 0) is the fastest
     trivial = (task != TASK_VELOCITY and start_inside and st0[3] == 0.0
@@ -225,7 +232,6 @@ def solve(ws):
         if nb + n > NPH or not (tb + res[R_T] < best_total):
             continue
         best_total = tb + res[R_T]
-        tb_best = tb
         ws[OUT_SHAPE] = res[R_SHAPE]
         nb_best = nb
         n_best = n
@@ -313,7 +319,7 @@ def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
 @jit
 def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     """Brake candidate ``cand`` (0, 1: paths; 2, 3: bumps to +-v_max; 4: natural;
-    5: hold; only 0 = none when the start is inside): (phase count or -1, duration); ``s1[:6]`` gets the
+    5: hold; 6: ruckig's rule; only 0 = none when the start is inside): (phase count or -1, duration); ``s1[:6]`` gets the
     problem from its end."""
     if start_inside:
         if cand > 0:
@@ -327,8 +333,10 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
                         lim[2], lim[3], lim[4], brk, bbuf)
     elif cand == 4:
         nb = brake_natural(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
-    else:
+    elif cand == 5:
         nb = brake_hold(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
+    else:
+        nb = brake_ruckig(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
     if nb < 0:
         return -1, 0.0
     # a brake exceeds the velocity limit no more than the start state forces

@@ -61,7 +61,7 @@ import numpy as np
 from ._check import check, clean
 from ._compile import jit
 from ._phase import phase_end
-from ._roots import MAX_DEGREE, cheb_nodes, horner, interp_unit, real_roots_unit
+from ._roots import cheb_nodes, interp_unit, real_roots_unit
 
 __all__ = ["NPH", "NVALID", "step1"]
 

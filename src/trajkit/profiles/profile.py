@@ -3,18 +3,21 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
-
-import numpy as np
 
 from .._constants import DURATION_RTOL, PHASE_EPS, REACHED_RTOL
 from .._validate import axis_label
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _scalar as K
-from ._range import (check_distance_range, check_duration_range, check_limits_range,
-                     check_position_range, check_rest_cruise, check_rest_duration_ratio)
+from ._range import (
+    check_distance_range,
+    check_duration_range,
+    check_limits_range,
+    check_position_range,
+    check_rest_cruise,
+    check_rest_duration_ratio,
+)
 from .motion import JerkMotion, ProfileSample
 
 __all__ = ["Profile", "ProfileSample", "plan_move", "PHASE_NAMES"]

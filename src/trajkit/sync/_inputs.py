@@ -10,8 +10,12 @@ import numpy as np
 from .._validate import check_array
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
-from ..profiles._range import (REST_POSITION_MAX, check_distance_range, check_duration_range,
-                               check_position_range)
+from ..profiles._range import (
+    REST_POSITION_MAX,
+    check_distance_range,
+    check_duration_range,
+    check_position_range,
+)
 
 __all__ = ["coerce_limits", "float_list", "check_positions", "check_distances", "coerce_states",
            "check_duration"]

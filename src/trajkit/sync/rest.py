@@ -23,7 +23,13 @@ from ..profiles.profile import (
     _rest_profile,
 )
 from ..trajectory import SYNC_MODES, Trajectory
-from ._inputs import check_distances, check_duration, check_positions, coerce_limits, float_list
+from ._inputs import (
+    check_distances,
+    check_duration,
+    check_positions,
+    coerce_limits,
+    float_list,
+)
 
 __all__ = ["plan_ptp_rest"]
 
