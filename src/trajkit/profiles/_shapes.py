@@ -1592,14 +1592,19 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
     st[5] = af
     st[6] = st0[6]
     V, A1, K1_, A2, K2_ = lim[0], lim[1], lim[2], lim[3], lim[4]
-    if A1 == A2 and K1_ == K2_:
+    symmetric = A1 == A2 and K1_ == K2_
+    if symmetric:
         # symmetric: one template, no split of the legs
         c1hi = min(A1, _c1_bound(V, v0, a0, K1_))
         c3lo = -min(A1, _c3_bound(V, vf, af, K1_))
         _setcfg(cfg, p0, v0, a0, D, vf, af, K1_, K1_, K1_, K1_, K1_, M_ZERO, A1, -A1, V,
                 a0, c1hi, c3lo, af, 0.0, 1.0, K1_)
         _solve(cfg, W, vec, ivl, 0, 0, sgn, st, lim, best, res)
-        return
+        # ... and, with both boundary accelerations of one sign, the profiles
+        # whose acceleration never changes sign (e.g. a hold at a_max from -v_max
+        # to +v_max): the one-run templates below
+        if not ((a0 > 0.0 and af > 0.0) or (a0 < 0.0 and af < 0.0)) or res[R_STOP] > 0.0:
+            return
     pre = W[1]
     suf = W[2]
     sufd = W[4]
@@ -1618,7 +1623,7 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
         nsD, pD, vD = _suffix_d(sufd, D, vf, af, K1_, K2_)
         aD = 0.0
     # ===== sign case (+, -): c1 >= 0 >= c3; run B (a > 0: v rises to vc), run C (a < 0)
-    for hb in range(5):
+    for hb in range(0 if symmetric else 5):
         okb, npre, ps, vs, as_, AB, KB, KB2, mb, vc_pos = _front(
             pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km)
         if not okb:
@@ -1669,6 +1674,8 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
             _setcfg(cfg, ps, vs, as_, pe, ve, ae, Kb, Kb, Ka, Ka, Ka, mode, -Ab, -Aa, V,
                     as_, 0.0, c3lo, min(ae, 0.0), -1.0, -1.0, Ka)
             _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res)
+    if symmetric:
+        return
     # ===== the tighter limits of both legs on the whole profile (always valid)
     c1hi = min(Am, _c1_bound(V, v0, a0, Km))
     c3lo = -min(Am, _c3_bound(V, vf, af, Km))
