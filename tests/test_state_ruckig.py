@@ -220,3 +220,17 @@ def test_asymmetric_never_slower_than_the_references(capsys):
               f"limit in {n_scan_bad_brake}); vs tight ruckig {n_tight}")
     assert n_scan >= 0.9 * N_ASYMMETRIC
     assert n_tight >= 0.3 * N_ASYMMETRIC
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_the_corner_where_ruckig_crashes_is_planned(sign):
+    # from -v_max to +v_max at the same position, accelerating at a_max all the
+    # way: one hold at a_max through the reversal, 2 v_max / a_max
+    V, A, J = 2.772424406185707, 0.4169379084220041, 1.3
+    lim = AxisLimits(V, A, J)
+    s = (0.5, -sign * V, sign * A)
+    g = (0.5, sign * V, sign * A)
+    assert ruckig_segfaults(s, g, (V, A, J))
+    p = plan_state_to_state(s, g, lim)
+    _check(p, lim)
+    assert p.duration == pytest.approx(2.0 * V / A, rel=1e-12)
