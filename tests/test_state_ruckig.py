@@ -129,17 +129,18 @@ def test_symmetric_equals_ruckig_including_brake_starts(capsys):
         if i % 50 == 0:
             rep = verify_state_profile(p)
             assert rep.ok, rep.violations[:3]
+        if s == g:
+            # already there: duration 0 (ruckig plans a detour back to the same
+            # state; at rest with a_max it crashes, found by the sweep: not sent)
+            assert p.duration == 0.0
+            stats["already_there"] += 1
+            continue
         if ruckig_segfaults(s, g, L):
             ruckig_crash.append((case, p.duration))
             continue
         ref = ruckig_duration(s, g, L[0], L[1], L[2], catch_errors=True)
         if ref is None:
             ruckig_failed.append((case, p.duration))
-            continue
-        if s == g:
-            # already there: duration 0 (ruckig plans a detour back to the same state)
-            assert p.duration == 0.0
-            stats["already_there"] += 1
             continue
         rel = (p.duration - ref) / ref
         if not brake:
