@@ -1,21 +1,27 @@
-"""Speed of the state-to-state planner: time per call, typical and worst.
+"""Speed of the state-to-state planner side by side with ruckig, in one run.
 
-Seeded random non-zero states over the hard corners (the generator of
-``tests/state_reference.py``), symmetric and asymmetric limits. For each case:
-``min_state_duration``, ``plan_state_to_state(duration=T)`` with
-``T = T_min (1 + f)``, ``f`` in {1e-6, 0.05, 0.7}, and the blocked-interval
-reports among those. Every time is the best of ``--repeat`` calls
-(``time.perf_counter`` around one call; the best of a few filters out the
-noise of a shared machine); median, mean, 99th percentile and worst over the
-cases are printed.
+Seeded random states over the hard corners (the generator of
+``tests/state_reference.py``), symmetric limits (ruckig's problem), moving
+start and goal states. Rows:
 
+* **1 axis**: ``plan_state_to_state(start, goal, limits)`` per call vs
+  ``Ruckig(1).calculate`` per call (the five input lists set in Python each
+  call, as a controller would). Each case is timed ``--repeat`` times, the
+  best is kept; median and 99th percentile over the cases.
+* **6 axes**: ``plan_ptp_states(start, goal, limits)`` (time
+  synchronisation) vs ``Ruckig(6).calculate``.
+* **batch**: ``plan_state_moves`` on ``--batch`` moves in one call, per move,
+  vs the ruckig loop of the 1-axis row, per move (throughput).
+* **fixed duration** (trajkit only): ``plan_state_to_state(..., duration=T)``
+  with ``T = 1.3 T_min`` (or the end of the blocked interval it falls in); asymmetric limits ``min_state_duration``.
+
+Every duration is compared with ruckig's (max relative difference printed).
 The compiled kernel (numba, ``pip install trajkit[fast]``) is loaded or
-compiled before the timed loop; its one-off cost is printed on its own line.
-``--no-jit`` times the pure-Python path (``TRAJKIT_NO_JIT=1``).
+compiled before the timed loops; its one-off cost is printed on its own line.
 
 Run::
 
-    python benchmarks/bench_states.py [--n 300] [--seed 1] [--repeat 3] [--no-jit]
+    python benchmarks/bench_states.py [--n 300] [--seed 1] [--repeat 5] [--batch 20000]
 """
 
 from __future__ import annotations
@@ -31,63 +37,159 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from state_reference import random_case
 
-from trajkit import AxisLimits
+from trajkit import AxisLimits, plan_ptp_states, plan_state_moves
 from trajkit.profiles.state import (
-    BlockedDurationError,
+    feasible_durations,
     min_state_duration,
     plan_state_to_state,
 )
 
 
-def _stats(name, xs):
-    if not xs:
-        print(f"{name:34s} (none)")
-        return
-    a = np.array(xs) * 1e3
-    print(f"{name:34s} n={a.size:5d}  median {np.median(a):8.3f} ms  mean {a.mean():8.3f} ms  "
-          f"p99 {np.percentile(a, 99):8.3f} ms  worst {a.max():8.3f} ms")
+def _ruckig(n_dof):
+    from ruckig import InputParameter, Ruckig, Trajectory
+
+    return Ruckig(n_dof), InputParameter(n_dof), Trajectory(n_dof)
+
+
+def _best(fn, repeat):
+    b = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        b = min(b, time.perf_counter() - t0)
+    return b
+
+
+def _cases(rng, n, dof=1):
+    out = []
+    while len(out) < n:
+        cs = [random_case(rng, symmetric=True) for _ in range(dof)]
+        if any(c[0] == c[1] for c in cs):
+            continue
+        out.append(cs)
+    return out
+
+
+def _row(name, tk, rk, ratio_note=""):
+    tk, rk = np.asarray(tk) * 1e6, np.asarray(rk) * 1e6
+    m1, m2 = np.median(tk), np.median(rk)
+    p1, p2 = np.percentile(tk, 99), np.percentile(rk, 99)
+    print(f"| {name} | {m1:.2f} / {p1:.2f} us | {m2:.2f} / {p2:.2f} us | "
+          f"median {m1 / m2:.1f}x, p99 {p1 / p2:.1f}x{ratio_note} |")
+    return m1, m2, p1, p2
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=300, help="random cases per symmetry")
+    ap.add_argument("--n", type=int, default=300, help="random cases (1 axis and 6 axes)")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--repeat", type=int, default=3, help="calls per case (best is kept)")
-    ap.add_argument("--no-jit", action="store_true", help="pure Python (TRAJKIT_NO_JIT=1)")
+    ap.add_argument("--repeat", type=int, default=5, help="calls per case (best is kept)")
+    ap.add_argument("--batch", type=int, default=20000, help="moves of the batch row")
     args = ap.parse_args(argv)
-    if args.no_jit:
-        os.environ["TRAJKIT_NO_JIT"] = "1"
     t0 = time.perf_counter()
-    min_state_duration((0.0, 0.1, 0.0), (1.0, 0.0, 0.0), AxisLimits(1.0, 1.0, 1.0))
-    print(f"first call (imports, numba compile or cache load): {time.perf_counter() - t0:.3f} s")
-    for symmetric in (True, False):
-        rng = np.random.default_rng(args.seed)
-        tmin, tfix, tblk = [], [], []
-        for _ in range(args.n):
-            s, g, L = random_case(rng, symmetric=symmetric)
-            if s == g:
-                continue
-            lim = AxisLimits(*L)
-            best = float("inf")
-            for _ in range(args.repeat):
-                t0 = time.perf_counter()
-                d = min_state_duration(s, g, lim)
-                best = min(best, time.perf_counter() - t0)
-            tmin.append(best)
-            for f in (1e-6, 0.05, 0.7):
-                best, blocked = float("inf"), False
-                for _ in range(args.repeat):
-                    t0 = time.perf_counter()
-                    try:
-                        plan_state_to_state(s, g, lim, duration=d * (1 + f))
-                    except BlockedDurationError:
-                        blocked = True
-                    best = min(best, time.perf_counter() - t0)
-                (tblk if blocked else tfix).append(best)
-        tag = "symmetric" if symmetric else "asymmetric"
-        _stats(f"min_state_duration ({tag})", tmin)
-        _stats(f"fixed duration ({tag})", tfix)
-        _stats(f"blocked report ({tag})", tblk)
+    lim0 = AxisLimits(1.0, 1.0, 1.0)
+    min_state_duration((0.0, 0.1, 0.0), (1.0, 0.0, 0.0), lim0)
+    plan_ptp_states([(0.0, 0.1, 0.0)] * 2, [(1.0, 0.0, 0.0)] * 2, lim0)
+    plan_state_moves([(0.0, 0.1, 0.0)] * 2, [(1.0, 0.0, 0.0)] * 2, 1.0, 1.0, 1.0)
+    print(f"first calls (imports, numba compile or cache load): {time.perf_counter() - t0:.3f} s")
+    print(f"cores: {os.cpu_count()}, numba threads: "
+          f"{__import__('numba').get_num_threads() if _has_numba() else 'no numba'}")
+    rng = np.random.default_rng(args.seed)
+    worst = 0.0
+
+    # ---- 1 axis
+    r, inp, traj = _ruckig(1)
+    tk, rk = [], []
+    for (c,) in _cases(rng, args.n):
+        s, g, L = c
+        lim = AxisLimits(*L)
+
+        def one_rk(s=s, g=g, L=L):
+            inp.current_position = [s[0]]
+            inp.current_velocity = [s[1]]
+            inp.current_acceleration = [s[2]]
+            inp.target_position = [g[0]]
+            inp.target_velocity = [g[1]]
+            inp.target_acceleration = [g[2]]
+            inp.max_velocity = [L[0]]
+            inp.max_acceleration = [L[1]]
+            inp.max_jerk = [L[2]]
+            r.calculate(inp, traj)
+
+        tk.append(_best(lambda: plan_state_to_state(s, g, lim), args.repeat))
+        rk.append(_best(one_rk, args.repeat))
+        worst = max(worst, abs(plan_state_to_state(s, g, lim).duration - traj.duration) / traj.duration)
+    print()
+    print("| measurement (median / p99 per call) | trajkit | ruckig 0.19 | trajkit / ruckig |")
+    print("|---|---|---|---|")
+    _row("1 axis: `plan_state_to_state` vs `Ruckig(1).calculate`", tk, rk)
+    rk_move = np.median(rk)
+
+    # ---- 6 axes
+    r6, inp6, traj6 = _ruckig(6)
+    tk, rk = [], []
+    for cs in _cases(rng, args.n, dof=6):
+        S = [c[0] for c in cs]
+        G = [c[1] for c in cs]
+        lims = [AxisLimits(*c[2]) for c in cs]
+
+        def six_rk(cs=cs):
+            inp6.current_position = [c[0][0] for c in cs]
+            inp6.current_velocity = [c[0][1] for c in cs]
+            inp6.current_acceleration = [c[0][2] for c in cs]
+            inp6.target_position = [c[1][0] for c in cs]
+            inp6.target_velocity = [c[1][1] for c in cs]
+            inp6.target_acceleration = [c[1][2] for c in cs]
+            inp6.max_velocity = [c[2][0] for c in cs]
+            inp6.max_acceleration = [c[2][1] for c in cs]
+            inp6.max_jerk = [c[2][2] for c in cs]
+            r6.calculate(inp6, traj6)
+
+        tk.append(_best(lambda: plan_ptp_states(S, G, lims), args.repeat))
+        rk.append(_best(six_rk, args.repeat))
+        d = plan_ptp_states(S, G, lims).duration
+        worst = max(worst, abs(d - traj6.duration) / traj6.duration)
+    _row("6 axes: `plan_ptp_states` vs `Ruckig(6).calculate`", tk, rk)
+
+    # ---- batch
+    cs = [c for (c,) in _cases(rng, args.batch)]
+    S = np.array([c[0] for c in cs])
+    G = np.array([c[1] for c in cs])
+    L = np.array([c[2] for c in cs])
+    t = _best(lambda: plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2]), max(1, args.repeat // 2))
+    per = t / len(cs)
+    print(f"| batch: `plan_state_moves` ({len(cs)} moves, one call) vs the ruckig loop, per move "
+          f"| {per * 1e6:.2f} us | {rk_move * 1e6:.2f} us | throughput "
+          f"{rk_move / per:.2f}x ruckig's |")
+    print()
+    print(f"max relative difference of the durations from ruckig's: {worst:.1e}")
+
+    # ---- trajkit only: fixed durations, asymmetric limits
+    rng = np.random.default_rng(args.seed + 1)
+    tf, ta = [], []
+    for (c,) in _cases(rng, args.n):
+        s, g, L = c
+        lim = AxisLimits(*L)
+        T = feasible_durations(s, g, lim).next_feasible(1.3 * min_state_duration(s, g, lim))
+        tf.append(_best(lambda: plan_state_to_state(s, g, lim, duration=T), args.repeat))
+    for _ in range(args.n):
+        s, g, L = random_case(rng, symmetric=False)
+        if s == g:
+            continue
+        lim = AxisLimits(*L)
+        ta.append(_best(lambda: min_state_duration(s, g, lim), args.repeat))
+    for name, xs in (("fixed duration T = 1.3 T_min (symmetric)", tf),
+                     ("min_state_duration (asymmetric limits)", ta)):
+        a = np.asarray(xs) * 1e6
+        print(f"{name}: median {np.median(a):.1f} us, p99 {np.percentile(a, 99):.1f} us")
+
+
+def _has_numba():
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return not os.environ.get("TRAJKIT_NO_JIT")
 
 
 if __name__ == "__main__":

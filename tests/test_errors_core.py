@@ -67,7 +67,9 @@ def test_invalid_input_is_value_error():
     ([0.0, 0.0, 0.0], [1.0, 1.0, math.inf], LIMS3, r"^goal of axis C must be finite, got inf$"),
     ([0.0, 0.0], [1.0, 1.0, 1.0], LIMS3, r"^start has 2 axes but goal has 3$"),
     ([0.0, 0.0], [1.0, 1.0], LIMS3, r"^limits has 3 entries but start/goal have 2 axes$"),
-    ([[0.0, 0.0]], [[1.0, 1.0]], LIMS3, r"^start must have 1 dimension\(s\), got shape \(1, 2\)$"),
+    ([[0.0, 0.0]], [[1.0, 1.0]], LIMS3,
+     r"^start must have shape \(n_axes, 3\) \(position, velocity, acceleration per axis\) "
+     r"or \(n_axes,\), got shape \(1, 2\)$"),
     ([], [], LIMS3, r"^start and goal must have at least one axis$"),
     ([0.0, 0.0, 7.0], [1.0, 1.0, 1.0],
      LIMS3[:2] + [AxisLimits(1.0, 2.0, 10.0, position_max=6.0, name="C")],

@@ -1,4 +1,5 @@
-"""plan_ptp with moving boundary states delegates to plan_ptp_states (issue 8 wiring)."""
+"""plan_ptp: the form of the input chooses the planner (positions at rest or states),
+never the values; the compatibility keywords select the state planner."""
 
 import numpy as np
 import pytest
@@ -15,10 +16,15 @@ from trajkit import (
 LIM = AxisLimits(1.0, 2.0, 10.0)
 
 
-def test_zero_rates_keep_rest_to_rest_profiles():
-    t = plan_ptp([0, 0], [1, 2], LIM, start_velocity=[0, 0], goal_acceleration=[0, 0])
-    assert all(isinstance(a, Profile) for a in t.axes)
-    assert t.duration == plan_ptp([0, 0], [1, 2], LIM).duration
+def test_the_input_form_chooses_the_planner_not_the_values():
+    rest = plan_ptp([0, 0], [1, 2], LIM)
+    assert all(isinstance(a, Profile) for a in rest.axes)
+    # states given, all at rest: still the state planner (explicit, no silent switch)
+    for t in (plan_ptp([[0, 0, 0], [0, 0, 0]], [[1, 0, 0], [2, 0, 0]], LIM),
+              plan_ptp([0, 0], [1, 2], LIM, start_velocity=[0, 0], goal_acceleration=[0, 0])):
+        assert all(isinstance(a, StateProfile) for a in t.axes)
+        assert t.duration == pytest.approx(rest.duration, rel=1e-12)
+        assert t.sync == "time"
 
 
 def test_moving_start_matches_plan_ptp_states_and_hits_states():

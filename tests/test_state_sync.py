@@ -8,8 +8,8 @@ from state_reference import exact_check, goal_error
 
 from trajkit import AxisLimits
 from trajkit.errors import InfeasibleError, InvalidInputError
-from trajkit.sync_states import plan_ptp_states
 from trajkit.profiles.state import plan_state_to_state
+from trajkit.sync_states import plan_ptp_states
 
 LIMS = [
     AxisLimits(1.0, 2.0, 10.0, name="A"),

@@ -18,25 +18,32 @@ from .limits import AxisLimits
 from .profiles import (
     PHASE_NAMES,
     BlockedDurationError,
+    DurationSet,
+    JerkMotion,
     MoveBatch,
     Profile,
     ProfileSample,
+    StateMoveBatch,
     StateProfile,
+    feasible_durations,
     min_duration,
     min_state_duration,
     plan_move,
     plan_moves,
+    plan_state_moves,
     plan_state_to_state,
     plan_velocity,
 )
-from .sync_states import plan_ptp_states
-from .trajectory import SYNC_MODES, Trajectory, TrajectorySample, plan_ptp
+from .sync import plan_ptp, plan_ptp_states
+from .trajectory import SYNC_MODES, Trajectory, TrajectorySample
 from .verify import (
     TrajectoryReport,
     VerificationError,
     VerificationReport,
     Violation,
+    verify_motion,
     verify_profile,
+    verify_state_profile,
     verify_trajectory,
 )
 
@@ -58,6 +65,8 @@ __all__ = [
     "MoveBatch",
     "plan_move",
     "plan_moves",
+    "plan_state_moves",
+    "StateMoveBatch",
     "min_duration",
     "Trajectory",
     "TrajectorySample",
@@ -69,7 +78,12 @@ __all__ = [
     "plan_velocity",
     "min_state_duration",
     "plan_ptp_states",
+    "JerkMotion",
+    "DurationSet",
+    "feasible_durations",
     "verify_profile",
+    "verify_state_profile",
+    "verify_motion",
     "verify_trajectory",
     "VerificationReport",
     "TrajectoryReport",

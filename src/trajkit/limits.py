@@ -186,8 +186,13 @@ class AxisLimits:
         )
 
     def check_position(self, value: float, field_name: str = "position") -> float:
-        """Raise unless ``value`` is finite and inside the position range."""
-        x = float(value)
+        """Raise unless ``value`` is a finite number inside the position range."""
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"{field_name}{axis_label(self.name)} must be a number, got {value!r}"
+            ) from None
         if not math.isfinite(x):
             raise InvalidInputError(f"{field_name}{axis_label(self.name)} must be finite, got {x!r}")
         if x < self.position_min or x > self.position_max:

@@ -1,9 +1,15 @@
-"""Multi-axis trajectories: synchronised point-to-point motion (:func:`plan_ptp`)."""
+"""Multi-axis trajectories: :class:`Trajectory` (samples and export of several axes).
+
+A trajectory holds one one-axis motion per axis (a
+:class:`~trajkit.profiles.Profile`, a :class:`~trajkit.profiles.StateProfile`
+or any :class:`~trajkit.profiles.motion.JerkMotion` with ``limits``); the
+planners that build them live in :mod:`trajkit.sync`. ``trajkit.trajectory.plan_ptp``
+is kept as an alias of :func:`trajkit.sync.plan_ptp` for existing callers.
+"""
 
 from __future__ import annotations
 
 import json
-import math
 import os
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -12,20 +18,10 @@ import numpy as np
 
 from ._atomicio import atomic_write
 from ._csvio import csv_text, unit_suffix
-from ._constants import DURATION_RTOL
 from ._sampling import MAX_SAMPLES, period_times
-from ._validate import check_array
-from .errors import InfeasibleError, InvalidInputError
-from .limits import AxisLimits
-from .profiles.profile import (
-    Profile,
-    _min_solution,
-    _plan_solved,
-    _plan_unchecked,
-    _rest_profile,
-)
+from .errors import InvalidInputError
 
-__all__ = ["Trajectory", "TrajectorySample", "plan_ptp", "SYNC_MODES"]
+__all__ = ["Trajectory", "TrajectorySample", "SYNC_MODES"]
 
 #: Accepted values of ``plan_ptp(..., sync=...)``.
 SYNC_MODES = ("time", "phase", "none")
@@ -51,12 +47,12 @@ class TrajectorySample:
 
 
 class Trajectory:
-    """A multi-axis trajectory made of one :class:`Profile` per axis.
+    """A multi-axis trajectory made of one motion per axis.
 
     Attributes
     ----------
-    axes : tuple of Profile
-        The per-axis profiles (all start at t = 0).
+    axes : tuple of Profile or StateProfile
+        The per-axis motions (all start at t = 0).
     duration : float
         The longest axis duration [s].
     sync : str
@@ -65,21 +61,28 @@ class Trajectory:
         Axis names (for export headers).
     """
 
-    def __init__(self, axes: Sequence[Profile], sync: str = "none",
+    def __init__(self, axes: Sequence[Any], sync: str = "none",
                  names: Sequence[str] | None = None) -> None:
         self.axes = tuple(axes)
         self.sync = sync
         self.duration = max((p.duration for p in self.axes), default=0.0)
         if names is None:
-            names = [
-                str(p.limits.name) if p.limits.name is not None else f"q{i}"
-                for i, p in enumerate(self.axes)
-            ]
+            names = [_axis_name(p.limits.name, i) for i, p in enumerate(self.axes)]
         self.names = tuple(names)
 
     @property
     def n_axes(self) -> int:
         return len(self.axes)
+
+    @property
+    def start_states(self) -> np.ndarray:
+        """Start states ``(p, v, a)`` per axis, shape (n_axes, 3)."""
+        return np.array([p.start_state for p in self.axes], dtype=float).reshape(-1, 3)
+
+    @property
+    def goal_states(self) -> np.ndarray:
+        """Goal states ``(p, v, a)`` per axis, shape (n_axes, 3)."""
+        return np.array([p.end_state for p in self.axes], dtype=float).reshape(-1, 3)
 
     @property
     def start(self) -> np.ndarray:
@@ -174,196 +177,19 @@ def _atomic_write(path: str | os.PathLike, text: str) -> None:
     atomic_write(path, text)
 
 
-def _coerce_limits(
-    limits: AxisLimits | Sequence[AxisLimits], n: int, named: bool = False
-) -> list[AxisLimits]:
-    """One AxisLimits per axis: the same objects, or with ``named=True`` copies of
-    the unnamed ones carrying their axis index (for messages)."""
-    if isinstance(limits, AxisLimits):
-        if named and limits.name is None:
-            return [limits.with_name(i) for i in range(n)]
-        return [limits] * n
-    try:
-        lims = list(limits)
-    except TypeError:
-        raise InvalidInputError(
-            f"limits must be an AxisLimits or a sequence of them, got {type(limits).__name__}"
-        ) from None
-    if len(lims) != n:
-        raise InvalidInputError(
-            f"limits has {len(lims)} entries but start/goal have {n} axes"
+def _axis_name(name: Any, i: int) -> str:
+    """Column name of an axis: its name, or ``q<i>`` (also for an integer index)."""
+    if name is None or (isinstance(name, int) and not isinstance(name, bool)):
+        return f"q{i if name is None else name}"
+    return str(name)
+
+
+def __getattr__(attr: str):
+    """``trajkit.trajectory.plan_ptp``: the planner moved to :mod:`trajkit.sync`."""
+    if attr == "plan_ptp":
+        from .sync import (
+            plan_ptp,  # deferred: trajectory never imports sync at load time
         )
-    for i, lim in enumerate(lims):
-        if not isinstance(lim, AxisLimits):
-            raise InvalidInputError(
-                f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}"
-            )
-        if named and lim.name is None:
-            lims[i] = lim.with_name(i)
-    return lims
 
-
-def _float_list(value: Any, field: str) -> list[float]:
-    """A 1-D sequence of numbers as a list of floats (fast path for lists and
-    1-D arrays; everything else goes through :func:`check_array`)."""
-    if isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "fiu":
-        return value.astype(np.float64, copy=False).tolist()
-    if isinstance(value, (list, tuple)) and all(type(x) in (float, int) for x in value):
-        return [float(x) for x in value]
-    return check_array(value, field, ndim=1, finite=False).tolist()
-
-
-def _check_positions(values: list[float], lims: list[AxisLimits], field: str) -> list[float]:
-    """Finite and inside each axis' range; messages name the axis (its name or index)."""
-    for i, (x, lim) in enumerate(zip(values, lims)):
-        if not (lim.position_min <= x <= lim.position_max) or not math.isfinite(x):
-            (lim if lim.name is not None else lim.with_name(i)).check_position(x, field)
-    return values
-
-
-def _boundary_states(start, goal, v0, a0, v1, a1):
-    """(n, 3) start and goal states, or None when every given rate is zero."""
-    s = check_array(start, "start", ndim=1, finite=False)
-    g = check_array(goal, "goal", ndim=1, finite=False)
-    n = s.size
-    rates = []
-    for value, field in ((v0, "start_velocity"), (a0, "start_acceleration"),
-                         (v1, "goal_velocity"), (a1, "goal_acceleration")):
-        if value is None:
-            rates.append(np.zeros(n))
-        else:
-            rates.append(check_array(value, field, ndim=1, size=n))
-    if not any(np.any(r != 0.0) for r in rates):
-        return None
-    if g.size != n:
-        raise InvalidInputError(f"start has {n} axes but goal has {g.size}")
-    return (np.column_stack([s, rates[0], rates[1]]), np.column_stack([g, rates[2], rates[3]]))
-
-
-def plan_ptp(
-    start: Any,
-    goal: Any,
-    limits: AxisLimits | Sequence[AxisLimits],
-    sync: str = "time",
-    duration: float | None = None,
-    *,
-    start_velocity: Any = None,
-    start_acceleration: Any = None,
-    goal_velocity: Any = None,
-    goal_acceleration: Any = None,
-) -> Trajectory:
-    """Plan a synchronised, jerk-limited point-to-point move of several axes.
-
-    Parameters
-    ----------
-    start, goal : array_like, shape (n_axes,)
-        Positions per axis [axis unit].
-    limits : AxisLimits or sequence of n_axes AxisLimits
-        One set of limits for every axis, or one per axis.
-    sync : {"time", "phase", "none"}
-        ``"time"``: every axis starts and arrives together at the slowest
-        axis' minimum time (seed 002's synchronisation, with S-curves), each
-        keeping its own limits. ``"phase"``: every axis follows the same
-        normalised profile, so the motion is a straight line in joint space,
-        within every axis' limits. ``"none"``: each axis at its own minimum
-        time.
-    duration : float, optional
-        With ``"time"`` or ``"phase"``: stretch the motion to exactly this
-        duration [s] (must be >= the synchronised minimum).
-    start_velocity, start_acceleration, goal_velocity, goal_acceleration : array_like, shape (n_axes,), optional
-        Moving boundary states [unit/s, unit/s^2]; when any is non-zero the
-        move is planned between states by :func:`trajkit.sync_states.plan_ptp_states`
-        (axes are then :class:`~trajkit.profiles.state.StateProfile` objects).
-
-    Returns
-    -------
-    Trajectory
-
-    Raises
-    ------
-    InvalidInputError
-        NaN/inf positions, mismatched axis counts, positions outside an
-        axis' range, an unknown ``sync``.
-    InfeasibleError
-        ``duration`` below the minimum.
-    """
-    if sync not in SYNC_MODES:
-        raise InvalidInputError(f"sync must be one of {SYNC_MODES}, got {sync!r}")
-    moving = (start_velocity, start_acceleration, goal_velocity, goal_acceleration)
-    if any(x is not None for x in moving):
-        states = _boundary_states(start, goal, *moving)
-        if states is not None:
-            from .sync_states import plan_ptp_states
-
-            return plan_ptp_states(states[0], states[1], limits, sync=sync, duration=duration)
-    # entries are checked per axis below (the messages name the axis)
-    sl = _float_list(start, "start")
-    gl = _float_list(goal, "goal")
-    if len(sl) != len(gl):
-        raise InvalidInputError(
-            f"start has {len(sl)} axes but goal has {len(gl)}"
-        )
-    n = len(sl)
-    if n == 0:
-        raise InvalidInputError("start and goal must have at least one axis")
-    lims = _coerce_limits(limits, n)
-    _check_positions(sl, lims, "start")
-    _check_positions(gl, lims, "goal")
-    if duration is not None:
-        try:
-            duration = float(duration)
-        except (TypeError, ValueError):
-            raise InvalidInputError(
-                f"duration must be a number of seconds, got {duration!r}"
-            ) from None
-        if not math.isfinite(duration) or duration < 0:
-            raise InvalidInputError(f"duration must be finite and >= 0 s, got {duration!r}")
-        if sync == "none":
-            raise InvalidInputError('duration cannot be given with sync="none"')
-
-    if sync == "none":
-        return Trajectory([_plan_unchecked(a, b, lim, None) for a, b, lim in zip(sl, gl, lims)], "none")
-
-    if sync == "time":
-        # step 1: each axis' fastest profile; the slowest sets the common duration
-        sols = [None if b == a else _min_solution(abs(b - a), lim)
-                for a, b, lim in zip(sl, gl, lims)]
-        tmin = max((sol[1] for sol in sols if sol is not None), default=0.0)
-        T = tmin if duration is None else duration
-        if duration is not None and duration < tmin * (1.0 - DURATION_RTOL):
-            raise InfeasibleError(
-                f"duration {duration!r} s is below the minimum synchronised duration {tmin:.15g} s",
-                minimum=tmin,
-            )
-        # step 2: every axis for exactly that duration
-        axes = [
-            _rest_profile(a, lim, T) if sol is None else _plan_solved(a, b, lim, sol[0], sol[1], T)
-            for a, b, lim, sol in zip(sl, gl, lims, sols)
-        ]
-        return Trajectory(axes, "time")
-
-    # phase: one normalised profile u(t) in [0, 1]; axis k = s_k + D_k u(t).
-    dist = [abs(b - a) for a, b in zip(sl, gl)]
-    moving = [k for k in range(n) if dist[k] > 0.0]
-    if not moving:
-        T = 0.0 if duration is None else duration
-        return Trajectory([_plan_unchecked(a, b, lim, T) for a, b, lim in zip(sl, gl, lims)], "phase")
-    vn = min(lims[k].v_max / dist[k] for k in moving)
-    an = min(lims[k].a_max / dist[k] for k in moving)
-    jn = min(lims[k].j_max / dist[k] for k in moving)
-    adn = min(lims[k].a_max_decel / dist[k] for k in moving)
-    jdn = min(lims[k].j_max_decel / dist[k] for k in moving)
-    unit = AxisLimits(vn, an, jn, adn, jdn, name="path")
-    u = _plan_unchecked(0.0, 1.0, unit, duration)
-    axes = []
-    for a, b, lim in zip(sl, gl, lims):
-        d = b - a
-        sgn = 1.0 if d > 0 else -1.0
-        ad = abs(d)
-        axes.append(Profile(
-            a, b, u.duration, u.min_duration if ad > 0 else 0.0,
-            u.phase_durations if ad > 0 else (0.0, 0.0, 0.0, u.duration, 0.0, 0.0, 0.0),
-            tuple(sgn * ad * jj for jj in u.jerks),
-            d * u.peak_velocity, ad * u.peak_acceleration, ad * u.peak_deceleration, lim,
-        ))
-    return Trajectory(axes, "phase")
+        return plan_ptp
+    raise AttributeError(f"module {__name__!r} has no attribute {attr!r}")

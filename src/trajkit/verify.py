@@ -1,9 +1,13 @@
 """Independent verification of planned profiles and trajectories.
 
-:func:`verify_profile` re-integrates a :class:`~trajkit.profiles.Profile`
-phase by phase from its phase durations and jerks (it does not trust the
-planner's boundary table) and checks, **exactly** at every phase boundary and
-at every in-phase extremum (found analytically), and again on dense samples:
+One verifier for every motion: :func:`verify_motion` re-integrates any
+piecewise-constant-jerk motion (:class:`~trajkit.profiles.Profile`,
+:class:`~trajkit.profiles.StateProfile`, brakes, ...) phase by phase from its
+phase table (it does not trust the planner's boundary table) and checks,
+**exactly** at every phase boundary and at every in-phase extremum (found
+analytically), and again on dense samples (:func:`verify_profile` adds the
+declared legs of a rest-to-rest profile, :func:`verify_trajectory` the
+synchronisation of several axes):
 
 * the goal is reached (error relative to the travelled distance);
 * the velocity limit, the acceleration limit of the accel leg, the
@@ -37,6 +41,7 @@ import numpy as np
 
 from ._constants import GOAL_RTOL, LIMIT_RTOL
 from .errors import InvalidInputError, TrajkitError
+from .profiles._phase import phase_eval
 
 __all__ = [
     "QUANTITIES",
@@ -44,6 +49,7 @@ __all__ = [
     "VerificationError",
     "VerificationReport",
     "TrajectoryReport",
+    "verify_motion",
     "verify_profile",
     "verify_state_profile",
     "verify_trajectory",
@@ -261,11 +267,9 @@ class TrajectoryReport:
 
 # --------------------------------------------------------------------- helpers
 def _poly_state(p0, v0, a0, j, t):
-    """State after time ``t`` of a constant-jerk phase (exact integration)."""
-    p = p0 + t * (v0 + t * (0.5 * a0 + t * j / 6.0))
-    v = v0 + t * (a0 + 0.5 * t * j)
-    a = a0 + t * j
-    return p, v, a
+    """State after time ``t`` of a constant-jerk phase (the one formula,
+    :func:`trajkit.profiles._phase.phase_eval`)."""
+    return phase_eval(p0, v0, a0, j, t)
 
 
 def _roots_in(dt: float, v0: float, a0: float, j: float) -> list[float]:
@@ -429,21 +433,9 @@ def verify_profile(
     lim = profile.limits
     axis = lim.name
     w = _Worst(axis, rtol)
-    start, goal, T = float(profile.start), float(profile.goal), float(profile.duration)
-    dist = abs(goal - start)
+    T = float(profile.duration)
     durs = [float(x) for x in profile.phase_durations]
     jerks = [float(x) for x in profile.jerks]
-    s = 1.0 if goal > start else (-1.0 if goal < start else 0.0)
-    # acceleration entering each phase: 0 where a jerk phase builds it up;
-    # for a jerk-free (trapezoid) leg the plateau is entered by a jump.
-    a1 = s * float(profile.peak_acceleration)
-    a2 = -s * float(profile.peak_deceleration)
-    a_enter = (0.0, a1, a1, 0.0, 0.0, a2, a2)
-
-    # scales for relative errors
-    v_scale = max(abs(float(profile.peak_velocity)), dist / T if T > 0 else 0.0)
-    a_scale = max(abs(a1), abs(a2))
-    p_scale = dist if dist > 0.0 else max(abs(start), 1.0)
 
     # duration
     if T < 0.0 or not math.isfinite(T):
@@ -469,71 +461,8 @@ def verify_profile(
     if durs[3] > 0.0 and jerks[3] != 0.0:
         w._fail("cruise_jerk", jerks[3], 0.0, math.fsum(durs[:3]))
 
-    # exact pass: integrate phase by phase, cut at roots of a and v
-    # the displacement x = p - start is integrated (its round-off scales with
-    # the distance, not with |start|); positions are start + x
-    dsign = goal - start
-    ulp_p = math.ulp(max(abs(start), abs(goal)))
-    pos_tol = goal_rtol * dist + POSITION_ULPS * ulp_p
-    w.position(start, lim.position_min, lim.position_max, p_scale, 0.0)
-    p, v, a_prev_end, t0, cont = _exact_phases(w, lim, start, 0.0, 0.0, durs, jerks, a_enter,
-                                               v_scale, a_scale, p_scale, rtol)
-    # final acceleration must return to zero (or jump there on a trapezoid leg)
-    if a_prev_end != 0.0:
-        leg = _leg_limits(lim, v, a_prev_end, True)
-        rel = abs(a_prev_end) / a_scale if a_scale > 0.0 else math.inf
-        if leg is not None and math.isfinite(leg[3]):
-            cont = max(cont, rel)
-            w.check("continuity_acceleration", rel, rtol, a_prev_end, 0.0, t0)
-        end_a = rel if leg is not None and math.isfinite(leg[3]) else 0.0
-    else:
-        end_a = 0.0
-    goal_err = abs(p - dsign) / dist if dist > 0.0 else abs(p - dsign)
-    w.check("goal", goal_err, goal_rtol, start + p, goal, t0)
-    end_v = abs(v) / v_scale if v_scale > 0.0 else abs(v)
-    w.check("end_velocity", end_v, rtol, v, 0.0, t0)
-
-    # agreement with the planner's own boundary table (what sample() uses)
-    if hasattr(profile, "boundary_states"):
-        bs = np.asarray(profile.boundary_states(), dtype=float)
-        pp, vv = 0.0, 0.0
-        for k in range(7):
-            e_abs = abs(bs[k, 0] - (start + pp))
-            ep = e_abs / p_scale
-            ev = abs(bs[k, 1] - vv) / v_scale if v_scale > 0.0 else abs(bs[k, 1] - vv)
-            cont = max(cont, ep, ev)
-            w.check("continuity_position", e_abs, pos_tol, bs[k, 0], start + pp)
-            w.check("continuity_velocity", ev, rtol, bs[k, 1], vv)
-            pp, vv, _ = _poly_state(pp, vv, a_enter[k], jerks[k], durs[k])
-
-    # dense samples
-    if n_samples and T > 0.0:
-        ts = np.linspace(0.0, T, n_samples)
-        smp = profile.sample(ts)
-        P = np.asarray(smp.position)
-        V = np.asarray(smp.velocity)
-        A = np.asarray(smp.acceleration)
-        J = np.asarray(smp.jerk)
-        _check_samples(w, lim, ts, P, V, A, J, p_scale)
-        # samples against the independent integration (continuity seen from
-        # sample(): a wrong boundary table would show here)
-        # samples against the independent integration (a wrong boundary
-        # table would show here). Both place a sample time among phase
-        # boundaries that are sums of rounded durations, so they may differ
-        # by a few ulp of T in time: allow the matching p and v change.
-        ref = _integrate_at(start, durs, jerks, a_enter, ts)
-        dtq = TIME_ULPS * math.ulp(T)
-        ip = int(np.argmax(np.abs(P - ref[0])))
-        iv = int(np.argmax(np.abs(V - ref[1])))
-        e_p = abs(float(P[ip] - ref[0][ip]))
-        e_v = abs(float(V[iv] - ref[1][iv]))
-        cont = max(cont, e_p / p_scale, e_v / v_scale if v_scale > 0.0 else e_v)
-        w.check("sample_position", e_p, pos_tol + v_scale * dtq, float(P[ip]),
-                float(ref[0][ip]), float(ts[ip]))
-        w.check("sample_velocity", e_v, rtol * v_scale + a_scale * dtq, float(V[iv]),
-                float(ref[1][iv]), float(ts[iv]))
-
-    return w.report(goal_err, end_v, end_a, cont, dur_err, n_samples if T > 0.0 else 0)
+    # the rest is the check of every motion (exact pass, goal, table, samples)
+    return _core(w, profile, lim, rtol, n_samples, goal_rtol, bad_phase_checked=True)
 
 
 def _exact_phases(w, lim, start, v_start, a_start, durs, jerks, a_enter,
@@ -626,33 +555,40 @@ def _exact_phases(w, lim, start, v_start, a_start, durs, jerks, a_enter,
     return p, v, a_prev_end, t0, cont
 
 
-def verify_state_profile(
-    profile: Any,
+def verify_motion(
+    motion: Any,
     rtol: float = LIMIT_RTOL,
     n_samples: int = DEFAULT_SAMPLES,
     goal_rtol: float = GOAL_RTOL,
+    expected_duration: float | None = None,
+    limits: Any = None,
 ) -> VerificationReport:
-    """Check a profile between moving states against its limits, exactly and on samples.
+    """Check any piecewise-constant-jerk motion against its limits, exactly and on samples.
 
-    The phases are re-integrated from the start state (the planner's
-    boundary table is not trusted) and cut at the roots of ``a`` and ``v``;
-    every limit is checked at the piece ends with the leg in force (accel
-    limits while |v| grows, decel limits while it shrinks), exactly as in
-    :func:`verify_profile`. Any number of phases; the start and goal may be
-    moving states.
+    The one verifier of trajkit: a rest-to-rest :class:`~trajkit.profiles.Profile`,
+    a :class:`~trajkit.profiles.StateProfile`, a runtime brake or any
+    :class:`~trajkit.profiles.motion.JerkMotion`. The phases are re-integrated
+    from the start state (the planner's boundary table is not trusted, it is
+    compared) and cut at the roots of ``a`` and ``v``; every limit is checked
+    at the piece ends with the leg in force (accel limits while |v| grows,
+    decel limits while it shrinks); the end state is compared with the
+    declared goal; dense samples are checked as well.
 
     Parameters
     ----------
-    profile : StateProfile
-        From :func:`~trajkit.profiles.state.plan_state_to_state` or
-        :func:`~trajkit.profiles.state.plan_velocity` (or any object with
-        ``start_state``, ``goal_state``, ``phase_durations``, ``jerks``,
-        ``phase_accelerations``, ``duration``, ``limits`` and ``sample(t)``).
-        A brake pre-phase (``n_brake_phases``) is exempt from the limits: it
-        exists because the start state breaks them.
+    motion : JerkMotion
+        Needs ``start_state``, ``phase_durations``, ``jerks``,
+        ``phase_accelerations``, ``duration``, ``sample(t)`` and a goal
+        (``end_state`` or ``goal_state``). A brake pre-phase
+        (``n_brake_phases``) is exempt from the limits: it exists because the
+        start state breaks them.
     rtol, n_samples, goal_rtol
         As in :func:`verify_profile`; ``goal_rtol`` is relative to the
-        distance travelled (or to ``max(1, |goal|)`` for a zero distance).
+        larger of the distance and the travelled path scale (``max |v| T``).
+    expected_duration : float, optional
+        When given, the duration must equal it (relative ``DURATION_SUM_RTOL``).
+    limits : AxisLimits, optional
+        The limits to check against (default: ``motion.limits``).
 
     Returns
     -------
@@ -663,67 +599,137 @@ def verify_state_profile(
     n_samples = int(n_samples)
     if n_samples < 0 or n_samples == 1:
         raise InvalidInputError(f"n_samples must be 0 or >= 2, got {n_samples!r}")
-    lim = profile.limits
+    lim = limits if limits is not None else motion.limits
     w = _Worst(lim.name, rtol)
-    p0, v0, a0 = (float(x) for x in profile.start_state)
-    pg, vg, ag = (float(x) for x in profile.goal_state)
-    durs = [float(x) for x in profile.phase_durations]
-    jerks = [float(x) for x in profile.jerks]
-    a_enter = [float(x) for x in profile.phase_accelerations]
-    nb = int(getattr(profile, "n_brake_phases", 0))
-    T = float(profile.duration)
-    # the brake pre-phase: integrate without checks
+    if expected_duration is not None:
+        T = float(motion.duration)
+        e = abs(T - expected_duration) / max(expected_duration, math.ulp(1.0))
+        w.check("expected_duration", e, DURATION_SUM_RTOL, T, expected_duration)
+    return _core(w, motion, lim, rtol, n_samples, goal_rtol)
+
+
+def verify_state_profile(
+    profile: Any,
+    rtol: float = LIMIT_RTOL,
+    n_samples: int = DEFAULT_SAMPLES,
+    goal_rtol: float = GOAL_RTOL,
+) -> VerificationReport:
+    """Check a profile between moving states: :func:`verify_motion` (same checks)."""
+    return verify_motion(profile, rtol=rtol, n_samples=n_samples, goal_rtol=goal_rtol)
+
+
+def _goal_of(m):
+    g = getattr(m, "goal_state", None)
+    if g is None:
+        g = m.end_state
+    return tuple(float(x) for x in g)
+
+
+def _core(w, m, lim, rtol, n_samples, goal_rtol, bad_phase_checked=False):
+    """The checks of every motion (see :func:`verify_motion`) into ``w``."""
+    p0, v0, a0 = (float(x) for x in m.start_state)
+    pg, vg, ag = _goal_of(m)
+    durs = [float(x) for x in m.phase_durations]
+    jerks = [float(x) for x in m.jerks]
+    a_enter = [float(x) for x in m.phase_accelerations]
+    nb = int(getattr(m, "n_brake_phases", 0))
+    T = float(m.duration)
+    # the brake pre-phase: integrated without checks
     p, v, a = 0.0, v0, a0
     for k in range(nb):
         p, v, a = _poly_state(p, v, a_enter[k], jerks[k], durs[k])
     tb = math.fsum(durs[:nb])
-    # scales: the largest |v| and |a| at phase boundaries
+    # scales: the largest |v| and |a| at phase boundaries and in-phase extrema
     vs, as_ = [abs(v), abs(vg)], [abs(a), abs(ag)]
     pp, vv = p, v
     for k in range(nb, len(durs)):
         as_.append(abs(a_enter[k]))
+        if jerks[k] != 0.0 and 0.0 < -a_enter[k] / jerks[k] < durs[k]:
+            vs.append(abs(_poly_state(pp, vv, a_enter[k], jerks[k], -a_enter[k] / jerks[k])[1]))
         pp, vv, aa = _poly_state(pp, vv, a_enter[k], jerks[k], durs[k])
         vs.append(abs(vv))
         as_.append(abs(aa))
     v_scale, a_scale = max(vs), max(as_)
     dist = abs(pg - p0)
-    p_scale = dist if dist > 0.0 else max(abs(p0), 1.0)
-    bad = [k for k, d in enumerate(durs) if not (d >= 0.0 and math.isfinite(d))]
-    for k in bad:
-        w._fail(f"phase_duration[{k}]", durs[k], 0.0, math.nan)
+    p_scale = max(dist, v_scale * (T - tb))
+    if not p_scale > 0.0:
+        p_scale = max(abs(p0), 1.0)
+    if not bad_phase_checked:
+        for k, d in enumerate(durs):
+            if not (d >= 0.0 and math.isfinite(d)):
+                w._fail(f"phase_duration[{k}]", d, 0.0, math.nan)
     total = math.fsum(durs)
     dur_err = abs(total - T) / T if T > 0 else abs(total)
     w.check("duration", dur_err, DURATION_SUM_RTOL, total, T)
     start_main = p0 + p
     w.position(start_main, lim.position_min, lim.position_max, p_scale, tb)
-    dp, v, a, t_main, cont = _exact_phases(w, lim, start_main, v, a, durs[nb:], jerks[nb:],
-                                           a_enter[nb:], v_scale, a_scale, p_scale, rtol)
+    dp, v, a, _, cont = _exact_phases(w, lim, start_main, v, a, durs[nb:], jerks[nb:],
+                                      a_enter[nb:], v_scale, a_scale, p_scale, rtol)
     ulp_p = math.ulp(max(abs(p0), abs(pg)))
     pos_tol = goal_rtol * p_scale + POSITION_ULPS * ulp_p
     goal_err = abs(start_main + dp - pg) / p_scale
     w.check("goal", abs(start_main + dp - pg), pos_tol, start_main + dp, pg, T)
     end_v = abs(v - vg) / v_scale if v_scale > 0.0 else abs(v - vg)
     w.check("end_velocity", end_v, rtol, v, vg, T)
+    # an acceleration may end by a jump only on a leg with an infinite jerk limit
     end_a = abs(a - ag) / a_scale if a_scale > 0.0 else abs(a - ag)
+    if end_a > rtol:
+        legs_ok = True
+        for side_before, x in ((True, a), (False, ag)):
+            if x != 0.0:
+                leg = _leg_limits(lim, v, x, side_before)
+                if leg is not None and math.isfinite(leg[3]):
+                    legs_ok = False
+        if legs_ok:
+            end_a = 0.0
     w.check("end_acceleration", end_a, rtol, a, ag, T)
-    if n_samples and T > 0.0:
+    # agreement with the motion's own boundary table (what sample() uses)
+    if hasattr(m, "boundary_states"):
+        bs = np.asarray(m.boundary_states(), dtype=float)
+        pp, vv = 0.0, v0
+        for k in range(len(durs)):
+            e_abs = abs(bs[k, 0] - (p0 + pp))
+            ev = abs(bs[k, 1] - vv) / v_scale if v_scale > 0.0 else abs(bs[k, 1] - vv)
+            cont = max(cont, e_abs / p_scale, ev)
+            w.check("continuity_position", e_abs, pos_tol, bs[k, 0], p0 + pp)
+            w.check("continuity_velocity", ev, rtol, bs[k, 1], vv)
+            pp, vv, _ = _poly_state(pp, vv, a_enter[k], jerks[k], durs[k])
+    if n_samples and T > tb:
         ts = np.linspace(tb, T, n_samples)
-        smp = profile.sample(ts)
-        _check_samples(w, lim, ts, np.asarray(smp.position), np.asarray(smp.velocity),
-                       np.asarray(smp.acceleration), np.asarray(smp.jerk), p_scale)
-    return w.report(goal_err, end_v, end_a, cont, dur_err, n_samples if T > 0.0 else 0)
+        smp = m.sample(ts)
+        P = np.asarray(smp.position)
+        V = np.asarray(smp.velocity)
+        A = np.asarray(smp.acceleration)
+        J = np.asarray(smp.jerk)
+        _check_samples(w, lim, ts, P, V, A, J, p_scale)
+        # samples against the independent integration (a wrong table would show
+        # here); both place a sample time among boundaries that are sums of
+        # rounded durations, so they may differ by a few ulp of T in time
+        ref = _integrate_at(p0, v0, durs, jerks, a_enter, ts)
+        dtq = TIME_ULPS * math.ulp(T)
+        ip = int(np.argmax(np.abs(P - ref[0])))
+        iv = int(np.argmax(np.abs(V - ref[1])))
+        e_p = abs(float(P[ip] - ref[0][ip]))
+        e_v = abs(float(V[iv] - ref[1][iv]))
+        cont = max(cont, e_p / p_scale, e_v / v_scale if v_scale > 0.0 else e_v)
+        w.check("sample_position", e_p, pos_tol + v_scale * dtq, float(P[ip]),
+                float(ref[0][ip]), float(ts[ip]))
+        w.check("sample_velocity", e_v, rtol * v_scale + a_scale * dtq, float(V[iv]),
+                float(ref[1][iv]), float(ts[iv]))
+    return w.report(goal_err, end_v, end_a, cont, dur_err, n_samples if T > tb else 0)
 
 
-def _integrate_at(start, durs, jerks, a_enter, ts):
+def _integrate_at(start, v0, durs, jerks, a_enter, ts):
     """Position and velocity at times ``ts`` from the phases (numpy)."""
+    n = len(durs)
     tb = np.concatenate([[0.0], np.cumsum(durs)])
-    P = np.empty(8)
-    V = np.empty(8)
-    p, v = 0.0, 0.0
-    for k in range(7):
+    P = np.empty(n)
+    V = np.empty(n)
+    p, v = 0.0, v0
+    for k in range(n):
         P[k], V[k] = p, v
         p, v, _ = _poly_state(p, v, a_enter[k], jerks[k], durs[k])
-    idx = np.clip(np.searchsorted(tb, ts, side="right") - 1, 0, 6)
+    idx = np.clip(np.searchsorted(tb, ts, side="right") - 1, 0, n - 1)
     dt = np.minimum(ts - tb[idx], np.asarray(durs)[idx])
     a0 = np.asarray(a_enter)[idx]
     j = np.asarray(jerks)[idx]
@@ -769,6 +775,11 @@ def _check_samples(w, lim, ts, P, V, A, J, p_scale):
 
 
 # ------------------------------------------------------------ many axes
+def _is_rest_profile(p) -> bool:
+    """A 7-phase rest-to-rest Profile (checked with its declared legs)."""
+    return hasattr(p, "peak_deceleration") and len(p.phase_durations) == 7
+
+
 def verify_trajectory(
     traj: Any,
     rtol: float = LIMIT_RTOL,
@@ -777,7 +788,8 @@ def verify_trajectory(
 ) -> TrajectoryReport:
     """Check every axis of a trajectory and its synchronisation.
 
-    Every axis is checked by :func:`verify_profile`. For ``sync="time"`` and
+    Every axis is checked by :func:`verify_profile` (rest-to-rest profiles) or
+    :func:`verify_motion` (profiles between states, any motion). For ``sync="time"`` and
     ``sync="phase"`` every axis must last the trajectory's duration; for
     ``sync="phase"`` the sampled motion must also lie on the joint-space
     straight line ``start + (goal - start) * u(t)`` with one common ``u``.
@@ -795,6 +807,8 @@ def verify_trajectory(
     """
     reports = tuple(
         verify_profile(p, rtol=rtol, n_samples=n_samples, goal_rtol=goal_rtol)
+        if _is_rest_profile(p) else
+        verify_motion(p, rtol=rtol, n_samples=n_samples, goal_rtol=goal_rtol)
         for p in traj.axes
     )
     ratios = {q: max((r.ratios[q] for r in reports), default=0.0) for q in QUANTITIES}
@@ -811,10 +825,11 @@ def verify_trajectory(
                 violations.append(Violation(p.limits.name if p.limits.name is not None else k,
                                             "sync_duration", float(p.duration), T))
     if sync == "phase" and T > 0.0 and n_samples:
+        # the line from start to goal, with one common path parameter u(t)
         ts = np.linspace(0.0, T, max(n_samples, 2))
         smp = traj.sample(ts)
-        s0 = np.asarray(traj.start, dtype=float)
-        d = np.asarray(traj.goal, dtype=float) - s0
+        s0 = np.array([float(p.start_state[0]) for p in traj.axes])
+        d = np.array([_goal_of(p)[0] for p in traj.axes]) - s0
         moving = np.abs(d) > 0.0
         if moving.any():
             u = (smp.position[:, moving] - s0[moving]) / d[moving]

@@ -29,7 +29,8 @@ from ..io.schema import Real, RealOrInf, short_repr, validation_message
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
-from ..trajectory import SYNC_MODES, Trajectory, plan_ptp
+from ..sync import plan_ptp
+from ..trajectory import SYNC_MODES, Trajectory
 from ._console import print_json, print_table
 
 __all__ = ["register", "load_ptp_job", "PtpJob", "JobLimits"]

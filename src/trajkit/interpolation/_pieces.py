@@ -7,6 +7,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..profiles._phase import phase_eval
 from ..profiles._pieces import eval_pieces
 
 __all__ = ["JerkPieces", "velocity_change"]
@@ -78,11 +79,7 @@ class JerkPieces:
         for i in range(k):
             p, v, a = st[i]
             h = d[i]
-            st[i + 1] = (
-                p + h * (v + h * (0.5 * a + h * j[i] / 6.0)),
-                v + h * (a + 0.5 * h * j[i]),
-                a + h * j[i],
-            )
+            st[i + 1] = phase_eval(p, v, a, j[i], h)
             t[i + 1] = t[i] + h
         self.t = t
         self.state = st

@@ -54,7 +54,7 @@ from scipy.optimize import brentq, minimize_scalar
 from ..errors import InfeasibleError, InvalidInputError, TrajkitError
 from ..limits import AxisLimits
 from ..profiles.state import StateProfile, min_state_duration, plan_state_to_state
-from ..trajectory import plan_ptp
+from ..sync import plan_ptp
 from ._crossing import _solve_phase, clearance_crossings, position_peak
 from .planners import HORIZONTAL_JOINTS, TripPlan, _assemble, _horizontal_time, register_planner
 from .scenario import PalletScenario, TripSpec
@@ -301,7 +301,10 @@ def _best_turn(z0, zp, z3, lb, cache):
             cands.append((float(r.fun), float(r.x)))
         else:  # pragma: no cover - B always has a finite acceleration limit here
             cands = [(f(hi), hi)]
-        cache[key] = min(cands)
+        # durations within round-off of the best are ties: the first (a grid
+        # point, e.g. the bound itself) wins over Brent's point a hair from it
+        fb = min(c[0] for c in cands)
+        cache[key] = next(c for c in cands if c[0] <= fb + 8.0 * math.ulp(fb))
     return cache[key]
 
 

@@ -17,7 +17,7 @@ from scipy.optimize import brentq
 
 from ..errors import InvalidInputError
 from ..profiles import min_duration, plan_move
-from ..trajectory import plan_ptp
+from ..sync import plan_ptp
 from ._crossing import time_at_position
 from .scenario import PalletScenario, TripSpec
 from .timeline import Piece, Timeline

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._phase import phase_eval
+
 __all__ = ["eval_pieces"]
 
 
@@ -28,10 +30,6 @@ def eval_pieces(tc: np.ndarray, tb: np.ndarray, P: np.ndarray, V: np.ndarray,
     n = J.size
     idx = np.searchsorted(tb[1:n], tc, side="right")
     dt = tc - tb[idx]
-    a = A[idx]
     j = J[idx]
-    v = V[idx]
-    pos = P[idx] + dt * (v + dt * (0.5 * a + dt * j / 6.0))
-    vel = v + dt * (a + 0.5 * dt * j)
-    acc = a + dt * j
+    pos, vel, acc = phase_eval(P[idx], V[idx], A[idx], j, dt)
     return pos, vel, acc, j

@@ -1,8 +1,10 @@
 """Scalar closed-form kernels for rest-to-rest jerk-limited profiles.
 
-Pure-Python float arithmetic (no numpy) so that planning one move costs a few
-microseconds. :mod:`trajkit.profiles._batch` implements the same formulas on
-numpy arrays; the tests check that both agree to 1e-12.
+Plain float arithmetic (no numpy), so that planning one move from Python
+costs a few microseconds. :mod:`._jit` compiles these same functions (their
+code objects, :func:`._compile.compiled_twins`) and runs them in a parallel
+loop over many moves; :mod:`trajkit.profiles.batch` implements the formulas
+on numpy arrays. The tests check that all agree to a few ulps.
 
 Notation (distance ``D > 0``, direction handled by the caller):
 

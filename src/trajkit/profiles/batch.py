@@ -17,6 +17,7 @@ from .._constants import DURATION_RTOL, ROOT_MAX_ITER, ROOT_RTOL
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _jit
+from . import _range as R
 from .profile import Profile
 
 __all__ = ["MoveBatch", "plan_moves"]
@@ -262,6 +263,62 @@ def _limit_array(value, name, n, allow_inf=True):
     return np.ascontiguousarray(arr)
 
 
+def _check_range(s, g, vm, a1, j1, a2, j2, T) -> None:
+    """The supported numeric range (:mod:`._range`), vectorised; names the first bad move."""
+    def first(mask, field, vals, bound, why):
+        if mask.any():
+            i = int(np.flatnonzero(mask)[0])
+            raise InvalidInputError(
+                f"{field}[{i}] {float(vals[i])!r} is outside the supported range: {why} {bound!r}")
+
+    for name, x in (("starts", s), ("goals", g)):
+        first(np.abs(x) > R.REST_POSITION_MAX, name, x, R.REST_POSITION_MAX,
+              "|position| must be at most")
+    d = np.abs(g - s)
+    first((d != 0.0) & (d < R.DISTANCE_ABS_MIN), "distance", g - s, R.DISTANCE_ABS_MIN,
+          "a non-zero |distance| must be at least")
+    for name, x in (("v_max", vm), ("a_max", a1), ("j_max", j1), ("a_max_decel", a2),
+                    ("j_max_decel", j2)):
+        fin = np.isfinite(x)
+        first(fin & ((x < R.REST_MAGNITUDE_MIN) | (x > R.REST_MAGNITUDE_MAX)), name, x,
+              (R.REST_MAGNITUDE_MIN, R.REST_MAGNITUDE_MAX), "finite limits must lie in")
+    with np.errstate(all="ignore"):
+        for name, x, y in (("a_max_decel", a2, a1), ("j_max_decel", j2, j1)):
+            r = x / y
+            first(np.isfinite(x) & np.isfinite(y) & ((r < 1.0 / R.LEG_RATIO_MAX) | (r > R.LEG_RATIO_MAX)),
+                  name, x, R.LEG_RATIO_MAX, "the decel leg must be within a factor of the accel leg:")
+    if T is not None:
+        first(T > R.REST_DURATION_MAX, "durations", T, R.REST_DURATION_MAX,
+              "a requested duration [s] must be at most")
+
+
+def _check_ratio(T, tmin, moving) -> None:
+    """Requested durations at most ``REST_DURATION_RATIO_MAX`` times the minimum."""
+    if T is None:
+        return
+    bad = moving & (T > R.REST_DURATION_RATIO_MAX * tmin)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InvalidInputError(
+            f"durations[{i}] {float(T[i])!r} is outside the supported range: a requested "
+            f"duration [s] must be at most {R.REST_DURATION_RATIO_MAX!r} times the minimum "
+            f"duration of the move, {float(tmin[i]) * R.REST_DURATION_RATIO_MAX!r}")
+
+
+def _check_cruise(T, vc, fixed, a1, j1, a2, j2) -> None:
+    """Cruise velocities of fixed durations at least ``REST_CRUISE_MIN`` times every finite limit."""
+    bad = np.zeros(vc.shape, dtype=bool)
+    with np.errstate(all="ignore"):
+        for x in (a1, j1, a2, j2):
+            bad |= fixed & np.isfinite(x) & ~(vc >= R.REST_CRUISE_MIN * x)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InvalidInputError(
+            f"durations[{i}] {float(T[i])!r} is outside the supported range: a requested "
+            f"duration this long gives a cruise velocity {float(vc[i])!r} whose ratio to every "
+            f"finite acceleration and jerk limit must be at least {R.REST_CRUISE_MIN!r}")
+
+
 def plan_moves(
     starts: Any,
     goals: Any,
@@ -295,7 +352,8 @@ def plan_moves(
     Raises
     ------
     InvalidInputError
-        NaN/inf positions, bad limits, mismatched shapes.
+        NaN/inf positions, bad limits, mismatched shapes, values outside the
+        supported range (:mod:`trajkit.profiles._range`, as :func:`plan_move`).
     InfeasibleError
         A requested duration below its minimum (the first such move is named).
     """
@@ -332,6 +390,7 @@ def plan_moves(
             i = int(np.flatnonzero(bad)[0])
             raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s, got {float(T[i])!r}")
 
+    _check_range(s, g, vm, a1, j1, a2, j2, T)
     thr1 = _threshold(a1, j1)
     thr2 = _threshold(a2, j2)
     if n >= JIT_MIN_MOVES and _jit.AVAILABLE and not os.environ.get("TRAJKIT_NO_JIT"):
@@ -343,6 +402,8 @@ def plan_moves(
                 f"{tmin[bad]:.15g} s",
                 minimum=float(tmin[bad]),
             )
+        _check_ratio(T, tmin, g != s)
+        _check_cruise(T, np.abs(vpk), dur > tmin, a1, j1, a2, j2)
         return MoveBatch(
             start=s, goal=g, duration=dur, min_duration=tmin, phase_durations=phases,
             jerks=jerks, peak_velocity=vpk, peak_acceleration=ap1, peak_deceleration=ap2,
@@ -376,10 +437,12 @@ def plan_moves(
                 f"durations[{i}] = {float(T[i])!r} s is below the minimum duration {tmin[i]:.15g} s",
                 minimum=float(tmin[i]),
             )
+        _check_ratio(T, tmin, moving)
         fixed = moving & (T > tmin)
         if fixed.any():
             f = fixed
             vc[f] = _cruise_velocity(dist[f], T[f], vp[f], a1[f], j1[f], a2[f], j2[f], thr1[f], thr2[f])
+            _check_cruise(T, vc, fixed, a1, j1, a2, j2)
         dur = np.where(fixed | ~moving, T, tmin)
 
     tj1, ta1, ap1 = _leg_phases(vc, a1, j1, thr1)

@@ -3,23 +3,24 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
-
-import numpy as np
 
 from .._constants import DURATION_RTOL, PHASE_EPS, REACHED_RTOL
 from .._validate import axis_label
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _scalar as K
-from ._pieces import eval_pieces
+from ._range import (
+    check_distance_range,
+    check_duration_range,
+    check_limits_range,
+    check_position_range,
+    check_rest_cruise,
+    check_rest_duration_ratio,
+)
+from .motion import JerkMotion, ProfileSample
 
 __all__ = ["Profile", "ProfileSample", "plan_move", "PHASE_NAMES"]
-
-#: Sorted time arrays at least this long are sampled phase by phase (slices)
-#: instead of with a per-sample phase lookup.
-SORTED_FAST_PATH_MIN = 64
 
 #: Names of the seven phases, in order.
 PHASE_NAMES = (
@@ -33,33 +34,14 @@ PHASE_NAMES = (
 )
 
 
-@dataclass(frozen=True)
-class ProfileSample:
-    """Kinematic state sampled at one or more times.
-
-    Each attribute is a float64 array shaped like the time argument
-    (a 0-d array for a scalar time).
-
-    Attributes
-    ----------
-    position : ndarray [unit]
-    velocity : ndarray [unit/s]
-    acceleration : ndarray [unit/s^2]
-    jerk : ndarray [unit/s^3]
-    """
-
-    position: np.ndarray
-    velocity: np.ndarray
-    acceleration: np.ndarray
-    jerk: np.ndarray
-
-
-class Profile:
+class Profile(JerkMotion):
     """A rest-to-rest, piecewise-constant-jerk profile of one axis.
 
     Build it with :func:`plan_move`. Seven phases (some may last zero): jerk
     up, constant acceleration, jerk down, cruise, then the same mirrored for
-    the deceleration leg (with its own jerk and acceleration).
+    the deceleration leg (with its own jerk and acceleration). It is a
+    :class:`~trajkit.profiles.motion.JerkMotion` (sampling, extrema, phase
+    table) from ``(start, 0, 0)`` to ``(goal, 0, 0)``.
 
     Attributes
     ----------
@@ -75,6 +57,9 @@ class Profile:
     jerks : tuple of 7 float
         Constant jerk in each phase [unit/s^3] (signed; zero for a phase of
         zero duration and for the infinite-jerk legs of a trapezoid).
+    phase_accelerations : tuple of 7 float
+        Acceleration entering each phase [unit/s^2] (it jumps only on a
+        trapezoidal leg).
     peak_velocity : float
         Largest speed reached, signed with the direction [unit/s].
     peak_acceleration, peak_deceleration : float
@@ -84,9 +69,8 @@ class Profile:
     """
 
     __slots__ = (
-        "start", "goal", "duration", "min_duration", "phase_durations", "jerks",
-        "peak_velocity", "peak_acceleration", "peak_deceleration", "limits",
-        "_cache",
+        "start", "goal", "min_duration", "peak_velocity", "peak_acceleration",
+        "peak_deceleration", "limits",
     )
 
     def __init__(
@@ -102,17 +86,23 @@ class Profile:
         peak_deceleration: float,
         limits: AxisLimits,
     ) -> None:
-        self.start = start
-        self.goal = goal
-        self.duration = duration
-        self.min_duration = min_duration
+        s = 1.0 if goal > start else (-1.0 if goal < start else 0.0)
+        a1 = s * peak_acceleration
+        a2 = -s * peak_deceleration
+        self.start_state = (start, 0.0, 0.0)
         self.phase_durations = phase_durations
         self.jerks = jerks
+        self.phase_accelerations = (0.0, a1, a1, 0.0, 0.0, a2, a2)
+        self.duration = duration
+        self._end = (goal, 0.0, 0.0)
+        self._tab = None
+        self.start = start
+        self.goal = goal
+        self.min_duration = min_duration
         self.peak_velocity = peak_velocity
         self.peak_acceleration = peak_acceleration
         self.peak_deceleration = peak_deceleration
         self.limits = limits
-        self._cache: Any = None
 
     # ------------------------------------------------------------------ info
     @property
@@ -180,109 +170,6 @@ class Profile:
             parts.append("no-cruise")
         return "+".join(parts) if parts else "7-phase"
 
-    @property
-    def phase_times(self) -> np.ndarray:
-        """Phase boundary times, shape (8,) [s]: 0, end of phase 1, ..., duration."""
-        return self._boundaries()[0].copy()
-
-    def boundary_states(self) -> np.ndarray:
-        """Exact state at every phase boundary.
-
-        Returns
-        -------
-        ndarray, shape (8, 3)
-            Rows: the 8 boundary times; columns: position, velocity,
-            acceleration (the acceleration is the value *entering* the next
-            phase; for an infinite-jerk trapezoid it jumps there).
-        """
-        tb, x, v, a, _ = self._boundaries()
-        out = np.empty((8, 3))
-        out[:7, 0], out[:7, 1], out[:7, 2] = self.start + x, v, a
-        out[7] = (self.goal, 0.0, 0.0)
-        return out
-
-    def _boundaries(self):
-        c = self._cache
-        if c is not None:
-            return c
-        s = self.direction
-        t = self.phase_durations
-        j = self.jerks
-        a1 = s * self.peak_acceleration
-        a2 = -s * self.peak_deceleration
-        acc = (0.0, a1, a1, 0.0, 0.0, a2, a2)
-        # positions are kept as displacements from the start, so that their
-        # round-off scales with the distance and not with |start|
-        tb = np.empty(8)
-        p = np.empty(7)
-        v = np.empty(7)
-        pk, vk, tk = 0.0, 0.0, 0.0
-        for k in range(7):
-            tb[k] = tk
-            p[k] = pk
-            v[k] = vk
-            dt, ak, jk = t[k], acc[k], j[k]
-            pk = pk + dt * (vk + dt * (0.5 * ak + dt * jk / 6.0))
-            vk = vk + dt * (ak + 0.5 * dt * jk)
-            tk += dt
-        tb[7] = self.duration
-        c = (tb, p, v, np.array(acc), np.array(j, dtype=float))
-        self._cache = c
-        return c
-
-    # -------------------------------------------------------------- sampling
-    def sample(self, t: Any) -> ProfileSample:
-        """Evaluate the profile at time(s) ``t`` [s] by exact integration.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (n,)
-            Times [s]. Times before 0 hold the start state, times after
-            ``duration`` hold the goal (exactly).
-
-        Returns
-        -------
-        ProfileSample
-            Arrays shaped like ``t``.
-        """
-        tb, P, V, A, J = self._boundaries()
-        tt = np.asarray(t, dtype=np.float64)
-        tc = np.clip(tt, 0.0, self.duration)
-        if tc.ndim == 1 and tc.size >= SORTED_FAST_PATH_MIN and bool(np.all(tc[1:] >= tc[:-1])):
-            pos, vel, acc, j = self._sample_sorted(tc, tb, P, V, A, J)
-        else:
-            pos, vel, acc, j = eval_pieces(tc, tb, P, V, A, J)
-            pos = self.start + pos
-        after = tt >= self.duration
-        before = tt < 0.0
-        if np.any(after) or np.any(before):
-            pos = np.where(after, self.goal, np.where(before, self.start, pos))
-            vel = np.where(after | before, 0.0, vel)
-            acc = np.where(after | before, 0.0, acc)
-            j = np.where(after | before, 0.0, j)
-        return ProfileSample(pos, vel, acc, j)
-
-    def _sample_sorted(self, tc, tb, P, V, A, J):
-        """:meth:`sample` for sorted times: each phase evaluated on its slice with
-        scalar coefficients (same formulas, same results, no per-sample gathers)."""
-        n = tc.shape[0]
-        pos = np.empty(n)
-        vel = np.empty(n)
-        acc = np.empty(n)
-        jerk = np.empty(n)
-        cuts = [0, *np.searchsorted(tc, tb[1:7], side="left").tolist(), n]
-        for k in range(7):
-            lo, hi = cuts[k], cuts[k + 1]
-            if hi <= lo:
-                continue
-            dt = tc[lo:hi] - tb[k]
-            a, jk, v = A[k], J[k], V[k]
-            pos[lo:hi] = self.start + (P[k] + dt * (v + dt * (0.5 * a + dt * jk / 6.0)))
-            vel[lo:hi] = v + dt * (a + 0.5 * dt * jk)
-            acc[lo:hi] = a + dt * jk
-            jerk[lo:hi] = jk
-        return pos, vel, acc, jerk
-
     def to_dict(self) -> dict:
         """JSON-ready summary (SI / axis units)."""
         return {
@@ -335,11 +222,34 @@ def _build(start, goal, limits, d, vc, duration, min_duration, sign):
 
 
 def min_duration(distance: float, limits: AxisLimits) -> float:
-    """Minimum duration [s] of a rest-to-rest move over ``distance`` [unit]."""
-    d = abs(float(distance))
+    """Minimum duration [s] of a rest-to-rest move over ``distance`` [unit].
+
+    The same value as ``plan_move(0.0, distance, limits).duration``; inputs
+    outside the supported range (:mod:`trajkit.profiles._range`) raise
+    :class:`~trajkit.errors.InvalidInputError`.
+    """
+    _check_rest_limits(limits)
+    try:
+        d = float(distance)
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"distance{axis_label(limits.name)} must be a number, got {distance!r}") from None
+    if not math.isfinite(d):
+        raise InvalidInputError(f"distance{axis_label(limits.name)} must be finite, got {d!r}")
+    check_position_range(0.5 * d, "distance / 2", limits.name, states=False)
+    check_distance_range(0.0, d, limits.name)
+    d = abs(d)
     if d == 0.0:
         return 0.0
     return _min_solution(d, limits)[1]
+
+
+def _check_rest_limits(limits: Any) -> None:
+    if not isinstance(limits, AxisLimits):
+        raise InvalidInputError(
+            f"limits must be an AxisLimits, got {type(limits).__name__}"
+        )
+    check_limits_range(limits)
 
 
 def plan_move(
@@ -385,12 +295,12 @@ def plan_move(
     >>> round(p.duration, 6)
     1.7
     """
-    if not isinstance(limits, AxisLimits):
-        raise InvalidInputError(
-            f"limits must be an AxisLimits, got {type(limits).__name__}"
-        )
+    _check_rest_limits(limits)
     s = limits.check_position(start, "start")
     g = limits.check_position(goal, "goal")
+    check_position_range(s, "start", limits.name, states=False)
+    check_position_range(g, "goal", limits.name, states=False)
+    check_distance_range(s, g, limits.name)
     if duration is not None:
         try:
             T = float(duration)
@@ -400,6 +310,7 @@ def plan_move(
             raise InvalidInputError(
                 f"duration{axis_label(limits.name)} must be finite and >= 0 s, got {T!r}"
             )
+        check_duration_range(T, limits.name, states=False)
     return _plan_unchecked(s, g, limits, duration if duration is None else T)
 
 
@@ -430,9 +341,11 @@ def _plan_solved(
                 minimum=tmin,
             )
         return _build(s, g, limits, d, vp, tmin, tmin, sign)
+    check_rest_duration_ratio(T, tmin, limits.name if axis is None else axis)
     a1, j1, a2, j2 = limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel
     thr1, thr2 = limits._thresholds
     vc = K.cruise_velocity(d, T, vp, a1, j1, a2, j2, thr1, thr2)
+    check_rest_cruise(vc, T, limits, limits.name if axis is None else axis)
     return _build(s, g, limits, d, vc, T, tmin, sign)
 
 

@@ -4,56 +4,64 @@
 a moving start state to a moving goal state (ruckig's problem, with
 trajkit's asymmetric limits), or one of exactly a requested duration;
 :func:`plan_velocity` reaches a velocity and acceleration with the position
-free (jogging, feed override, controlled stop). Both return a
-:class:`StateProfile`, which samples like :class:`~trajkit.profiles.Profile`.
+free (jogging, feed override, controlled stop); :func:`feasible_durations`
+gives the minimum duration and the blocked intervals (what a
+synchronisation of several axes needs). All return or use a
+:class:`StateProfile`, a :class:`~trajkit.profiles.motion.JerkMotion`.
 
 Limit semantics (see :class:`~trajkit.limits.AxisLimits`): while ``|v|``
 grows (``v*a > 0``, or ``v = 0``) the accel leg's ``a_max`` / ``j_max``
 apply, while ``|v|`` shrinks (``v*a < 0``) the decel leg's ``a_max_decel`` /
-``j_max_decel``; ``|v| <= v_max`` always. The method and its limits are
+``j_max_decel``; ``|v| <= v_max`` always. The method (closed-form shapes,
+the brake pre-phase, blocked intervals) and the supported numeric range are
 described in ``docs/state-profiles.md``.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .._constants import DURATION_RTOL
-from .._validate import axis_label, check_finite
+from .._validate import axis_label
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
-from . import _state_kernel as K
-from ._pieces import eval_pieces
-from .profile import ProfileSample
+from . import _kernel as K
+from ._brake import inside
+from ._compile import ENABLED as _COMPILED
+from ._range import (
+    POSITION_MAX,
+    STATE_RATIO_MAX,
+    check_distance_range,
+    check_duration_range,
+    check_limits_range,
+    check_position_range,
+    check_state_range,
+)
+from ._shapes import SHAPE_NAMES
+from .motion import JerkMotion
 
 __all__ = [
     "BlockedDurationError",
+    "DurationSet",
     "StateProfile",
+    "feasible_durations",
     "min_state_duration",
     "plan_state_to_state",
     "plan_velocity",
+    "position_extremes",
 ]
 
-#: Relative precision of the upper end of a blocked duration interval (the
-#: next feasible duration; the value returned is itself feasible).
-BLOCKED_SEARCH_RTOL = 1e-9
+#: Names of the fixed-duration (step 2) shapes, after the step-1 ones.
+STEP2_NAMES = ("cruise", "acc0_cruise", "cruise_acc1", "acc0_cruise_acc1", "hold1", "hold3",
+               "hold_mid", "acc0_hold_mid", "hold_mid_3", "hold_mid_acc1", "reduced_jerk")
 
-#: Relative precision of the upper end where only the slow F2-with-hold
-#: family reaches the feasible durations next to it.
-BLOCKED_HOLD_RTOL = 1e-4
-
-#: Relative precision of the lower end of a blocked interval (informative).
-BLOCKED_LOWER_RTOL = 1e-6
-
-#: Maximum rounds of the brake pre-phase (each removes one kind of excess).
-BRAKE_MAX_ROUNDS = 6
-
-#: Maximum doublings when searching for the end of a blocked interval.
-BLOCKED_SEARCH_MAX = 80
+#: A requested duration within this fraction of the minimum is the minimum.
+DURATION_RTOL = K.DURATION_RTOL
 
 
 class BlockedDurationError(InfeasibleError):
@@ -69,8 +77,9 @@ class BlockedDurationError(InfeasibleError):
     minimum : float
         The minimum duration [s].
     interval : tuple of float
-        ``(lower, upper)`` [s]: the blocked interval containing the request,
-        with ``upper`` the next feasible duration (to ``BLOCKED_SEARCH_RTOL``).
+        ``(lower, upper)`` [s]: the blocked interval containing the request;
+        both ends are durations of valid profiles (``upper`` is the next
+        feasible duration).
     """
 
     def __init__(self, message: str, minimum: float, interval: tuple[float, float]):
@@ -78,10 +87,44 @@ class BlockedDurationError(InfeasibleError):
         self.interval = interval
 
 
-class StateProfile:
+@dataclass(frozen=True)
+class DurationSet:
+    """The feasible durations of a move: ``[minimum, inf)`` minus ``blocked``.
+
+    Attributes
+    ----------
+    minimum : float
+        Minimum duration [s].
+    blocked : tuple of (float, float)
+        Open intervals ``(lower, upper)`` [s] of infeasible durations,
+        ascending (at most two for symmetric limits).
+    """
+
+    minimum: float
+    blocked: tuple = ()
+
+    def contains(self, T: float) -> bool:
+        """True when the duration ``T`` [s] is feasible."""
+        if T < self.minimum * (1.0 - DURATION_RTOL):
+            return False
+        return not any(lo < T < hi for lo, hi in self.blocked)
+
+    def next_feasible(self, T: float) -> float:
+        """The smallest feasible duration >= ``T`` [s]."""
+        T = max(T, self.minimum)
+        for lo, hi in self.blocked:
+            if lo < T < hi:
+                T = hi
+        return T
+
+
+class StateProfile(JerkMotion):
     """A piecewise-constant-jerk profile of one axis between two states.
 
-    Built by :func:`plan_state_to_state` or :func:`plan_velocity`.
+    Built by :func:`plan_state_to_state` or :func:`plan_velocity` (or from a
+    phase table: ``StateProfile(start_state, goal_state, phases,
+    min_duration, n_brake_phases, family, limits)`` with ``phases`` a list
+    of ``(duration, jerk, start acceleration)``).
 
     Attributes
     ----------
@@ -97,78 +140,40 @@ class StateProfile:
         Minimum duration of this motion [s] (``duration`` unless a longer one
         was requested).
     brake_duration : float
-        Length of the brake pre-phase [s] (0 when the start state is within
+        Length of the brake pre-phase [s] (0 when the start state is inside
         the limits). The first ``n_brake_phases`` phases form it.
     n_brake_phases : int
         Number of phases of the brake pre-phase.
-    phase_durations : tuple of float
-        Duration of each phase [s] (their number varies with the shape).
-    jerks : tuple of float
-        Constant jerk of each phase [unit/s^3].
-    phase_accelerations : tuple of float
-        Acceleration at the start of each phase [unit/s^2] (continuous unless
-        a jerk limit is infinite).
+    phase_durations, jerks, phase_accelerations : tuple of float
+        The phase table: duration [s], constant jerk [unit/s^3] and the
+        acceleration entering each phase [unit/s^2].
     family : str
-        Which profile family won: ``"F1"`` (two acceleration bumps through a
-        velocity extremum), ``"F1-cruise"`` (with a cruise at ``+-v_max``),
-        ``"F2"`` (a bump and a ramp through an acceleration extremum),
-        ``"fixed"`` / ``"fixed-blend"`` (fixed duration), ``"velocity"``
-        (:func:`plan_velocity`), ``"none"`` (already at the goal).
+        The profile's shape: the jerk-sign pattern (``"UDDU"`` or its mirror
+        ``"DUUD"``) and the limits reached, ruckig's names in lower case
+        (``"none"``, ``"acc0"``, ``"acc1"``, ``"acc0_acc1"``, ``"vel"``,
+        ``"acc0_vel"``, ...); ``"fixed ..."`` for a requested duration
+        (``cruise``, ``hold1``, ...), ``"velocity ..."`` for
+        :func:`plan_velocity`, ``"none"`` when already at the goal.
     limits : AxisLimits
     """
 
-    __slots__ = (
-        "_A",
-        "_J",
-        "_P",
-        "_V",
-        "_tb",
-        "brake_duration",
-        "duration",
-        "family",
-        "goal_state",
-        "jerks",
-        "limits",
-        "min_duration",
-        "n_brake_phases",
-        "phase_accelerations",
-        "phase_durations",
-        "start_state",
-    )
+    __slots__ = ("min_duration", "n_brake_phases", "family", "limits")
 
-    def __init__(self, start_state, goal_state, phases, min_duration, n_brake_phases,
-                 family, limits):
-        self.start_state = tuple(float(x) for x in start_state)
-        self.goal_state = tuple(float(x) for x in goal_state)
-        self.phase_durations = tuple(float(p[0]) for p in phases)
-        self.jerks = tuple(float(p[1]) for p in phases)
-        self.phase_accelerations = tuple(float(p[2]) for p in phases)
-        self.n_brake_phases = int(n_brake_phases)
-        self.brake_duration = float(sum(self.phase_durations[:n_brake_phases]))
-        self.duration = float(sum(self.phase_durations))
+    def __init__(self, start_state: Any, goal_state: Any, phases: Any, min_duration: float,
+                 n_brake_phases: int, family: str, limits: AxisLimits) -> None:
+        ph = list(phases)
+        super().__init__(start_state, [p[0] for p in ph], [p[1] for p in ph],
+                         [p[2] for p in ph], goal_state)
         self.min_duration = float(min_duration)
+        self.n_brake_phases = int(n_brake_phases)
         self.family = family
         self.limits = limits
-        n = len(phases)
-        tb = np.empty(n + 1)
-        P = np.empty(n)
-        Vv = np.empty(n)
-        p, v, _ = self.start_state
-        t = 0.0
-        for k, (dt, j, a) in enumerate(phases):
-            tb[k] = t
-            P[k], Vv[k] = p, v
-            p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
-            v = v + dt * (a + 0.5 * dt * j)
-            t += dt
-        tb[n] = self.duration
-        self._tb = tb
-        self._P = P
-        self._V = Vv
-        self._A = np.array(self.phase_accelerations, dtype=float)
-        self._J = np.array(self.jerks, dtype=float)
 
-    # ------------------------------------------------------------------ info
+    @property
+    def goal_state(self) -> tuple:
+        """``(p, v, a)`` at the end [unit, unit/s, unit/s^2]."""
+        return self.end_state
+
     @property
     def start(self) -> float:
         """Start position [unit]."""
@@ -177,255 +182,160 @@ class StateProfile:
     @property
     def goal(self) -> float:
         """Goal position [unit]."""
-        return self.goal_state[0]
+        return self.end_state[0]
 
     @property
-    def n_phases(self) -> int:
-        return len(self.phase_durations)
+    def brake_duration(self) -> float:
+        """Length of the brake pre-phase [s]."""
+        return float(math.fsum(self.phase_durations[:self.n_brake_phases]))
 
     @property
-    def phase_times(self) -> np.ndarray:
-        """Phase boundary times, shape (n_phases + 1,) [s]."""
-        return self._tb.copy()
-
-    def boundary_states(self) -> np.ndarray:
-        """Exact state at every phase boundary.
-
-        Returns
-        -------
-        ndarray, shape (n_phases + 1, 3)
-            Position, velocity, acceleration at each boundary time (the
-            acceleration is the value entering the next phase); the last row
-            is the goal state.
-        """
-        n = self.n_phases
-        out = np.empty((n + 1, 3))
-        out[:n, 0] = self._P
-        out[:n, 1] = self._V
-        out[:n, 2] = self._A
-        out[n] = self.goal_state
-        return out
-
-    # -------------------------------------------------------------- sampling
-    def sample(self, t: Any) -> ProfileSample:
-        """Evaluate the profile at time(s) ``t`` [s] by exact integration.
-
-        Parameters
-        ----------
-        t : float or array_like, shape (n,)
-            Times [s]. Before 0 the start state is held (its position,
-            velocity and acceleration, jerk 0); after ``duration`` the goal
-            state is continued at constant goal acceleration
-            (``p = pf + vf dt + af dt^2/2``, ``v = vf + af dt``, ``a = af``,
-            jerk 0), which is what an axis does when the next segment is late.
-
-        Returns
-        -------
-        ProfileSample
-            Arrays shaped like ``t``.
-        """
-        tt = np.asarray(t, dtype=np.float64)
-        n = self.n_phases
-        pf, vf, af = self.goal_state
-        if n == 0:
-            dt = np.maximum(tt, 0.0)
-            p0, v0, a0 = self.start_state
-            return ProfileSample(
-                np.where(tt < 0, p0, pf + dt * (vf + 0.5 * af * dt)),
-                np.where(tt < 0, v0, vf + af * dt),
-                np.where(tt < 0, a0, af + 0 * dt),
-                np.zeros_like(dt),
-            )
-        tc = np.clip(tt, 0.0, self.duration)
-        pos, vel, acc, j = eval_pieces(tc, self._tb, self._P, self._V, self._A, self._J)
-        after = tt >= self.duration
-        before = tt < 0.0
-        if np.any(after) or np.any(before):
-            p0, v0, a0 = self.start_state
-            da = np.where(after, tt - self.duration, 0.0)
-            pos = np.where(after, pf + da * (vf + 0.5 * af * da), np.where(before, p0, pos))
-            vel = np.where(after, vf + af * da, np.where(before, v0, vel))
-            acc = np.where(after, af, np.where(before, a0, acc))
-            j = np.where(after | before, 0.0, j)
-        return ProfileSample(pos, vel, acc, j)
+    def shape(self) -> str:
+        """Alias of :attr:`family`."""
+        return self.family
 
     def to_dict(self) -> dict:
         """JSON-ready summary (axis units)."""
-        return {
-            "start_state": list(self.start_state),
+        d = super().to_dict()
+        d.update({
             "goal_state": list(self.goal_state),
             "start": self.start,
             "goal": self.goal,
-            "duration_s": self.duration,
             "min_duration_s": self.min_duration,
             "brake_duration_s": self.brake_duration,
+            "n_brake_phases": self.n_brake_phases,
             "family": self.family,
-            "phases": [
-                {"duration_s": d, "jerk": j, "start_acceleration": a}
-                for d, j, a in zip(self.phase_durations, self.jerks, self.phase_accelerations)
-            ],
-        }
+        })
+        return d
 
     def __repr__(self) -> str:
-        return (
-            f"StateProfile(start_state={self.start_state!r}, goal_state={self.goal_state!r}, "
-            f"duration={self.duration!r}, family={self.family!r})"
-        )
+        return (f"StateProfile(start_state={self.start_state!r}, goal_state={self.goal_state!r}, "
+                f"duration={self.duration!r}, family={self.family!r})")
+
+
+def _from_table(start, goal, flat, n, nb, tmin, family, limits) -> StateProfile:
+    """A StateProfile from the kernel's flat phase table (no per-phase Python work)."""
+    prof = StateProfile.__new__(StateProfile)
+    prof.start_state = start
+    prof.phase_durations = tuple(flat[0:3 * n:3])
+    prof.jerks = tuple(flat[1:3 * n:3])
+    prof.phase_accelerations = tuple(flat[2:3 * n:3])
+    prof.duration = math.fsum(prof.phase_durations)
+    prof._end = goal
+    prof._tab = None
+    prof.min_duration = tmin
+    prof.n_brake_phases = nb
+    prof.family = family
+    prof.limits = limits
+    return prof
 
 
 # ------------------------------------------------------------ validation
-def _limits_tuple(limits: AxisLimits):
-    return (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel)
+_local = threading.local()
+
+
+def _ws():
+    ws = getattr(_local, "ws", None)
+    if ws is None:
+        ws = _local.ws = K.workspace()
+    return ws
 
 
 def _check_limits(limits: Any) -> AxisLimits:
+    if type(limits) is AxisLimits and limits.__dict__.get("_states_ok", False):
+        return limits
     if not isinstance(limits, AxisLimits):
         raise InvalidInputError(f"limits must be an AxisLimits, got {type(limits).__name__}")
+    if limits.v_max == math.inf and limits.a_max == math.inf and limits.a_max_decel == math.inf:
+        raise InvalidInputError(
+            f"limits{axis_label(limits.name)}: v_max and a_max cannot both be infinite for a "
+            "profile between moving states")
+    check_limits_range(limits, states=True)
+    object.__setattr__(limits, "_amax", max(limits.a_max, limits.a_max_decel))
+    jm = min(limits.j_max, limits.j_max_decel)
+    object.__setattr__(limits, "_kmin2", 0.5 / jm if jm < math.inf else 0.0)
+    object.__setattr__(limits, "_states_ok", True)
     return limits
 
 
-def _check_state(state: Any, field: str, limits: AxisLimits, with_position: bool = True):
-    n = 3 if with_position else 2
+_NAMES3 = ("position", "velocity", "acceleration")
+_PMAX = POSITION_MAX
+_SMAX = STATE_RATIO_MAX
+
+
+def _num(x, field, name):
     try:
-        vals = [x for x in state]
+        f = float(x)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{field}{axis_label(name)} must be a number, got {x!r}") from None
+    if not math.isfinite(f):
+        raise InvalidInputError(f"{field}{axis_label(name)} must be finite, got {f!r}")
+    return f
+
+
+def _check_state(state: Any, field: str, limits: AxisLimits) -> tuple:
+    # fast path: three finite floats inside the ranges (the common call)
+    if type(state) is tuple and len(state) == 3:
+        p, v, a = state
+        if (type(p) is float and type(v) is float and type(a) is float
+                and -_PMAX <= p <= _PMAX and limits.position_min <= p <= limits.position_max
+                and abs(v) <= _SMAX * limits.v_max and abs(a) <= _SMAX * limits._amax
+                and abs(v) + a * a * limits._kmin2 <= _SMAX * limits.v_max
+                and math.isfinite(v) and math.isfinite(a)):
+            return state
+    return _check_state_slow(state, field, limits)
+
+
+def _check_state_slow(state: Any, field: str, limits: AxisLimits) -> tuple:
+    name = limits.name
+    try:
+        vals = tuple(state)
     except TypeError:
         raise InvalidInputError(
-            f"{field}{axis_label(limits.name)} must be a sequence of {n} numbers "
+            f"{field}{axis_label(name)} must be a sequence of 3 numbers "
             f"(position, velocity, acceleration), got {state!r}"
         ) from None
-    if len(vals) != n:
+    if len(vals) != 3:
         raise InvalidInputError(
-            f"{field}{axis_label(limits.name)} must have {n} entries "
+            f"{field}{axis_label(name)} must have 3 entries "
             f"(position, velocity, acceleration), got {len(vals)}"
         )
-    names = ("position", "velocity", "acceleration")[3 - n:]
-    out = [check_finite(x, f"{field} {nm}", limits.name) for x, nm in zip(vals, names)]
-    if with_position:
-        limits.check_position(out[0], f"{field} position")
-    return tuple(out)
+    p = _num(vals[0], f"{field} position", name)
+    v = _num(vals[1], f"{field} velocity", name)
+    a = _num(vals[2], f"{field} acceleration", name)
+    check_position_range(p, f"{field} position", name)
+    limits.check_position(p, f"{field} position")
+    check_state_range(v, a, field, limits)
+    return (p, v, a)
 
 
-def _natural_velocity(v, a, L):
-    """Velocity reached by ramping ``a`` to zero at once (regime jerks)."""
-    s = 1.0 if v > 0.0 or (v == 0.0 and a > 0.0) else -1.0
-    out: list = []
-    dv, _ = K.ramp(s * a, 0.0, L[2], L[4], out)
-    vn = v + s * dv
-    if vn * s < 0.0:  # the ramp crosses v = 0: conservative jerk
-        Jm = min(L[2], L[4])
-        out = []
-        dv, _ = K.ramp(s * a, 0.0, Jm, Jm, out)
-        vn = v + s * dv
-    return vn
+def _goal_violation(v: float, a: float, limits: AxisLimits) -> str | None:
+    """Why the goal (v, a) cannot be reached within the limits, or None.
 
-
-def _start_violation(v, a, L) -> str | None:
-    """Why the start state cannot be kept within the limits, or None."""
-    V, A1, J1, A2, J2 = L
-    tol = K.LIMIT_RTOL
-    if abs(v) > V * (1.0 + tol):
-        return f"|velocity| {abs(v)!r} is above v_max {V!r}"
-    speeding = v * a > 0.0 or (v == 0.0 and a != 0.0)
-    A = A1 if speeding else A2
-    if abs(a) > A * (1.0 + tol):
-        return (f"|acceleration| {abs(a)!r} is above "
-                f"{'a_max' if speeding else 'a_max_decel'} {A!r}")
-    vn = _natural_velocity(v, a, L)
-    if abs(vn) > V * (1.0 + tol):
-        return (f"the acceleration {a!r} carries the velocity to {vn!r}, past v_max {V!r}")
-    if _reverses_too_hard(v, a, L):
-        return (f"slowing down with |acceleration| {abs(a)!r}, the velocity {v!r} reverses "
-                f"before the acceleration can drop to a_max {A1!r}")
-    return None
-
-
-def _reverses_too_hard(v, a, L):
-    """Slowing down with |a| > a_max: does v reach 0 before |a| drops to a_max?"""
-    V, A1, J1, A2, J2 = L
-    if not (v * a < 0.0 and abs(a) > A1 * (1.0 + K.LIMIT_RTOL)):
-        return False
-    if J2 == math.inf:
-        return False
-    dv = (a * a - A1 * A1) / (2.0 * J2)  # |v| lost while |a| ramps down to A1
-    return abs(v) < dv
-
-
-def _goal_violation(v, a, L) -> str | None:
-    """Why the goal state cannot be reached within the limits, or None."""
-    V, A1, J1, A2, J2 = L
-    tol = K.LIMIT_RTOL
-    if abs(v) > V * (1.0 + tol):
+    Arriving at ``(v, a)`` is leaving ``(v, -a)`` backwards in time with the
+    legs swapped: the goal is reachable when that state is inside the limits.
+    """
+    if a == 0.0 and abs(v) <= limits.v_max:
+        return None
+    V = limits.v_max
+    tol = 1.0 + 1e-12
+    if abs(v) > V * tol:
         return f"|velocity| {abs(v)!r} is above v_max {V!r}"
     speeding = v * a > 0.0
-    A = A1 if speeding else A2
-    if abs(a) > A * (1.0 + tol):
+    A = limits.a_max if speeding else limits.a_max_decel
+    if abs(a) > A * tol:
         return (f"|acceleration| {abs(a)!r} is above "
                 f"{'a_max' if speeding else 'a_max_decel'} {A!r}")
-    # time-reversed: the arrival state mirrored, decel/accel legs swapped
-    Lr = (V, A2, J2, A1, J1)
-    vn = _natural_velocity(v, -a, Lr)
-    if abs(vn) > V * (1.0 + tol):
-        return (f"arriving with acceleration {a!r} needs the velocity {vn!r} just "
-                f"before, past v_max {V!r}")
+    k1 = 0.0 if limits.j_max == math.inf else 1.0 / limits.j_max
+    k2 = 0.0 if limits.j_max_decel == math.inf else 1.0 / limits.j_max_decel
+    if not inside(v, -a, V, limits.a_max_decel, k2, limits.a_max, k1):
+        vn = v - a * abs(a) * (k2 if speeding else k1) / 2.0
+        return (f"arriving with acceleration {a!r} needs the velocity about {vn!r} just "
+                f"before, past v_max {V!r} (or a reversal past a limit)")
     return None
 
 
-def brake_phases(v0: float, a0: float, L) -> list:
-    """Brake pre-phase bringing ``(v0, a0)`` back into the limits.
-
-    Empty when the start state is within the limits. Otherwise, in rounds
-    (each at the largest jerk) until the state is valid:
-
-    1. an acceleration above its leg's limit is ramped back to the limit;
-       slowing down with ``|a| > a_max`` so hard that the velocity reverses
-       first, ``|a|`` is ramped down to ``a_max`` (through the reversal);
-    2. above ``v_max`` while already slowing down (and the slowdown alone
-       brings the velocity back within the limits): the acceleration is held
-       until ``|v| = v_max``; otherwise the fastest velocity change to
-       ``(+-v_max, 0)`` (decelerating at up to ``a_max_decel``);
-    3. a slowdown so hard that the velocity reverses past ``-v_max``: the
-       acceleration is ramped to zero, then the velocity brought back to
-       ``v_max`` in the new direction.
-
-    During the pre-phase the velocity may exceed ``v_max`` and the
-    acceleration its limit (the start state forces it); each round only
-    reduces the excess.
-    """
-    V, A1, J1, A2, J2 = L
-    out: list = []
-    v, a = v0, a0
-    for _ in range(BRAKE_MAX_ROUNDS):
-        if _start_violation(v, a, L) is None:
-            break
-        s = 1.0 if v > 0.0 or (v == 0.0 and a > 0.0) else -1.0
-        fv, fa = s * v, s * a  # frame: velocity >= 0
-        r: list = []
-        if fa > A1 * (1.0 + K.LIMIT_RTOL):
-            K.ramp(fa, A1, J1, J2, r)
-        elif fa < -A2 * (1.0 + K.LIMIT_RTOL):
-            K.ramp(fa, -A2, J1, J2, r)
-        elif _reverses_too_hard(fv, fa, L):
-            K.ramp(fa, -A1, J1, J2, r)
-        else:
-            vn = _natural_velocity(fv, fa, L)
-            if fv > V * (1.0 + K.LIMIT_RTOL) and fa < 0.0 and abs(vn) <= V:
-                r.append(((fv - V) / -fa, 0.0, fa))
-            elif fv > V * (1.0 + K.LIMIT_RTOL) or vn > V:
-                b = K.bump(fv, fa, V, 0.0, L)
-                if b is None:
-                    break
-                r += b
-            elif vn < -V:
-                K.ramp(fa, 0.0, J1, J2, r)
-            else:  # pragma: no cover - _start_violation has no other case
-                break
-        ph = r if s > 0 else K.negate(r)
-        v, a = K.integrate_va(ph, v, a)
-        out += ph
-    return out
-
-
-def _duration_arg(duration: Any, limits: AxisLimits) -> float | None:
+def _duration_arg(duration: Any, name) -> float | None:
     if duration is None:
         return None
     try:
@@ -433,90 +343,129 @@ def _duration_arg(duration: Any, limits: AxisLimits) -> float | None:
     except (TypeError, ValueError):
         raise InvalidInputError(f"duration must be a number of seconds, got {duration!r}") from None
     if not math.isfinite(T) or T < 0.0:
-        raise InvalidInputError(
-            f"duration{axis_label(limits.name)} must be finite and >= 0 s, got {T!r}"
-        )
+        raise InvalidInputError(f"duration{axis_label(name)} must be finite and >= 0 s, got {T!r}")
+    check_duration_range(T, name)
     return T
 
 
-# -------------------------------------------------------------- planners
-def _pre_ramp(v, a, L):
-    """Ramp ``|a|`` down to ``a_max`` at the decel jerk while slowing down.
-
-    Used when no family member verifies from a slowing-down state with
-    ``|a| > a_max``: the families use the tighter jerk of both legs in a
-    bump that reverses the velocity, which can be too slow to bring ``|a|``
-    within ``a_max`` before the reversal; the decel jerk is not.
-    Returns the phases (empty when it does not apply).
-    """
-    V, A1, J1, A2, J2 = L
-    if not (v * a < 0.0 and abs(a) > A1):
-        return []
-    sgn = 1.0 if v > 0.0 else -1.0
-    r: list = []
-    K.ramp(sgn * a, -A1, J1, J2, r)
-    return r if sgn > 0 else K.negate(r)
-
-
-def _min_time(start, goal, L, name):
-    """Fastest verified candidate; (phases, family, seeds).
-
-    ``seeds`` iterates the phases of every verified candidate (checked
-    lazily, see :class:`~trajkit.profiles._state_kernel.VerifiedSeeds`):
-    the minimum time only needs the candidates up to the fastest one that
-    verifies, the fixed-duration search the others only when it gets there.
-    """
-    if start == goal and start[2] == 0.0:
-        return [], "none", [[]]
-    seeds = K.VerifiedSeeds(K.candidates_min_time(start, goal, L, verified=False), start, goal, L)
-    best = seeds.fastest()
-    if best is None:
-        pre = _pre_ramp(start[1], start[2], L)
-        if pre:
-            mid = K.integrate(pre, *start)
-            cands = [(t + K.total_time(pre), fam + "+pre", pre + ph)
-                     for t, fam, ph in K.candidates_min_time(mid, goal, L)]
-            seeds = K.VerifiedSeeds(cands, start, goal, L)
-            best = seeds.fastest()
-    if best is None:
-        raise InfeasibleError(
-            f"no profile found from state {start!r} to {goal!r}{axis_label(name)} "
-            "within the limits (please report this input)"
-        )
-    return best[2], best[1], seeds
-
-
-def _prepare(start, goal, limits):
-    L = _limits_tuple(limits)
-    gv = _goal_violation(goal[1], goal[2], L)
+def _prepare(start, goal, limits, velocity_only=False):
+    limits = _check_limits(limits)
+    s = _check_state(start, "start", limits)
+    if velocity_only:
+        g = goal
+    else:
+        g = _check_state(goal, "goal", limits)
+        check_distance_range(s[0], g[0], limits.name)
+    gv = _goal_violation(g[1], g[2], limits)
     if gv is not None:
-        raise InvalidInputError(f"goal state{axis_label(limits.name)} cannot be reached within the limits: {gv}")
-    brake = brake_phases(start[1], start[2], L)
-    p1, v1, a1 = K.integrate(brake, *start) if brake else start
-    if brake:
-        sv = _start_violation(v1, a1, L)
-        if sv is not None:
-            raise InfeasibleError(
-                f"start state{axis_label(limits.name)} cannot be brought back within the limits: {sv}"
-            )
-    return L, brake, (p1, v1, a1)
+        what = "goal velocity/acceleration" if velocity_only else "goal state"
+        raise InvalidInputError(
+            f"{what}{axis_label(limits.name)} cannot be reached within the limits: {gv}")
+    return limits, s, g
 
 
+def _run(s, g, limits, task, T=0.0):
+    ws = _ws()
+    ws[0] = s[0]
+    ws[1] = s[1]
+    ws[2] = s[2]
+    ws[3] = g[0]
+    ws[4] = g[1]
+    ws[5] = g[2]
+    ws[6] = limits.v_max
+    ws[7] = limits.a_max
+    ws[8] = limits.j_max
+    ws[9] = limits.a_max_decel
+    ws[10] = limits.j_max_decel
+    ws[K.IN_TASK] = task
+    ws[K.IN_T] = T
+    if _COMPILED:
+        K.solve(ws)
+    else:
+        with np.errstate(all="ignore"):
+            K.solve(ws)
+    return ws
+
+
+def _family(code: float) -> str:
+    """The shape name of a kernel shape code (see :attr:`StateProfile.family`)."""
+    c = int(code)
+    fixed = c >= 32
+    direction = "DUUD" if c & 16 else "UDDU"
+    c &= 15
+    if fixed:
+        return f"fixed {direction} {STEP2_NAMES[c - 4] if 4 <= c < 15 else '?'}"
+    if c == 15:  # NONE with equal jerks (solved in w = c1 - c3)
+        return f"{direction} none"
+    if c >= 8:
+        return f"velocity {direction}" + (" acc0" if c == 9 else "")
+    return f"{direction} {SHAPE_NAMES[c]}"
+
+
+def _fail(ws, s, g, limits, what):
+    st = int(ws[K.OUT_STATUS])
+    name = axis_label(limits.name)
+    if st == K.ST_BRAKE:
+        raise InfeasibleError(
+            f"start state {s!r}{name} cannot be brought back within the limits")
+    raise InfeasibleError(
+        f"no profile found {what}{name} from state {s!r} to {g!r} within the limits "
+        "(please report this input)")
+
+
+def _check_range(prof: StateProfile, limits: AxisLimits) -> StateProfile:
+    if limits.position_min == -math.inf and limits.position_max == math.inf:
+        return prof
+    lo, hi = prof.extrema().position
+    # the integrated positions carry a few ulp of round-off (a goal at the range
+    # end is reached exactly: sample() returns the declared goal there)
+    tol = 8.0 * math.ulp(max(abs(lo), abs(hi), abs(prof.start), abs(prof.goal)))
+    if lo < limits.position_min - tol or hi > limits.position_max + tol:
+        raise InfeasibleError(
+            f"the profile{axis_label(limits.name)} would leave the position range "
+            f"[{limits.position_min}, {limits.position_max}] (reaches [{lo}, {hi}])"
+        )
+    return prof
+
+
+def position_extremes(prof: JerkMotion) -> tuple[float, float]:
+    """Exact smallest and largest position of a motion over ``[0, duration]``."""
+    return prof.extrema().position
+
+
+# ------------------------------------------------------------ planners
 def min_state_duration(start: Sequence[float], goal: Sequence[float], limits: AxisLimits) -> float:
     """Minimum duration [s] of :func:`plan_state_to_state` (brake included).
 
     The same plan, value and errors as ``plan_state_to_state(start, goal,
     limits).duration``, without building the :class:`StateProfile`.
     """
-    limits = _check_limits(limits)
-    s = _check_state(start, "start", limits)
-    g = _check_state(goal, "goal", limits)
-    L, brake, s1 = _prepare(s, g, limits)
-    main, _, _ = _min_time(s1, g, L, limits.name)
-    _final_check(s, g, brake, main, limits)
-    phases = list(brake) + list(main)
-    _check_range_phases(s, g, phases, limits)
-    return float(sum(ph[0] for ph in phases))
+    return plan_state_to_state(start, goal, limits).duration
+
+
+def feasible_durations(start: Sequence[float], goal: Sequence[float],
+                       limits: AxisLimits) -> DurationSet:
+    """The feasible durations of a move between states: minimum and blocked intervals.
+
+    Parameters
+    ----------
+    start, goal : sequence of 3 float
+        As in :func:`plan_state_to_state`.
+    limits : AxisLimits
+
+    Returns
+    -------
+    DurationSet
+        Step 1 of the planner: the durations of every valid profile of the
+        shape enumeration bound the feasible set (ruckig's *block*).
+    """
+    limits, s, g = _prepare(start, goal, limits)
+    ws = _run(s, g, limits, K.TASK_BLOCK)
+    if int(ws[K.OUT_STATUS]) != K.ST_OK:
+        _fail(ws, s, g, limits, "")
+    nb = int(ws[K.OUT_NBLK])
+    blk = tuple((float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1])) for i in range(nb))
+    return DurationSet(float(ws[K.OUT_TMIN]), blk)
 
 
 def plan_state_to_state(
@@ -534,7 +483,8 @@ def plan_state_to_state(
         The goal must be reachable within the limits: ``|vf| <= v_max``,
         ``|af|`` within its leg's limit and the velocity just before arrival
         within ``v_max``. A start state outside the limits gets a brake
-        pre-phase (see :func:`brake_phases`).
+        pre-phase (the fastest return into them, chosen together with the
+        rest for the shortest total).
     limits : AxisLimits
         Velocity, acceleration and jerk limits (asymmetric accel/decel legs:
         accel limits while ``|v|`` grows, decel limits while it shrinks).
@@ -545,19 +495,21 @@ def plan_state_to_state(
     Returns
     -------
     StateProfile
-        Exact (piecewise-constant jerk), hitting the goal state to 1e-9
-        relative, every limit kept (checked exactly at phase boundaries,
-        in-phase extrema and ``v = 0`` crossings) after the brake pre-phase.
+        Exact (piecewise-constant jerk), ending at the goal state (to 1e-10
+        relative; ``sample`` returns it exactly at the end), every limit kept
+        after the brake pre-phase (checked exactly at phase boundaries,
+        in-phase extrema and ``v = 0`` crossings).
 
     Raises
     ------
     InvalidInputError
-        Malformed or non-finite states, positions outside the range, an
+        Malformed or non-finite states, values outside the supported range
+        (``trajkit.profiles._range``), positions outside the axis range, an
         unreachable goal state, a bad duration.
     InfeasibleError
         ``duration`` below the minimum (``error.minimum``); a
         :class:`BlockedDurationError` when it lies in a blocked interval
-        (``error.interval``).
+        (``error.interval``); a profile that would leave the position range.
 
     Examples
     --------
@@ -568,139 +520,33 @@ def plan_state_to_state(
     >>> round(p.duration, 6)
     1.7
     """
-    limits = _check_limits(limits)
-    s = _check_state(start, "start", limits)
-    g = _check_state(goal, "goal", limits)
-    T = _duration_arg(duration, limits)
-    L, brake, s1 = _prepare(s, g, limits)
-    tb = K.total_time(brake)
-    main, fam, seeds = _min_time(s1, g, L, limits.name)
-    tmin = tb + K.total_time(main)
-    if T is None or abs(T - tmin) <= DURATION_RTOL * max(tmin, K.TINY):
-        return _finish(s, g, brake, main, tmin, fam, limits)
-    if T < tmin:
-        raise InfeasibleError(
-            f"duration {T!r} s{axis_label(limits.name)} is below the minimum duration "
-            f"{tmin!r} s from state {s!r} to {g!r}",
-            minimum=tmin,
-        )
-    ph = K.fixed_time_profile(s1, g, L, T - tb, seeds)
-    if ph is None:
-        lo, hi = _blocked_interval(s1, g, L, T - tb, tmin - tb, seeds)
-        raise BlockedDurationError(
-            f"duration {T!r} s{axis_label(limits.name)} lies in a blocked interval "
-            f"({lo + tb!r}, {hi + tb!r}) s of the move from state {s!r} to {g!r}: no profile of "
-            f"that duration keeps the limits; the minimum is {tmin!r} s",
-            minimum=tmin, interval=(lo + tb, hi + tb),
-        )
-    return _finish(s, g, brake, ph, tmin, "fixed", limits)
-
-
-def _blocked_interval(s1, g, L, T, tmin, seeds):
-    """``(lower, upper)`` feasible-duration gap containing the infeasible ``T``."""
-    def ok(t):
-        # the fast families only: a "yes" is a verified profile; a rare
-        # "no" that only the slow F2-with-hold family could turn into a yes
-        # makes the interval slightly wider than the truth, never wrong
-        # the other way (the upper end returned is feasible)
-        return K.fixed_time_profile(s1, g, L, t, seeds, hold=False) is not None
-
-    step = max(T - tmin, BLOCKED_SEARCH_RTOL * max(T, K.TINY))
-    hi = T + step
-    n = 0
-    while not ok(hi):
-        step *= 2.0
-        hi = T + step
-        n += 1
-        if n > BLOCKED_SEARCH_MAX:
-            return T, math.inf
-    lo_in = T
-    while hi - lo_in > BLOCKED_SEARCH_RTOL * hi:
-        mid = 0.5 * (lo_in + hi)
-        if ok(mid):
-            hi = mid
-        else:
-            lo_in = mid
-
-    def ok_full(t):
-        return K.fixed_time_profile(s1, g, L, t, seeds) is not None
-
-    # the slow F2-with-hold family may reach durations the fast ones miss:
-    # if it does just below the end found, refine the end with it
-    if ok_full(hi * (1.0 - BLOCKED_HOLD_RTOL)):
-        lo_in = T
-        while hi - lo_in > BLOCKED_HOLD_RTOL * hi:
-            mid = 0.5 * (lo_in + hi)
-            if ok_full(mid):
-                hi = mid
-            else:
-                lo_in = mid
-    # lower end: between tmin (feasible) and T (infeasible)
-    lo_ok, lo_in = tmin, T
-    while lo_in - lo_ok > BLOCKED_LOWER_RTOL * lo_in:
-        mid = 0.5 * (lo_ok + lo_in)
-        if ok(mid):
-            lo_ok = mid
-        else:
-            lo_in = mid
-    return lo_ok, hi
-
-
-def _final_check(s, g, brake, main, limits):
-    """Exact check of the planned motion after the brake (every candidate is
-    verified before it is used; this guards the assembly)."""
-    L = _limits_tuple(limits)
-    start_main = K.integrate(brake, *s) if brake else s
-    why = K.verify(main, *start_main, L, g)
-    if why is not None:  # pragma: no cover - every candidate is verified before
-        raise InfeasibleError(f"internal: profile{axis_label(limits.name)} failed verification: {why}")
-
-
-def _finish(s, g, brake, main, tmin, fam, limits):
-    _final_check(s, g, brake, main, limits)
-    phases = list(brake) + list(main)
-    prof = StateProfile(s, g, phases, tmin, len(brake), fam, limits)
-    _check_range(prof, limits)
-    return prof
-
-
-def _check_range(prof: StateProfile, limits: AxisLimits) -> None:
-    _check_range_phases(prof.start_state, prof.goal_state, list(zip(
-        prof.phase_durations, prof.jerks, prof.phase_accelerations)), limits)
-
-
-def _check_range_phases(start, goal, phases, limits: AxisLimits) -> None:
-    if limits.position_min == -math.inf and limits.position_max == math.inf:
-        return
-    lo, hi = _phase_extremes(start, goal, phases)
-    if lo < limits.position_min or hi > limits.position_max:
-        raise InfeasibleError(
-            f"the profile{axis_label(limits.name)} would leave the position range "
-            f"[{limits.position_min}, {limits.position_max}] (reaches [{lo}, {hi}])"
-        )
-
-
-def position_extremes(prof: StateProfile) -> tuple[float, float]:
-    """Exact smallest and largest position of a profile over ``[0, duration]``."""
-    return _phase_extremes(prof.start_state, prof.goal_state, list(zip(
-        prof.phase_durations, prof.jerks, prof.phase_accelerations)))
-
-
-def _phase_extremes(start, goal, phases) -> tuple[float, float]:
-    """Smallest and largest position along ``phases`` (``(dt, j, a)``) from
-    ``start``: at every phase end and every in-phase ``v = 0`` (the phase
-    boundary states integrated as :class:`StateProfile` does)."""
-    if not phases:
-        return float(goal[0]), float(goal[0])
-    p, v = float(start[0]), float(start[1])
-    lo = hi = p
-    for dt, j, a in phases:
-        for t in (dt,) + tuple(x for x in K._quad_roots(0.5 * j, a, v) if 0.0 < x < dt):
-            x = p + t * (v + t * (0.5 * a + t * j / 6.0))
-            lo, hi = min(lo, x), max(hi, x)
-        p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
-        v = v + dt * (a + 0.5 * dt * j)
-    return lo, hi
+    limits, s, g = _prepare(start, goal, limits)
+    T = _duration_arg(duration, limits.name)
+    if s == g and (T is None or T == 0.0):
+        return StateProfile(s, g, [], 0.0, 0, "none", limits)
+    ws = _run(s, g, limits, K.TASK_MIN if T is None else K.TASK_FIXED, 0.0 if T is None else T)
+    st = int(ws[K.OUT_STATUS])
+    if st != K.ST_OK:
+        tmin = float(ws[K.OUT_TMIN])
+        name = axis_label(limits.name)
+        if st == K.ST_SHORT:
+            raise InfeasibleError(
+                f"duration {T!r} s{name} is below the minimum duration {tmin!r} s from state "
+                f"{s!r} to {g!r}", minimum=tmin)
+        if st == K.ST_BLOCKED:
+            lo, hi = next((float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1]))
+                          for i in range(int(ws[K.OUT_NBLK]))
+                          if ws[K.OUT_BLK + 2 * i] < T < ws[K.OUT_BLK + 2 * i + 1])
+            raise BlockedDurationError(
+                f"duration {T!r} s{name} lies in a blocked interval ({lo!r}, {hi!r}) s of the "
+                f"move from state {s!r} to {g!r}: no profile of that duration keeps the limits; "
+                f"the minimum is {tmin!r} s", minimum=tmin, interval=(lo, hi))
+        _fail(ws, s, g, limits, "" if T is None else f"of duration {T!r} s")
+    n = int(ws[K.OUT_N])
+    flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()
+    prof = _from_table(s, g, flat, n, int(ws[K.OUT_NB]), float(ws[K.OUT_TMIN]),
+                       _family(ws[K.OUT_SHAPE]), limits)
+    return _check_range(prof, limits)
 
 
 def plan_velocity(
@@ -719,7 +565,8 @@ def plan_velocity(
     Parameters
     ----------
     start : sequence of 3 float
-        ``(position [unit], velocity [unit/s], acceleration [unit/s^2])``.
+        ``(position [unit], velocity [unit/s], acceleration [unit/s^2])``;
+        a state outside the limits is braked first.
     goal_velocity : float
         Target velocity [unit/s], ``|goal_velocity| <= v_max``.
     goal_acceleration : float, optional
@@ -728,7 +575,8 @@ def plan_velocity(
         Keyword-only.
     duration : float, optional
         Requested duration [s]: the velocity first changes to a cruise
-        velocity ``vc`` (the goal velocity when the goal acceleration is 0),
+        velocity (the goal velocity when the goal acceleration is 0, else the
+        velocity from which one ramp of the acceleration reaches the goal),
         holds it, then ramps into the goal acceleration, ending exactly at
         ``duration``.
 
@@ -742,90 +590,64 @@ def plan_velocity(
     InvalidInputError
         Malformed input, an unreachable goal velocity/acceleration.
     InfeasibleError
-        ``duration`` below the minimum (``error.minimum``) or not reachable.
+        ``duration`` below the minimum (``error.minimum``).
     """
     limits = _check_limits(limits)
-    s = _check_state(start, "start", limits)
-    vf = check_finite(goal_velocity, "goal_velocity", limits.name)
-    af = check_finite(goal_acceleration, "goal_acceleration", limits.name)
-    T = _duration_arg(duration, limits)
-    L = _limits_tuple(limits)
-    gv = _goal_violation(vf, af, L)
-    if gv is not None:
-        raise InvalidInputError(
-            f"goal velocity/acceleration{axis_label(limits.name)} cannot be reached "
-            f"within the limits: {gv}"
-        )
-    brake = brake_phases(s[1], s[2], L)
-    s1 = K.integrate(brake, *s) if brake else s
-    if brake and _start_violation(s1[1], s1[2], L) is not None:
-        raise InfeasibleError(
-            f"start state{axis_label(limits.name)} cannot be brought back within the limits"
-        )
-    tb = K.total_time(brake)
-    main = K.bump(s1[1], s1[2], vf, af, L) if (s1[1], s1[2]) != (vf, af) else []
-    ok = main is not None and K.verify(main, *s1, L, (0.0, vf, af), check_goal=False) is None
-    if not ok:
-        pre = _pre_ramp(s1[1], s1[2], L)
-        if pre:
-            vm, am = K.integrate_va(pre, s1[1], s1[2])
-            b = K.bump(vm, am, vf, af, L)
-            if b is not None:
-                main = pre + b
-                ok = K.verify(main, *s1, L, (0.0, vf, af), check_goal=False) is None
-    if not ok:
-        raise InfeasibleError(
-            f"no velocity profile found{axis_label(limits.name)} from {s!r} to velocity "
-            f"{vf!r}, acceleration {af!r} (please report this input)"
-        )
-    tmin = tb + K.total_time(main)
-    if T is not None and abs(T - tmin) > DURATION_RTOL * max(tmin, K.TINY):
-        if T < tmin:
+    vf = _num(goal_velocity, "goal_velocity", limits.name)
+    af = _num(goal_acceleration, "goal_acceleration", limits.name)
+    limits, s, g = _prepare(start, (math.nan, vf, af), limits, velocity_only=True)
+    T = _duration_arg(duration, limits.name)
+    if T is None or (s[1] == vf and s[2] == af and T == 0.0):
+        return _velocity(s, vf, af, limits)
+    if af == 0.0:
+        first = _velocity(s, vf, 0.0, limits)
+        tmin = first.duration
+        if T < tmin * (1.0 - DURATION_RTOL):
             raise InfeasibleError(
                 f"duration {T!r} s{axis_label(limits.name)} is below the minimum duration "
-                f"{tmin!r} s to reach velocity {vf!r}",
-                minimum=tmin,
-            )
-        main = _velocity_fixed(s1, vf, af, L, T - tb)
-        if main is None:
-            raise InfeasibleError(
-                f"no velocity profile of duration {T!r} s{axis_label(limits.name)} "
-                f"reaches velocity {vf!r}, acceleration {af!r} within the limits",
-                minimum=tmin,
-            )
-        fam = "velocity-fixed"
-    else:
-        fam = "velocity"
-    pe, ve, ae = K.integrate(main, *s1)
-    goal = (pe, vf, af)
-    why = K.verify(main, *s1, L, goal)
-    if why is not None:  # pragma: no cover
-        raise InfeasibleError(f"internal: velocity profile failed verification: {why}")
-    prof = StateProfile(s, goal, list(brake) + list(main), tmin, len(brake), fam, limits)
-    _check_range(prof, limits)
-    return prof
+                f"{tmin!r} s to reach velocity {vf!r}", minimum=tmin)
+        ph = first.phases() + [(max(T - tmin, 0.0), 0.0, vf * 0.0)]
+        return _velocity_profile(s, ph, tmin, first.n_brake_phases, "velocity fixed", limits,
+                                 vf, 0.0)
+    # cruise at vc, then one ramp of the acceleration into (vf, af), at the smaller
+    # jerk limit of both legs (valid whichever leg the ramp lies in)
+    jm = min(limits.j_max, limits.j_max_decel)
+    k = 0.0 if jm == math.inf else 1.0 / jm
+    direct = _velocity(s, vf, af, limits)
+    vc = vf - af * abs(af) * k / 2.0
+    first = _velocity(s, vc, 0.0, limits)
+    ramp = [] if k == 0.0 else [(abs(af) * k, math.copysign(1.0 / k, af), 0.0)]
+    t_fixed = first.duration + sum(r[0] for r in ramp)
+    if T < direct.duration * (1.0 - DURATION_RTOL):
+        raise InfeasibleError(
+            f"duration {T!r} s{axis_label(limits.name)} is below the minimum duration "
+            f"{direct.duration!r} s to reach velocity {vf!r}, acceleration {af!r}",
+            minimum=direct.duration)
+    if T < t_fixed:
+        raise InfeasibleError(
+            f"no velocity profile of duration {T!r} s{axis_label(limits.name)} cruises at "
+            f"{vc!r} before ramping into acceleration {af!r} (it needs {t_fixed!r} s)",
+            minimum=t_fixed)
+    ph = first.phases() + [(T - t_fixed, 0.0, 0.0)] + ramp
+    return _velocity_profile(s, ph, direct.duration, first.n_brake_phases, "velocity fixed",
+                             limits, vf, af)
 
 
-def _velocity_fixed(s1, vf, af, L, T):
-    """Bump to a cruise velocity, hold, bump to ``(vf, af)``: exactly ``T``."""
-    _, v0, a0 = s1
-    Am, vn0, vnf = K.natural_scale(s1, (0.0, vf, af), L)
-    V = L[0]
-    tries = [vnf, vf, vn0, v0]
-    w = max(abs(v0), abs(vf), abs(vn0), abs(vnf), K.TINY)
-    lo, hi = (-V, V) if V != math.inf else (-2 * w, 2 * w)
-    tries += sorted(K._grid(lo, hi, []), key=lambda x: abs(x - vnf))
-    for vc in tries:
-        if V != math.inf and abs(vc) > V:
-            continue
-        b1 = K.bump(v0, a0, vc, 0.0, L)
-        b2 = K.bump(vc, 0.0, vf, af, L)
-        if b1 is None or b2 is None:
-            continue
-        tc = T - K.total_time(b1) - K.total_time(b2)
-        if tc < 0.0:
-            continue
-        ph = b1 + [(tc, 0.0, 0.0)] + b2
-        if K.verify(ph, *s1, L, (0.0, vf, af), check_goal=False) is None:
-            return ph
-    return None
+def _velocity(s, vf, af, limits) -> StateProfile:
+    if s[1] == vf and s[2] == af:
+        return StateProfile(s, s, [], 0.0, 0, "none", limits)
+    g = (math.nan, vf, af)
+    ws = _run(s, g, limits, K.TASK_VELOCITY)
+    if int(ws[K.OUT_STATUS]) != K.ST_OK:
+        _fail(ws, s, (None, vf, af), limits, "to the velocity")
+    n = int(ws[K.OUT_N])
+    flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()
+    return _velocity_profile(s, list(zip(flat[0::3], flat[1::3], flat[2::3])),
+                             float(ws[K.OUT_TMIN]), int(ws[K.OUT_NB]),
+                             _family(ws[K.OUT_SHAPE]), limits, vf, af)
+
+
+def _velocity_profile(s, phases, tmin, nb, family, limits, vf, af) -> StateProfile:
+    m = JerkMotion(s, [p[0] for p in phases], [p[1] for p in phases], [p[2] for p in phases])
+    prof = StateProfile(s, (m.end_state[0], vf, af), phases, tmin, nb, family, limits)
+    return _check_range(prof, limits)

@@ -14,7 +14,8 @@ from .._sampling import MAX_SAMPLES, period_times
 from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import RobotModel
 from ..limits import AxisLimits
-from ..trajectory import Trajectory, plan_ptp
+from ..sync import plan_ptp
+from ..trajectory import Trajectory
 from ._cartesian import SLOWDOWN_RTOL, VEL_USE, CartesianChain, Slowdown, plan_chain
 from ._rotations import quat_from_matrix
 from .motion import Circ, JointTarget, Lin, Ptp, Wait

@@ -1,41 +1,69 @@
-"""Closed-form minimum-time brake of one axis from a moving state to rest.
+"""Minimum-time brake of one axis from a moving state to rest (the controlled stop).
 
-The kernel behind the controlled stop: from ``(p0, v0, a0)`` the axis
-reaches ``v = a = 0`` as fast as its limits allow. Limit semantics follow
+The runtime's stop uses the one state-to-state kernel of
+:mod:`trajkit.profiles` (velocity interface, goal ``v = a = 0``, position
+free) with the velocity limit left out: a brake only lowers ``|v|``, so an
+overspeeding axis is stopped straight away. Limit semantics follow
 :class:`~trajkit.limits.AxisLimits`: while ``|v|`` grows (``v*a > 0``) the
 accel leg (``a_max``, ``j_max``) applies, while it shrinks the decel leg
-(``a_max_decel``, ``j_max_decel``). The velocity limit plays no part (a
-brake only lowers ``|v|``), so an overspeeding axis can be stopped too.
-
-Cases (``v0 >= 0`` after mirroring):
-
-1. ``a0 > 0``: ramp the acceleration to 0 at ``-j_max`` (accel leg).
-2. ``a0 < -a_max_decel`` (a state beyond the limit): ramp up to
-   ``-a_max_decel`` at ``+j_max_decel``.
-3. From ``a = -a1`` (``0 <= a1 <= a_max_decel``): ramp down to ``-ap`` at
-   ``-j_max_decel``, hold ``-ap`` (only when ``ap = a_max_decel``), ramp back
-   to 0 at ``+j_max_decel``; ``ap`` from the velocity left,
-   ``(2 ap^2 - a1^2) / (2 J) + ap t_hold = v``.
-4. Reversal: when even ramping straight back to ``a = 0`` removes more than
-   the velocity left (``v < a1^2 / (2 j_max_decel)``), the axis must pass
-   through zero velocity: ramp up to ``+ap`` at ``min(j_max, j_max_decel)``
-   and back to 0 at ``-j_max_decel``. This case uses the smaller jerk for
-   the whole rising ramp, so it is feasible but may be slightly slower than
-   the true minimum.
+(``a_max_decel``, ``j_max_decel``), including the exact leg change when the
+velocity passes through zero (a reversal). An acceleration beyond its limit
+is first brought back within it (the brake pre-phase of the kernel).
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from typing import Any
 
-import numpy as np
-
+from .._validate import check_finite
 from ..limits import AxisLimits
-from ..profiles._pieces import eval_pieces
-from ..profiles.profile import ProfileSample
+from ..profiles import _kernel as K
+from ..profiles._compile import ENABLED as _COMPILED
+from ..profiles._phase import phase_end
+from ..profiles.motion import JerkMotion
 
-__all__ = ["BrakeProfile", "brake_phases", "brake_profile"]
+__all__ = ["BrakeProfile", "brake_phases", "brake_profile", "stop_position"]
+
+_local = threading.local()
+
+
+def _stop_table(v0: float, a0: float, a_max: float, j_max: float, a_dec: float,
+                j_dec: float, with_nb: bool = False):
+    """Phases ``[(dt, j, a_start), ...]`` of the minimum-time stop (kernel);
+    with ``with_nb`` also the number of its brake pre-phases (an acceleration
+    beyond its limit brought back first)."""
+    if v0 == 0.0 and a0 == 0.0:
+        return ([], 0) if with_nb else []
+    ws = getattr(_local, "ws", None)
+    if ws is None:
+        ws = _local.ws = K.workspace()
+    ws[0] = 0.0
+    ws[1] = v0
+    ws[2] = a0
+    ws[3] = math.nan
+    ws[4] = 0.0
+    ws[5] = 0.0
+    ws[6] = math.inf
+    ws[7] = a_max
+    ws[8] = j_max
+    ws[9] = a_dec
+    ws[10] = j_dec
+    ws[K.IN_TASK] = K.TASK_VELOCITY
+    if _COMPILED:
+        K.solve(ws)
+    else:
+        import numpy as np
+
+        with np.errstate(all="ignore"):
+            K.solve(ws)
+    if int(ws[K.OUT_STATUS]) != K.ST_OK:  # pragma: no cover - the stop always exists
+        raise ArithmeticError(f"internal: no stop from velocity {v0!r}, acceleration {a0!r}")
+    n = int(ws[K.OUT_N])
+    flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()
+    out = list(zip(flat[0::3], flat[1::3], flat[2::3]))
+    return (out, int(ws[K.OUT_NB])) if with_nb else out
 
 
 def brake_phases(v0: float, a0: float, a_max: float, j_max: float,
@@ -54,125 +82,48 @@ def brake_phases(v0: float, a0: float, a_max: float, j_max: float,
     Returns
     -------
     list of (float, float)
-        Constant-jerk phases; empty when already at rest.
+        Constant-jerk phases; empty when already at rest. (With an infinite
+        jerk limit the acceleration jumps between phases: use
+        :func:`brake_profile`, whose table carries the start accelerations.)
     """
-    sgn = -1.0 if (v0 < 0.0 or (v0 == 0.0 and a0 < 0.0)) else 1.0
-    v, a = sgn * v0, sgn * a0
-    out: list[tuple[float, float]] = []
-    if v == 0.0 and a == 0.0:
-        return out
-    if a > 0.0:  # case 1: still speeding up
-        if math.isfinite(j_max):
-            t = a / j_max
-            out.append((t, -j_max))
-            v += 0.5 * a * t
-        a = 0.0
-    if a < -a_dec:  # case 2: beyond the decel limit
-        if math.isfinite(j_dec):
-            t = (-a_dec - a) / j_dec
-            out.append((t, j_dec))
-            v += t * (a + 0.5 * j_dec * t)
-        a = -a_dec
-    a1 = -a
-    if math.isinf(j_dec):  # trapezoidal: the acceleration jumps to -a_dec
-        out.append((v / a_dec, 0.0))
-        return [(dt, sgn * j) for dt, j in out if dt > 0.0]
-    back = a1 * a1 / (2.0 * j_dec)
-    if v >= back:  # case 3
-        full = (2.0 * a_dec * a_dec - a1 * a1) / (2.0 * j_dec) if math.isfinite(a_dec) else math.inf
-        if v >= full:
-            ap = a_dec
-            th = (v - full) / a_dec
-        else:
-            ap = math.sqrt(max(j_dec * v + 0.5 * a1 * a1, a1 * a1))
-            th = 0.0
-        out.append(((ap - a1) / j_dec, -j_dec))
-        out.append((th, 0.0))
-        out.append((ap / j_dec, j_dec))
-    else:  # case 4: reversal through zero velocity
-        j1 = min(j_max, j_dec)
-        ap = math.sqrt((a1 * a1 / j1 - 2.0 * v) / (1.0 / j1 + 1.0 / j_dec))
-        out.append(((ap + a1) / j1, j1))
-        out.append((ap / j_dec, -j_dec))
-    return [(dt, sgn * j) for dt, j in out if dt > 0.0]
+    return [(dt, j) for dt, j, _ in _stop_table(v0, a0, a_max, j_max, a_dec, j_dec)]
 
 
-def _integrate(phases, p, v, a):
-    for dt, j in phases:
-        p = p + dt * (v + dt * (0.5 * a + dt * j / 6.0))
-        v = v + dt * (a + 0.5 * dt * j)
-        a = a + dt * j
-    return p, v, a
-
-
-class BrakeProfile:
+class BrakeProfile(JerkMotion):
     """Minimum-time brake of one axis to rest (see :func:`brake_profile`).
+
+    A :class:`~trajkit.profiles.motion.JerkMotion` from the start state to
+    ``(stop_position, 0, 0)``; after the end it rests there.
 
     Attributes
     ----------
     start_state : tuple of 3 float
         ``(p0 [unit], v0 [unit/s], a0 [unit/s^2])``.
-    phase_durations, jerks : tuple of float
-        The constant-jerk phases [s], [unit/s^3].
+    phase_durations, jerks, phase_accelerations : tuple of float
+        The constant-jerk phases [s], [unit/s^3], [unit/s^2].
     duration : float
         Time to rest [s].
     stop_position : float
         Where the axis comes to rest [unit].
+    limits : AxisLimits or None
+        The limits it was planned for (checked by :func:`trajkit.verify.verify_motion`).
+    n_brake_phases : int
+        Leading phases that bring an acceleration beyond its limit back
+        within it (exempt from the limits, as in a StateProfile).
     """
 
-    __slots__ = (
-        "_A",
-        "_J",
-        "_P",
-        "_V",
-        "_tb",
-        "duration",
-        "jerks",
-        "phase_durations",
-        "start_state",
-        "stop_position",
-    )
+    __slots__ = ("stop_position", "limits", "n_brake_phases")
 
-    def __init__(self, start_state, phases):
-        p, v, a = (float(x) for x in start_state)
-        self.start_state = (p, v, a)
-        self.phase_durations = tuple(float(d) for d, _ in phases)
-        self.jerks = tuple(float(j) for _, j in phases)
-        n = len(phases)
-        self._tb = np.zeros(n + 1)
-        self._P, self._V, self._A = np.empty(n), np.empty(n), np.empty(n)
-        self._J = np.array(self.jerks, dtype=float)
-        t = 0.0
-        for k, (dt, j) in enumerate(phases):
-            self._tb[k] = t
-            self._P[k], self._V[k], self._A[k] = p, v, a
-            p, v, a = _integrate([(dt, j)], p, v, a)
-            t += dt
-        self._tb[n] = t
-        self.duration = t
-        self.stop_position = p
-
-    def sample(self, t: Any) -> ProfileSample:
-        """Exact state at times ``t`` [s] (array_like, shape (n,)); rest after the end.
-
-        Before 0 the start state is returned.
-        """
-        tt = np.asarray(t, dtype=np.float64)
-        n = self._J.size
-        if n == 0:
-            p0, v0, a0 = self.start_state
-            z = np.zeros_like(tt)
-            return ProfileSample(z + p0, z + v0 * (tt < 0), z + a0 * (tt < 0), z)
-        tc = np.clip(tt, 0.0, self.duration)
-        pos, vel, acc, j = eval_pieces(tc, self._tb, self._P, self._V, self._A, self._J)
-        after = tt >= self.duration
-        before = tt < 0.0
-        p0, v0, a0 = self.start_state
-        pos = np.where(after, self.stop_position, np.where(before, p0, pos))
-        vel = np.where(after, 0.0, np.where(before, v0, vel))
-        acc = np.where(after, 0.0, np.where(before, a0, acc))
-        jer = np.where(after | before, 0.0, j)
-        return ProfileSample(pos, vel, acc, jer)
+    def __init__(self, start_state: Any, phases: Any, limits: AxisLimits | None = None,
+                 n_brake_phases: int = 0) -> None:
+        ph = [tuple(p) for p in phases]
+        acc = [p[2] for p in ph] if ph and len(ph[0]) > 2 else None
+        m = JerkMotion(start_state, [p[0] for p in ph], [p[1] for p in ph], acc)
+        super().__init__(start_state, m.phase_durations, m.jerks, m.phase_accelerations,
+                         (m.end_state[0], 0.0, 0.0))
+        self.stop_position = self.end_state[0]
+        self.limits = limits
+        self.n_brake_phases = int(n_brake_phases)
 
     def __repr__(self) -> str:
         return (f"BrakeProfile(start_state={self.start_state!r}, duration={self.duration!r}, "
@@ -204,18 +155,20 @@ def brake_profile(position: float, velocity: float, acceleration: float,
     InvalidInputError
         A non-finite state value (the message names the field and the axis).
     """
-    from .._validate import check_finite
-
     p = check_finite(position, "position", limits.name)
     v = check_finite(velocity, "velocity", limits.name)
     a = check_finite(acceleration, "acceleration", limits.name)
-    ph = brake_phases(v, a, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel)
-    return BrakeProfile((p, v, a), ph)
+    ph, nb = _stop_table(v, a, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel,
+                         with_nb=True)
+    return BrakeProfile((p, v, a), ph, limits, nb)
 
 
 def stop_position(position: float, velocity: float, acceleration: float,
                   limits: AxisLimits) -> float:
     """Where the minimum-time brake from this state ends [unit] (no validation)."""
-    ph = brake_phases(velocity, acceleration, limits.a_max, limits.j_max,
-                      limits.a_max_decel, limits.j_max_decel)
-    return _integrate(ph, position, velocity, acceleration)[0]
+    ph = _stop_table(velocity, acceleration, limits.a_max, limits.j_max,
+                     limits.a_max_decel, limits.j_max_decel)
+    p, v = position, velocity
+    for dt, j, a in ph:
+        p, v, _ = phase_end(p, v, a, j, dt)
+    return p

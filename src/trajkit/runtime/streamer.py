@@ -83,9 +83,10 @@ from typing import Any
 import numpy as np
 
 from .._validate import check_finite, check_positive
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, TrajkitError
 from ..limits import AxisLimits
-from ._brake import BrakeProfile, brake_phases
+from ..sync import plan_ptp, plan_ptp_states
+from ._brake import brake_profile
 from .pulses import PulseAxis, check_pulse_equivalents, pulse_count
 from .safety import Monitors, RuntimeFault, SafetyConfig
 from .servo import ServoBank, ServoParams
@@ -577,7 +578,7 @@ class Streamer:
         self.tau = 0.0
         self.s = 0.0
         self.sd = 0.0
-        self._mode = "hold"  # hold | path | brake | detour
+        self._mode = "hold"  # hold | path | brake | detour | target
         self._stop_kind = None  # None | "command" | "fault"
         self._path_stop = False
         self._q = src.start_position.copy()
@@ -586,6 +587,7 @@ class Streamer:
         self._blk = None
         self._brake = None
         self._detour = None
+        self._online = None
         self._stops = list(src.stop_points) if self.wait_in_position else []
         self._settle = 0
         self._waiting = False
@@ -598,6 +600,27 @@ class Streamer:
                 f"override changes are proven up to rate {self.rate_ceiling:.4g} only (the program "
                 "leaves no slack at full rate: plan it with override_limits); above it the rate "
                 "changes at the program's stop points", )
+
+    @classmethod
+    def hold_at(cls, position: Any, period: float, limits: Sequence[AxisLimits],
+                **kwargs: Any) -> "Streamer":
+        """A streamer whose program is to stand still at ``position``: for online
+        targets only (:meth:`set_target`; e.g. a jog without a loaded job).
+
+        Parameters
+        ----------
+        position : array_like, shape (n_axes,)
+            Where the axes are [unit].
+        period : float
+            Control period [s].
+        limits : sequence of AxisLimits
+            One per axis (the targets are planned and monitored with these).
+        **kwargs
+            Further :class:`Streamer` options (``servo``, ``pulse_equivalents``, ...).
+        """
+        q = np.asarray(position, dtype=float)
+        lims = list(limits)
+        return cls(plan_ptp(q, q, lims), period, limits=lims, **kwargs)
 
     # ================================================================ commands
     def _push(self, *cmd) -> None:
@@ -640,6 +663,65 @@ class Streamer:
     def reset(self) -> None:
         """Acknowledge a fault (fault -> reset -> idle)."""
         self._push("reset")
+
+    def set_target(self, position: Any, velocity: Any = None, acceleration: Any = None, *,
+                   sync: str = "time") -> None:
+        """Move to a goal state now, re-planning from the commanded state (online target).
+
+        Applied at the start of the next cycle: the axes leave the current
+        commanded state ``(position, velocity, acceleration)`` -- whatever
+        they were doing (a program, a previous target, at rest) -- on a
+        time-optimal, jerk-limited motion between states
+        (:func:`trajkit.sync.plan_ptp_states`, under :attr:`limits`), and the
+        setpoint of that same cycle is already on it. Call it again at any
+        time (e.g. at every jog tick) to change the goal while moving.
+
+        Parameters
+        ----------
+        position : array_like, shape (n_axes,)
+            Goal positions [unit].
+        velocity, acceleration : array_like, shape (n_axes,), optional
+            Goal velocities [unit/s] and accelerations [unit/s^2] (default 0:
+            the axes stop at the goal). With a goal velocity the axes go on at
+            it after arriving (the goal acceleration continued), until the
+            next target or a stop.
+        sync : {"time", "none"}
+            ``"time"``: all axes arrive together; ``"none"``: each as fast as
+            it can.
+
+        Raises
+        ------
+        InvalidInputError
+            A malformed goal (shape, NaN/inf) or an unknown ``sync``; a goal
+            the limits cannot reach or a position outside an axis' range is
+            refused when the command is applied (event ``rejected``, the
+            motion goes on unchanged).
+
+        Notes
+        -----
+        In state ``running`` (a program on its path, a target) or ``idle``;
+        ``stop()`` brakes every axis to rest as for a program, ``estop()``
+        clears the output. After a target the program does not continue by
+        itself: ``start()`` returns to its path (re-entry move) and resumes it.
+        """
+        n = self.n_axes
+        goal = np.zeros((n, 3))
+        for col, value, field in ((0, position, "position"), (1, velocity, "velocity"),
+                                  (2, acceleration, "acceleration")):
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=float) if not isinstance(value, np.ndarray) else value
+            try:
+                arr = np.broadcast_to(np.asarray(arr, dtype=float), (n,))
+            except (TypeError, ValueError):
+                raise InvalidInputError(
+                    f"target {field} must have {n} entries (one per axis), got {value!r}") from None
+            if not np.all(np.isfinite(arr)):
+                raise InvalidInputError(f"target {field} must be finite, got {arr.tolist()}")
+            goal[:, col] = arr
+        if sync not in ("time", "none"):
+            raise InvalidInputError(f"target sync must be 'time' or 'none', got {sync!r}")
+        self._push("target", goal, sync)
 
     def inject_encoder_jump(self, axis: int, delta: float) -> None:
         """Fault injection: the measured position of ``axis`` jumps by ``delta`` [unit]."""
@@ -697,6 +779,8 @@ class Streamer:
             self.paused = False
             self._begin_motion()
             self._event("start", f"start at program time {self.tau:.6g} s")
+        elif kind == "pause" and self._mode == "target":
+            self._event("rejected", "pause rejected while moving to a target (use stop)")
         elif kind == "pause":
             if self.state == "running" and not self.paused:
                 self.paused = True
@@ -715,6 +799,8 @@ class Streamer:
             if self.state in ("running", "stopping", "idle"):
                 f = RuntimeFault("all", "emergency stop", 0.0, 0.0, self.cycle, self.t)
                 self._emergency(f)
+        elif kind == "target":
+            self._apply_target(cmd[1], cmd[2])
         elif kind == "reset":
             if self.state == "fault":
                 self.state = "reset"
@@ -731,12 +817,29 @@ class Streamer:
             else:
                 self._event("rejected", f"reset rejected in state {self.state}")
 
+    def _apply_target(self, goal: np.ndarray, sync: str) -> None:
+        """Re-plan from the commanded state to ``goal`` (see :meth:`set_target`)."""
+        if self.state not in ("idle", "running") or self._mode == "brake":
+            self._event("rejected", f"target rejected in state {self.state}")
+            return
+        start = np.column_stack([self._q, self._v, self._a])
+        try:
+            traj = plan_ptp_states(start, goal, self.limits, sync=sync)
+        except TrajkitError as err:
+            self._event("rejected", f"target rejected: {err}")
+            return
+        self._online = (traj, 0)
+        self._mode = "target"
+        self._blk = None
+        self._path_stop = False
+        self.paused = False
+        self.state = "running"
+        self._event("target", f"target {goal[:, 0].tolist()} in {traj.duration:.6g} s")
+
     def _begin_motion(self) -> None:
         qp, qdp, _ = self.source.sample(self.tau)
         off = np.abs(qp[0] - self._q)
         if np.any(off > REENTRY_ATOL * np.maximum(1.0, np.abs(qp[0]))):
-            from ..trajectory import plan_ptp
-
             lims = [AxisLimits(lm.v_max, lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel,
                                name=lm.name) for lm in self.limits]
             self._detour = (plan_ptp(self._q, qp[0], lims), 0)
@@ -765,8 +868,7 @@ class Streamer:
         profs = []
         for k in range(n):
             lm = self.limits[k]
-            ph = brake_phases(self._v[k], self._a[k], lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel)
-            profs.append(BrakeProfile((self._q[k], self._v[k], self._a[k]), ph))
+            profs.append(brake_profile(self._q[k], self._v[k], self._a[k], lm))
         T = max(p.duration for p in profs)
         m = int(math.ceil(T / self.period - 1e-12)) + 1
         tt = np.arange(1, m + 1) * self.period
@@ -777,6 +879,7 @@ class Streamer:
             s = p.sample(tt)
             Q[:, k], V[:, k], A[:, k] = s.position, s.velocity, s.acceleration
         self._brake = (profs, Q, V, A, 0)
+        self._online = None
         self._mode = "brake"
         self._blk = None
 
@@ -787,6 +890,7 @@ class Streamer:
         self._a = np.zeros(self.n_axes)
         self._brake = None
         self._detour = None
+        self._online = None
         self.s = self.sd = 0.0
         self._path_stop = False
         self.paused = False
@@ -932,6 +1036,11 @@ class Streamer:
             profs, Q, V, A, i = self._brake
             q, v, a = Q[i], V[i], A[i]
             self._brake = (profs, Q, V, A, i + 1)
+        elif mode == "target":
+            traj, i = self._online
+            smp = traj.sample(np.array([(i + 1) * self.period]))
+            q, v, a = smp.position[0], smp.velocity[0], smp.acceleration[0]
+            self._online = (traj, i + 1)
         elif mode == "detour":
             traj, i = self._detour
             smp = traj.sample(np.array([(i + 1) * self.period]))
@@ -941,7 +1050,7 @@ class Streamer:
             q, v, a = self._q, self._v, self._a
         # ---- monitors (on the candidate, before it is output)
         counts = None
-        if self.state in ("running", "stopping") and mode in ("path", "detour", "brake"):
+        if self.state in ("running", "stopping") and mode in ("path", "detour", "brake", "target"):
             chk = self.monitors.check(q, v, a, measured if self.state == "running" else None)
             if chk is None and self.pulse_axes is not None and self.state == "running":
                 counts = [math.floor(x / e + 0.5) for x, e in zip(q.tolist(), self._peq)]
@@ -981,6 +1090,19 @@ class Streamer:
             self._path_bookkeeping(q, measured, tau_out)
         elif self._mode == "brake" and self._brake is not None and self._brake[4] >= self._brake[1].shape[0]:
             self._at_rest_after_stop()
+        elif self._mode == "target" and self._online is not None:
+            traj, i = self._online
+            if i * self.period >= traj.duration:
+                gs = traj.goal_states
+                if not np.any(gs[:, 1:]):
+                    # at rest on the target: hold there
+                    q = gs[:, 0].copy()
+                    v = np.zeros(n)
+                    a = np.zeros(n)
+                    self._online = None
+                    self._mode = "hold"
+                    self.state = "idle"
+                    self._event("target_reached", f"at rest on the target {q.tolist()}")
         elif self._mode == "detour" and self._detour is not None:
             traj, i = self._detour
             if i * self.period >= traj.duration:

@@ -1,4 +1,13 @@
-"""Scalar kernels for profiles between arbitrary states (one axis).
+"""The retired one-parameter scan kernel, kept as an independent reference.
+
+This is the state-to-state kernel trajkit shipped before the closed-form
+shape enumeration (``trajkit.profiles._shapes``) replaced it: profile
+families scanned on grids with root refinement. It lives on only here, in
+plain Python, as the asymmetric-limits oracle of the tests (the new planner
+must never be slower than it by more than 1e-9). Text below is its original
+documentation.
+
+Scalar kernels for profiles between arbitrary states (one axis).
 
 Pure-float code; validation happens in :mod:`trajkit.profiles.state`.
 
@@ -45,7 +54,7 @@ from __future__ import annotations
 import math
 import sys
 
-from .._constants import GOAL_RTOL, LIMIT_RTOL
+from trajkit._constants import GOAL_RTOL, LIMIT_RTOL
 
 _inf = math.inf
 _sqrt = math.sqrt
@@ -664,11 +673,8 @@ def f2_hold_residual(am, T, p0, v0, a0, pf, vf, af, A1, J1, A2, J2, first_is_ram
 
 
 def _jit_kernels():
-    """The compiled residuals of :mod:`._state_jit`, or ``None`` (no numba,
-    or ``TRAJKIT_NO_JIT`` set): checked on every call."""
-    from . import _state_jit
-
-    return _state_jit.kernels() if _state_jit.enabled() else None
+    """The oracle runs in plain Python (its compiled variant was retired)."""
+    return None
 
 
 def _scan(jk, kind, grid, P, edge_steps=EDGE_BISECT, near=False):

@@ -1,0 +1,176 @@
+"""Compiled loops over the one-axis kernel: many moves, and many synchronised axes.
+
+* :func:`solve_many` plans N independent moves between states (minimum time,
+  or each a requested duration) in one call, in parallel over the cores
+  (``numba.prange`` over chunks, one workspace per chunk).
+* :func:`sync_time` plans the axes of one multi-axis move in time
+  synchronisation (ruckig's scheme): step 1 with the blocked intervals on
+  every axis, the common duration (the largest minimum, moved past every
+  blocked interval), step 2 on every axis that is not at its own minimum.
+
+Both run the same :func:`._kernel.solve` as the one-axis planner; inputs are
+rows ``(p0, v0, a0, pf, vf, af, v_max, a_max, j_max, a_max_decel,
+j_max_decel)``, validated by the caller.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import _kernel as K
+from ._brake import inside
+from ._compile import jit, jit_parallel, prange
+from ._shapes import NPH
+
+__all__ = ["NIN", "NBLK", "ST_GOAL", "solve_many", "sync_time", "NPH"]
+
+NBLK = K.NBLK
+
+#: Columns of an input row.
+NIN = 11
+
+#: Status (beyond the kernel's): the goal state cannot be reached within the limits.
+ST_GOAL = 9
+
+#: Rounds of moving the common duration past blocked intervals.
+SYNC_MAX_ROUNDS = 16
+
+#: Moves per chunk of the parallel loop (one workspace each).
+CHUNK = 64
+
+
+@jit
+def _goal_ok(vf, af, V, A1, J1, A2, J2):
+    """Whether the goal (v, a) can be reached: leaving (v, -a) backwards in time,
+    legs swapped, is inside the limits."""
+    K1 = 1.0 / J1 if J1 < math.inf else 0.0
+    K2 = 1.0 / J2 if J2 < math.inf else 0.0
+    return inside(vf, -af, V, A2, K2, A1, K1)
+
+
+@jit
+def _load(ws, row, task, T):
+    for k in range(NIN):
+        ws[k] = row[k]
+    ws[K.IN_TASK] = task
+    ws[K.IN_T] = T
+
+
+@jit
+def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
+    st = int(ws[K.OUT_STATUS])
+    status[i] = st
+    tmin[i] = ws[K.OUT_TMIN]
+    n = int(ws[K.OUT_N]) if st == K.ST_OK else 0
+    nph[i] = n
+    nbr[i] = int(ws[K.OUT_NB])
+    shape[i] = ws[K.OUT_SHAPE]
+    # the duration is the sum of the phases, compensated (as ``math.fsum`` in
+    # the one-axis planner)
+    tot = 0.0
+    comp = 0.0
+    for k in range(n):
+        d = ws[K.OUT_PH + 3 * k]
+        ph[i, k, 0] = d
+        ph[i, k, 1] = ws[K.OUT_PH + 3 * k + 1]
+        ph[i, k, 2] = ws[K.OUT_PH + 3 * k + 2]
+        t = tot + d
+        if abs(tot) >= abs(d):
+            comp += (tot - t) + d
+        else:
+            comp += (d - t) + tot
+        tot = t
+    dur[i] = tot + comp if st == K.ST_OK else ws[K.OUT_T]
+
+
+@jit_parallel
+def solve_many(inp, T, status, dur, tmin, nph, nbr, shape, ph):
+    """Plan every row of ``inp``: minimum time where ``T[i]`` is NaN, else exactly
+    ``T[i]``. Fills the output arrays (``ph``: ``(N, NPH, 3)`` phase tables)."""
+    n = inp.shape[0]
+    nchunk = (n + CHUNK - 1) // CHUNK
+    for c in prange(nchunk):
+        ws = np.zeros(K.NWS)
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            row = inp[i]
+            if not _goal_ok(row[4], row[5], row[6], row[7], row[8], row[9], row[10]):
+                status[i] = ST_GOAL
+                nph[i] = 0
+                dur[i] = math.nan
+                tmin[i] = math.nan
+                continue
+            Ti = T[i]
+            if Ti == Ti:
+                _load(ws, row, K.TASK_FIXED, Ti)
+            else:
+                _load(ws, row, K.TASK_MIN, 0.0)
+            K.solve(ws)
+            _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
+
+
+@jit
+def sync_time(inp, Treq, status, dur, tmin, nph, nbr, shape, ph, blk, nblk):
+    """Time-synchronised plan of the axes in ``inp`` (rows as in :func:`solve_many`).
+
+    ``Treq``: the requested common duration, NaN for the minimum. Returns
+    ``(code, T)``: code 0 and the common duration when every axis is planned
+    (outputs filled per axis), else a negative code (-1: an axis' step 1
+    failed, see ``status``; -2: the requested duration is below the
+    synchronised minimum; -3: it lies in a blocked interval of an axis; -4:
+    step 2 failed on an axis, which the caller plans again in Python) and the
+    axis index in ``T``'s place.
+    """
+    n = inp.shape[0]
+    ws = np.zeros(K.NWS)
+    # step 1 on every axis, with its blocked intervals
+    for i in range(n):
+        row = inp[i]
+        if not _goal_ok(row[4], row[5], row[6], row[7], row[8], row[9], row[10]):
+            status[i] = ST_GOAL
+            return -1, float(i)
+        _load(ws, row, K.TASK_BLOCK, 0.0)
+        K.solve(ws)
+        _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
+        if status[i] != K.ST_OK:
+            return -1, float(i)
+        nb = int(ws[K.OUT_NBLK])
+        nblk[i] = nb
+        for b in range(nb):
+            blk[i, b, 0] = ws[K.OUT_BLK + 2 * b]
+            blk[i, b, 1] = ws[K.OUT_BLK + 2 * b + 1]
+    T = 0.0
+    for i in range(n):
+        T = max(T, tmin[i])
+    if Treq == Treq:
+        if Treq < T * (1.0 - K.DURATION_RTOL):
+            return -2, T
+        for i in range(n):
+            for b in range(nblk[i]):
+                if blk[i, b, 0] < Treq < blk[i, b, 1]:
+                    return -3, float(i)
+        T = max(Treq, T)
+    else:
+        # the smallest duration feasible for every axis
+        for _ in range(SYNC_MAX_ROUNDS):
+            T2 = T
+            for i in range(n):
+                for b in range(nblk[i]):
+                    if blk[i, b, 0] < T2 < blk[i, b, 1]:
+                        T2 = blk[i, b, 1]
+            if T2 == T:
+                break
+            T = T2
+    # step 2 on every axis not at its own minimum
+    for i in range(n):
+        if T <= tmin[i] * (1.0 + K.DURATION_RTOL):
+            continue
+        row = inp[i]
+        _load(ws, row, K.TASK_STEP2, T)
+        ws[K.OUT_TMIN] = tmin[i]
+        K.solve(ws)
+        _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
+        if status[i] != K.ST_OK:
+            return -4, float(i)
+    return 0, T

@@ -1,0 +1,187 @@
+"""Exact check of a candidate profile (kernel side).
+
+A candidate is a table ``ph[k] = (duration, jerk, start acceleration)``. The
+check integrates it from the start state with :func:`._phase.phase_end`,
+cuts every phase at the zeros of the acceleration (velocity extrema) and of
+the velocity (the leg changes there), and checks on every piece, at its
+ends:
+
+* ``|v| <= v_max``;
+* while ``|v|`` grows (``v a > 0``): ``|a| <= a_max``, ``|j| <= j_max``;
+  while it shrinks (``v a < 0``): ``a_max_decel``, ``j_max_decel``;
+* an acceleration jump only where the jerk limit of the leg is infinite;
+* the end state equals the goal.
+
+Limits are in the kernel's form: ``L = (V, A1, K1, A2, K2)`` with
+``K = 1/j_max`` (0 for an infinite jerk limit).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ._compile import jit
+from ._phase import phase_end
+
+__all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "clean"]
+
+#: Relative tolerance of every limit in the kernel check (ten times tighter
+#: than :data:`trajkit._constants.LIMIT_RTOL` of the public verifier).
+LIMIT_RTOL = 1e-10
+
+#: Relative tolerance of the end state (position relative to the distance
+#: travelled, velocity relative to the velocity change along the path,
+#: acceleration relative to its scale).
+GOAL_RTOL = 1e-10
+
+#: Pieces whose |v| and |a| stay below this fraction of their scales have
+#: no meaningful leg (v a is round-off): they take the larger of both legs'
+#: bounds (as the public verifier does).
+SLIVER_RTOL = 1e-9
+
+#: Negative phase durations above ``-ZERO_T * duration`` are round-off of a
+#: phase that is absent and are set to zero.
+ZERO_T = 1e-12
+
+
+@jit
+def clean(ph, n):
+    """Zero round-off negative durations; False when a duration is really negative."""
+    tot = 0.0
+    for k in range(n):
+        tot += abs(ph[k, 0])
+    for k in range(n):
+        d = ph[k, 0]
+        if not (d >= 0.0):
+            if d >= -ZERO_T * tot:
+                ph[k, 0] = 0.0
+            else:
+                return False
+        elif d > 1e300:
+            return False
+    return True
+
+
+@jit
+def _leg(v, a, A1, K1, A2, K2):
+    """(a bound, 1/jerk bound) of the leg in force at (v, a); speeding up at v = 0."""
+    if v * a < 0.0:
+        return A2, K2
+    return A1, K1
+
+
+@jit
+def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
+    """True when the candidate keeps every limit and ends at the goal state."""
+    # scales (for slivers and the end-state tolerances)
+    # (round-off of the end state accumulates along the path: the velocity
+    # change and the distance travelled, summed over the phases)
+    T = 0.0
+    vsc = max(abs(v0), abs(vf))
+    asc = max(abs(a0), abs(af))
+    dv_path = 0.0
+    dp_path = 0.0
+    p = p0
+    v = v0
+    for k in range(n):
+        dt = ph[k, 0]
+        j = ph[k, 1]
+        a = ph[k, 2]
+        asc = max(asc, abs(a))
+        vb = abs(v)
+        p, v, ae = phase_end(p, v, a, j, dt)
+        vsc = max(vsc, abs(v))
+        asc = max(asc, abs(ae))
+        da = max(abs(a), abs(ae)) * dt
+        dv_path += da
+        dp_path += (max(vb, abs(v)) + da) * dt
+        T += dt
+    if not (T < 1e300):
+        return False
+    vsc = max(vsc, 1e-300)
+    asc = max(asc, 1e-300)
+    p = p0
+    v = v0
+    a_prev = a0
+    for k in range(n):
+        dt = ph[k, 0]
+        j = ph[k, 1]
+        a = ph[k, 2]
+        if a != a_prev and abs(a - a_prev) > 1e-12 * asc:
+            # an acceleration jump: only within legs whose jerk limit is infinite
+            if not (K1 == 0.0 and K2 == 0.0):
+                if a * a_prev < 0.0 and v != 0.0:
+                    return False
+                if a_prev != 0.0 and _leg(v, a_prev, A1, K1, A2, K2)[1] != 0.0:
+                    return False
+                if a != 0.0 and _leg(v, a, A1, K1, A2, K2)[1] != 0.0:
+                    return False
+        if dt > 0.0:
+            # cut points: a = 0 and v = 0 inside the phase
+            c0 = dt
+            c1 = dt
+            c2 = dt
+            if j != 0.0:
+                ta = -a / j
+                if 0.0 < ta < dt:
+                    c0 = ta
+                disc = a * a - 2.0 * j * v
+                if disc >= 0.0:
+                    sq = math.sqrt(disc)
+                    q = -(a + math.copysign(sq, a)) if a != 0.0 else sq
+                    if q != 0.0:
+                        r1 = q / j
+                        r2 = 2.0 * v / q
+                        if 0.0 < r1 < dt:
+                            c1 = r1
+                        if 0.0 < r2 < dt:
+                            c2 = r2
+            elif a != 0.0:
+                tv = -v / a
+                if 0.0 < tv < dt:
+                    c1 = tv
+            # sort the three cuts
+            if c0 > c1:
+                c0, c1 = c1, c0
+            if c1 > c2:
+                c1, c2 = c2, c1
+            if c0 > c1:
+                c0, c1 = c1, c0
+            t_prev = 0.0
+            for cut in (c0, c1, c2, dt):
+                if cut <= t_prev:
+                    continue
+                # the piece (t_prev, cut): its leg from its midpoint
+                tm = 0.5 * (t_prev + cut)
+                _, vm, am = phase_end(p, v, a, j, tm)
+                _, vb, ab = phase_end(p, v, a, j, cut)
+                _, va, aa = phase_end(p, v, a, j, t_prev)
+                if abs(vb) > V * (1.0 + LIMIT_RTOL):
+                    return False
+                if abs(vm) <= SLIVER_RTOL * vsc or abs(am) <= SLIVER_RTOL * asc:
+                    Am = max(A1, A2)
+                    Km = min(K1, K2)
+                elif vm * am < 0.0:
+                    Am = A2
+                    Km = K2
+                else:
+                    Am = A1
+                    Km = K1
+                if abs(ab) > Am * (1.0 + LIMIT_RTOL) or abs(aa) > Am * (1.0 + LIMIT_RTOL):
+                    return False
+                if j != 0.0 and abs(j) * Km > 1.0 + LIMIT_RTOL:
+                    return False
+                t_prev = cut
+        elif abs(v) > V * (1.0 + LIMIT_RTOL):
+            return False
+        p, v, a_prev = phase_end(p, v, a, j, dt)
+    # end state (an acceleration jump onto the goal is a zero-length phase)
+    if pf == pf:  # a NaN goal position: the position is free (velocity interface)
+        psc = max(abs(pf - p0), dp_path, 1e-300)
+        if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
+            return False
+    if abs(v - vf) > GOAL_RTOL * max(vsc, dv_path):
+        return False
+    if abs(a_prev - af) > GOAL_RTOL * asc:
+        return False
+    return True

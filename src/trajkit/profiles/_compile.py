@@ -1,0 +1,115 @@
+"""One switch for the compiled kernels: numba when it is installed, else plain Python.
+
+Kernel modules decorate their scalar functions with :func:`jit`. With numba
+(``pip install trajkit[fast]``) and without ``TRAJKIT_NO_JIT`` in the
+environment, every decorated function is compiled on first use (IEEE
+arithmetic, no fast-math; the machine code is cached on disk next to the
+sources); otherwise the same source runs as Python. There is one source:
+the tests run both paths and compare them to a few ulps.
+
+numba keys a cached function by its own source file only, but a compiled
+caller contains its callees from other files; here the cache of every
+kernel function is keyed by all kernel sources together, so editing any of
+them recompiles every kernel (no stale machine code).
+"""
+
+from __future__ import annotations
+
+import os
+import types
+
+try:  # pragma: no cover - depends on the install
+    import numba
+except ImportError:  # pragma: no cover
+    numba = None
+
+__all__ = ["ENABLED", "KERNEL_MODULES", "compiled_twins", "jit", "jit_parallel", "prange"]
+
+#: True when the decorated kernels are compiled by numba.
+ENABLED = numba is not None and os.environ.get("TRAJKIT_NO_JIT", "") in ("", "0")
+
+#: Source files of the compiled kernels (next to this file).
+KERNEL_MODULES = ("_phase.py", "_roots.py", "_check.py", "_brake.py", "_shapes.py", "_kernel.py",
+                  "_batch_states.py", "_scalar.py", "_jit.py")
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+_FILES = tuple(os.path.join(_HERE, f) for f in KERNEL_MODULES)
+
+
+def _install_cache_locator() -> None:  # pragma: no cover - depends on numba internals
+    """Key the disk cache of the kernels by every kernel source (see the module text)."""
+    try:
+        from numba.core import caching
+    except ImportError:
+        return
+
+    class _KernelLocator(caching.InTreeCacheLocator):
+        def get_source_stamp(self):
+            out = []
+            for p in _FILES:
+                try:
+                    st = os.stat(p)
+                except OSError:
+                    continue
+                out.append((os.path.basename(p), st.st_mtime, st.st_size))
+            return tuple(out)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if os.path.abspath(py_file) not in _FILES:
+                return None
+            return super().from_function(py_func, py_file)
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    classes = getattr(impl, "_locator_classes", None)
+    if isinstance(classes, list) and not any(c.__name__ == "_KernelLocator" for c in classes):
+        classes.insert(0, _KernelLocator)
+
+
+if ENABLED:
+    _install_cache_locator()
+
+
+def jit(fn):
+    """Compile ``fn`` with ``numba.njit`` (cached, no fast-math, numpy's float
+    error model: a division by zero gives inf/nan as in the Python path, where
+    the kernels run on numpy floats) when :data:`ENABLED`."""
+    if not ENABLED:
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def jit_parallel(fn):
+    """:func:`jit` with numba's ``parallel=True`` (loops over :func:`prange`
+    run on every core); plain Python when not :data:`ENABLED`."""
+    if not ENABLED:
+        return fn
+    return numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")(fn)
+
+
+#: ``numba.prange`` when :data:`ENABLED`, else ``range``.
+prange = numba.prange if ENABLED else range
+
+
+def compiled_twins(namespace: dict, names) -> dict:
+    """Compiled twins of plain-Python functions that call each other.
+
+    ``namespace`` is a module's globals, ``names`` the functions to compile.
+    Each twin is the same code object with its globals pointing to the other
+    twins, so compiled calls stay compiled while Python callers keep the plain
+    functions (a call into compiled code costs more than these few
+    operations). Returns ``{name: twin}`` (the plain functions when not
+    :data:`ENABLED`).
+    """
+    if not ENABLED:
+        return {n: namespace[n] for n in names}
+    g = dict(namespace)
+    out = {}
+    for n in names:
+        f = namespace[n]
+        twin = types.FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__)
+        twin.__module__ = f.__module__
+        twin.__qualname__ = f.__qualname__
+        out[n] = numba.njit(cache=True, nogil=True, error_model="numpy")(twin)
+    g.update(out)  # compiled lazily: every call between twins resolves to a twin
+    return out

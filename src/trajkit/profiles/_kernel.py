@@ -1,0 +1,412 @@
+"""Entry point of the one-axis state-to-state kernel: one flat workspace array.
+
+The public planners (:mod:`trajkit.profiles.state`) write the problem into a
+float64 workspace (:func:`workspace`), call :func:`solve` once (one numba
+dispatch) and read the result back. Layout (indices are module constants):
+
+``IN_*``
+    start state, goal state (a NaN goal position: velocity interface), the
+    limits ``v_max, a_max, j_max, a_max_decel, j_max_decel`` (``inf`` allowed
+    where :class:`~trajkit.limits.AxisLimits` allows it), the task and the
+    requested duration.
+``OUT_*``
+    status, duration, minimum duration, phase count, brake phase count, the
+    blocked intervals and the phase table ``(duration, jerk, start
+    acceleration)`` in the caller's units.
+
+Inside, the problem is scaled by powers of two (exact) so that the
+reference jerk and acceleration are of order one, positions are taken
+relative to the start, the brake (:mod:`._brake`) brings the start state
+inside the limits, and step 1 (:mod:`._shapes`) / step 2 (:mod:`._step2`)
+plan the rest.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._brake import (
+    brake_bump,
+    brake_hold,
+    brake_natural,
+    brake_path,
+    brake_ruckig,
+    forced_speed,
+    inside,
+    peak_speed,
+)
+from ._compile import jit
+from ._phase import phase_end
+from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
+
+__all__ = [
+    "NWS", "workspace", "solve",
+    "TASK_MIN", "TASK_BLOCK", "TASK_FIXED", "TASK_VELOCITY", "TASK_STEP2",
+    "ST_OK", "ST_NONE", "ST_BRAKE", "ST_BLOCKED", "ST_SHORT",
+]
+
+# tasks
+TASK_MIN = 0       # minimum time
+TASK_BLOCK = 1     # minimum time and the blocked intervals
+TASK_FIXED = 2     # exactly IN_T
+TASK_VELOCITY = 3  # velocity interface, minimum time
+TASK_STEP2 = 4     # exactly IN_T, step 1 already done: its minimum duration in OUT_TMIN
+
+# status
+ST_OK = 0
+ST_NONE = 1      # no profile found (a gap of the shape set: reported, never silent)
+ST_BRAKE = 2     # the start state cannot be brought inside the limits
+ST_BLOCKED = 3   # the requested duration lies in a blocked interval
+ST_SHORT = 4     # the requested duration is below the minimum
+
+#: Largest number of blocked intervals reported.
+NBLK = 4
+
+#: Brake candidates (see :mod:`._brake`).
+NCAND = 7
+
+#: A brake end state within this fraction of the brake's velocity (and
+#: acceleration) scale outside the limits is round-off and is moved onto them.
+BRAKE_SNAP_RTOL = 1e-9
+
+#: Valid step-1 durations closer than this (relative) are one profile.
+BLOCK_MERGE_RTOL = 1e-10
+
+#: A requested duration within this (relative) of the minimum is the minimum.
+DURATION_RTOL = 1e-12
+
+# layout
+IN_P0, IN_V0, IN_A0, IN_PF, IN_VF, IN_AF = 0, 1, 2, 3, 4, 5
+IN_V, IN_A1, IN_J1, IN_A2, IN_J2 = 6, 7, 8, 9, 10
+IN_TASK, IN_T = 11, 12
+OUT_STATUS, OUT_T, OUT_TMIN, OUT_N, OUT_NB, OUT_NBLK, OUT_SHAPE = 13, 14, 15, 16, 17, 18, 19
+OUT_BLK = 20
+OUT_PH = OUT_BLK + 2 * NBLK
+_W = OUT_PH + 3 * NPH           # W: 5 x NPH x 3
+_VEC = _W + 5 * NPH * 3         # vec: 19 x 16 (values, coefficients, roots, 16 x 16 scratch)
+_IVL = _VEC + 19 * 16           # ivl: 8 x 2
+_CFG = _IVL + 16
+_ST = _CFG + NCFG
+_BEST = _ST + 7
+_RES = _BEST + 3 * NPH
+_LIM = _RES + R_V0 + NVALID
+_ST0 = _LIM + 5
+_BRK = _ST0 + 7
+_S1 = _BRK + 3 * 16
+_BBUF = _S1 + 7
+_KEEP = _BBUF + 96
+_VALID = _KEEP + 3 * NPH
+_TS = _VALID + NVALID
+NWS = _TS + 1
+
+
+def workspace() -> np.ndarray:
+    """A new workspace array for :func:`solve`."""
+    return np.zeros(NWS)
+
+
+@jit
+def _pow2(x):
+    """The power of two nearest to ``x > 0`` (in log scale)."""
+    if not (x > 0.0) or not (x < math.inf):
+        return 1.0
+    e = math.floor(math.log2(x) + 0.5)
+    e = min(max(e, -1000.0), 1000.0)
+    return 2.0 ** e
+
+
+@jit
+def _scales(ws):
+    """(time, length) scales, powers of two, so that the reference jerk and
+    acceleration (or velocity) are about one."""
+    V = ws[IN_V]
+    A = min(ws[IN_A1], ws[IN_A2])
+    J = min(ws[IN_J1], ws[IN_J2])
+    if J < math.inf and A < math.inf:
+        ts = A / J
+        ls = A * ts * ts
+    elif J < math.inf and V < math.inf:
+        ts = math.sqrt(V / J)
+        ls = V * ts
+    elif A < math.inf and V < math.inf:
+        ts = V / A
+        ls = V * ts
+    elif A < math.inf:
+        d = abs(ws[IN_PF] - ws[IN_P0]) if ws[IN_PF] == ws[IN_PF] else 0.0
+        ls = max(d, ws[IN_V0] * ws[IN_V0] / A, ws[IN_VF] * ws[IN_VF] / A, 1e-300)
+        ts = math.sqrt(ls / A)
+    else:
+        d = abs(ws[IN_PF] - ws[IN_P0]) if ws[IN_PF] == ws[IN_PF] else 0.0
+        ls = max(d, 1e-300)
+        ts = (ls / J) ** (1.0 / 3.0)
+    ts = _pow2(ts)
+    ls = _pow2(ls)
+    return ts, ls
+
+
+@jit
+def solve(ws):
+    """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
+    task = int(ws[IN_TASK])
+    tmin_in = ws[OUT_TMIN]
+    ts, ls = _scales(ws)
+    ws[_TS] = ts
+    vs = ls / ts
+    as_ = vs / ts
+    js = as_ / ts
+    lim = ws[_LIM:_LIM + 5]
+    lim[0] = ws[IN_V] / vs
+    lim[1] = ws[IN_A1] / as_
+    lim[2] = js / ws[IN_J1] if ws[IN_J1] < math.inf else 0.0
+    lim[3] = ws[IN_A2] / as_
+    lim[4] = js / ws[IN_J2] if ws[IN_J2] < math.inf else 0.0
+    st0 = ws[_ST0:_ST0 + 7]
+    st0[0] = 0.0
+    st0[1] = ws[IN_V0] / vs
+    st0[2] = ws[IN_A0] / as_
+    if task == TASK_VELOCITY:
+        st0[3] = math.nan
+    else:
+        st0[3] = (ws[IN_PF] - ws[IN_P0]) / ls
+    st0[4] = ws[IN_VF] / vs
+    st0[5] = ws[IN_AF] / as_
+    st0[6] = math.nan
+    if not (lim[0] < math.inf):
+        # no velocity limit: a finite one far above any velocity the motion can use
+        # (the shapes need a bounded parameter interval)
+        am = max(lim[1], lim[3]) if max(lim[1], lim[3]) < math.inf else 1.0
+        km = max(lim[2], lim[4])
+        d = abs(st0[3]) if st0[3] == st0[3] else 0.0
+        lim[0] = 8.0 * (abs(st0[1]) + abs(st0[4]) + math.sqrt(am * d) + am * am * km
+                        + abs(st0[2]) * abs(st0[2]) * km + abs(st0[5]) * abs(st0[5]) * km) + 1.0
+    W = ws[_W:_W + 5 * NPH * 3].reshape((5, NPH, 3))
+    vec = ws[_VEC:_VEC + 19 * 16].reshape((19, 16))
+    ivl = ws[_IVL:_IVL + 16].reshape((8, 2))
+    cfg = ws[_CFG:_CFG + NCFG]
+    st = ws[_ST:_ST + 7]
+    best = ws[_BEST:_BEST + 3 * NPH].reshape((NPH, 3))
+    res = ws[_RES:_RES + R_V0 + NVALID]
+    brk = ws[_BRK:_BRK + 48].reshape((16, 3))
+    out = ws[OUT_PH:OUT_PH + 3 * NPH].reshape((NPH, 3))
+    ws[OUT_STATUS] = ST_OK
+    ws[OUT_N] = 0.0
+    ws[OUT_NB] = 0.0
+    ws[OUT_NBLK] = 0.0
+    # ---- the brake pre-phase (candidates) and step 1 from where each ends
+    s1 = ws[_S1:_S1 + 7]
+    bbuf = ws[_BBUF:_BBUF + 96]
+    keep = ws[_KEEP:_KEEP + 3 * NPH].reshape((NPH, 3))
+    valid = ws[_VALID:_VALID + NVALID]
+    start_inside = inside(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4])
+    if task == TASK_STEP2:
+        T = ws[IN_T] / ts
+        tmin = tmin_in / ts
+        if T > tmin * (1.0 + DURATION_RTOL):
+            _step2(ws, T, tmin, 0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+                   ivl, cfg, st, keep, out, ts, js, as_)
+            return
+        task = TASK_FIXED  # the minimum itself: plan it
+    best_total = math.inf
+    nb_best = 0
+    n_best = 0
+    nvalid = 0
+    res[R_ALL] = 1.0 if (task == TASK_BLOCK or task == TASK_FIXED) else 0.0
+    # the goal is the start: the empty profile (duration 0) is the fastest
+    trivial = (task != TASK_VELOCITY and start_inside and st0[3] == 0.0
+               and st0[1] == st0[4] and st0[2] == st0[5])
+    ncand = NCAND
+    if trivial:
+        # (the valid set of the loop still bounds the blocked durations)
+        ncand = 1 if (task == TASK_BLOCK or task == TASK_FIXED) else 0
+    for cand in range(ncand):
+        nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
+        if nb < 0:
+            continue
+        s1[6] = math.nan
+        step1(s1, lim, best, res, W, vec, ivl, cfg, st)
+        if not (res[R_T] < math.inf):
+            continue
+        n = int(res[R_N])
+        if nb + n > NPH or not (tb + res[R_T] < best_total):
+            continue
+        best_total = tb + res[R_T]
+        ws[OUT_SHAPE] = res[R_SHAPE]
+        nb_best = nb
+        n_best = n
+        nvalid = int(res[R_NV])
+        for k in range(nvalid):
+            valid[k] = res[R_V0 + k] + tb
+        _copy_rows(keep, 0, brk, nb)
+        _copy_rows(keep, nb, best, n)
+    if trivial:
+        # (a moving start reaches itself again only after a loop: the
+        # durations in between are blocked, see _blocks)
+        valid[nvalid] = 0.0
+        nvalid += 1
+        best_total = 0.0
+        nb_best = 0
+        n_best = 0
+        ws[OUT_SHAPE] = 0.0
+    if not (best_total < math.inf):
+        ws[OUT_STATUS] = ST_NONE if start_inside else ST_BRAKE
+        return
+    _emit(ws, out, keep, nb_best + n_best, nb_best, best_total, best_total, ts, js, as_)
+    if task == TASK_MIN or task == TASK_VELOCITY:
+        return
+    nblk = _blocks(valid, nvalid, best_total, ws)
+    if task == TASK_BLOCK:
+        return
+    # ---- step 2: exactly T (brake included)
+    T = ws[IN_T] / ts
+    if T < best_total * (1.0 - DURATION_RTOL):
+        ws[OUT_STATUS] = ST_SHORT
+        return
+    if T <= best_total * (1.0 + DURATION_RTOL):
+        return
+    _step2(ws, T, best_total, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+           ivl, cfg, st, keep, out, ts, js, as_)
+
+
+@jit
+def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl,
+           cfg, st, keep, out, ts, js, as_):
+    """Step 2: a profile of exactly ``T`` (normalised; brake included)."""
+    for cand in range(NCAND):
+        nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
+        if nb < 0 or not (T - tb > 0.0):
+            continue
+        s1[6] = T - tb
+        res[R_ALL] = 0.0
+        step1(s1, lim, best, res, W, vec, ivl, cfg, st)
+        if not (res[R_T] < math.inf):
+            continue
+        n = int(res[R_N])
+        if nb + n > NPH:
+            continue
+        _copy_rows(keep, 0, brk, nb)
+        _copy_rows(keep, nb, best, n)
+        _emit(ws, out, keep, nb + n, nb, tb + res[R_T], tmin, ts, js, as_)
+        ws[OUT_SHAPE] = res[R_SHAPE] + 32
+        return
+    ws[OUT_STATUS] = ST_NONE
+    for b in range(nblk):
+        if ws[OUT_BLK + 2 * b] / ts < T < ws[OUT_BLK + 2 * b + 1] / ts:
+            ws[OUT_STATUS] = ST_BLOCKED
+
+
+@jit
+def _copy_rows(dst, n0, src, m):
+    for k in range(m):
+        dst[n0 + k, 0] = src[k, 0]
+        dst[n0 + k, 1] = src[k, 1]
+        dst[n0 + k, 2] = src[k, 2]
+
+
+@jit
+def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
+    for k in range(n):
+        out[k, 0] = keep[k, 0] * ts
+        out[k, 1] = keep[k, 1] * js
+        out[k, 2] = keep[k, 2] * as_
+    ws[OUT_N] = n
+    ws[OUT_NB] = nb
+    ws[OUT_T] = total * ts
+    ws[OUT_TMIN] = tmin * ts
+
+
+@jit
+def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
+    """Brake candidate ``cand`` (0, 1: paths; 2, 3: bumps to +-v_max; 4: natural;
+    5: hold; 6: ruckig's rule; only 0 = none when the start is inside): (phase count or -1, duration); ``s1[:6]`` gets the
+    problem from its end."""
+    if start_inside:
+        if cand > 0:
+            return -1, 0.0
+        nb = 0
+    elif cand < 2:
+        nb = brake_path(1.0 if cand == 0 else -1.0, st0[1], st0[2], lim[0], lim[1], lim[2],
+                        lim[3], lim[4], brk, bbuf[:78])
+    elif cand < 4:
+        nb = brake_bump(lim[0] if cand == 2 else -lim[0], st0[1], st0[2], lim[0], lim[1],
+                        lim[2], lim[3], lim[4], brk, bbuf)
+    elif cand == 4:
+        nb = brake_natural(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
+    elif cand == 5:
+        nb = brake_hold(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
+    else:
+        nb = brake_ruckig(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
+    if nb < 0:
+        return -1, 0.0
+    # a brake exceeds the velocity limit no more than the start state forces
+    if nb > 0 and peak_speed(brk, nb, st0[1], st0[2]) > forced_speed(
+            st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4]) * (1.0 + BRAKE_SNAP_RTOL):
+        return -1, 0.0
+    p = 0.0
+    v = st0[1]
+    a = st0[2]
+    tb = 0.0
+    vsc = abs(v)
+    asc = abs(a)
+    for k in range(nb):
+        p, v, a = phase_end(p, v, brk[k, 2], brk[k, 1], brk[k, 0])
+        tb += brk[k, 0]
+        vsc = max(vsc, abs(v))
+        asc = max(asc, abs(a), abs(brk[k, 2]))
+    if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
+        # the brake ends on the boundary of the inside set; its end state carries
+        # the round-off of the brake's own velocity and acceleration scale
+        if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
+            v = lim[0] if v > 0.0 else -lim[0]
+        am = max(lim[1], lim[3])
+        if abs(a) > am and abs(a) - am <= BRAKE_SNAP_RTOL * asc:
+            a = am if a > 0.0 else -am
+        if abs(a) <= BRAKE_SNAP_RTOL * asc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
+                                                            lim[4]):
+            a = 0.0
+        if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
+            return -1, 0.0
+    s1[0] = p
+    s1[1] = v
+    s1[2] = a
+    s1[3] = st0[3]
+    s1[4] = st0[4]
+    s1[5] = st0[5]
+    return nb, tb
+
+
+@jit
+def _blocks(valid, nvalid, tmin, ws):
+    """Blocked intervals from the durations of the valid step-1 profiles.
+
+    Between moving states the feasible durations are ``[t_min, inf)`` minus
+    intervals whose ends are durations of valid profiles (ruckig's *block*):
+    with ``t_min < t1 < t2 < ...`` (equal durations merged), the blocked
+    intervals are ``(t1, t2)``, ``(t3, t4)``. An even count means that the
+    minimum is an isolated feasible duration (a degenerate profile, e.g. a
+    pure cruise at ``v_max``, whose neighbours merged with it): the intervals
+    are then ``(t_min, t1)``, ``(t2, t3)``.
+    """
+    # sort, merge equal durations
+    for i in range(1, nvalid):
+        x = valid[i]
+        k = i - 1
+        while k >= 0 and valid[k] > x:
+            valid[k + 1] = valid[k]
+            k -= 1
+        valid[k + 1] = x
+    m = 0
+    for i in range(nvalid):
+        if m == 0 or valid[i] - valid[m - 1] > BLOCK_MERGE_RTOL * max(valid[i], 1e-300):
+            valid[m] = valid[i]
+            m += 1
+    nblk = 0
+    i = 1 if m % 2 == 1 else 0
+    while i + 1 < m and nblk < NBLK:
+        ws[OUT_BLK + 2 * nblk] = valid[i] * ws[_TS]
+        ws[OUT_BLK + 2 * nblk + 1] = valid[i + 1] * ws[_TS]
+        nblk += 1
+        i += 2
+    ws[OUT_NBLK] = nblk
+    return nblk

@@ -1,0 +1,1 @@
+"""The retired scan kernel: an independent reference for asymmetric limits."""

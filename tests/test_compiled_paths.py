@@ -1,0 +1,99 @@
+"""One source, two paths: the compiled kernels (numba) and the pure-Python
+fallback (``TRAJKIT_NO_JIT=1``) give the same results to a few ulps.
+
+The Python path runs in a subprocess (the switch is read at import). Floats
+from the two paths are compared in ulps, never bit for bit: libm and numpy's
+SIMD ``pow``/``cbrt`` differ by an ulp on some machines, and a root polished
+from a slightly different start may land an ulp away.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from floatcmp import assert_ulp_close
+
+from trajkit.profiles import _compile
+
+ROOT = Path(__file__).resolve().parents[1]
+
+pytestmark = [pytest.mark.skipif(not _compile.ENABLED, reason="numba is not installed (one path only)"),
+              pytest.mark.codepaths]
+
+#: Durations of the two paths agree to this many ulps.
+DURATION_ULPS = 64
+
+_SCRIPT = textwrap.dedent("""
+    import json, sys
+    import numpy as np
+    sys.path.insert(0, {tests!r})
+    from state_reference import random_brake_case, random_case
+    from trajkit import AxisLimits
+    from trajkit.profiles.state import feasible_durations, plan_state_to_state, plan_velocity
+    from trajkit.runtime._brake import brake_profile
+    rng = np.random.default_rng(4242)
+    out = []
+    for i in range({n}):
+        kind = i % 4
+        if kind == 3:
+            s, g, L = random_brake_case(rng, symmetric=bool(i % 8 == 3))
+        else:
+            s, g, L = random_case(rng, symmetric=bool(kind == 0))
+        lim = AxisLimits(*L)
+        p = plan_state_to_state(s, g, lim)
+        fd = feasible_durations(s, g, lim)
+        T = p.duration * 1.3 + 1e-3
+        try:
+            q = plan_state_to_state(s, g, lim, duration=T).duration
+        except Exception as e:
+            q = type(e).__name__
+        vel = plan_velocity(s, g[1], g[2], limits=lim).duration
+        b = brake_profile(s[0], s[1], s[2], lim).duration
+        out.append(dict(d=p.duration, fam=p.family, ph=list(p.phase_durations),
+                        jk=list(p.jerks), tmin=fd.minimum, blk=[list(x) for x in fd.blocked],
+                        fixed=q, vel=vel, brake=b))
+    print(json.dumps(out))
+""")
+
+
+def _run(n, no_jit):
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    if no_jit:
+        env["TRAJKIT_NO_JIT"] = "1"
+    else:
+        env.pop("TRAJKIT_NO_JIT", None)
+    code = _SCRIPT.format(tests=str(ROOT / "tests"), n=n)
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                       timeout=1800)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout)
+
+
+def test_state_planner_numba_equals_python():
+    n = 160
+    fast = _run(n, no_jit=False)
+    slow = _run(n, no_jit=True)
+    same_family = 0
+    for i, (a, b) in enumerate(zip(fast, slow)):
+        for key in ("d", "tmin", "vel", "brake"):
+            assert_ulp_close(a[key], b[key], DURATION_ULPS, err_msg=f"case {i} {key}")
+        if isinstance(a["fixed"], str) or isinstance(b["fixed"], str):
+            assert a["fixed"] == b["fixed"], (i, a["fixed"], b["fixed"])
+        else:
+            assert_ulp_close(a["fixed"], b["fixed"], DURATION_ULPS, err_msg=f"case {i} fixed")
+        assert len(a["blk"]) == len(b["blk"]), (i, a["blk"], b["blk"])
+        for x, y in zip(a["blk"], b["blk"]):
+            np.testing.assert_allclose(x, y, rtol=1e-12)
+        if a["fam"] == b["fam"] and len(a["ph"]) == len(b["ph"]):
+            same_family += 1
+            # the phase tables of the same shape agree to round-off of the shape parameter
+            np.testing.assert_allclose(a["ph"], b["ph"], rtol=1e-9, atol=1e-12 * a["d"])
+            assert a["jk"] == b["jk"]
+    assert same_family >= 0.95 * n

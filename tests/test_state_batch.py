@@ -1,0 +1,145 @@
+"""Many state-to-state moves in one call, and the compiled multi-axis synchronisation.
+
+* ``plan_state_moves`` gives move by move what ``plan_state_to_state`` gives
+  (durations to a few ulps, the same phase tables), including brake starts,
+  fixed durations and asymmetric limits; errors name the first bad move.
+* ``plan_ptp_states`` (compiled time synchronisation) gives what the
+  per-axis Python path gives: the same common duration, every axis verified.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from floatcmp import assert_ulp_close
+from state_reference import random_brake_case, random_case
+
+from trajkit import AxisLimits, plan_ptp_states, plan_state_moves
+from trajkit.errors import InfeasibleError, InvalidInputError
+from trajkit.profiles.state import feasible_durations, plan_state_to_state
+from trajkit.sync import states as sync_states
+from trajkit.verify import verify_state_profile, verify_trajectory
+
+#: Compares two code paths (see floatcmp); CI runs it again with numpy SIMD off.
+pytestmark = pytest.mark.codepaths
+
+
+def _cases(rng, n):
+    out = []
+    for i in range(n):
+        if i % 5 == 4:
+            out.append(random_brake_case(rng, symmetric=bool(i % 2)))
+        else:
+            out.append(random_case(rng, symmetric=bool(i % 2)))
+    return out
+
+
+def test_batch_equals_one_by_one():
+    rng = np.random.default_rng(8)
+    cs = _cases(rng, 300)
+    S = np.array([c[0] for c in cs])
+    G = np.array([c[1] for c in cs])
+    L = np.array([c[2] for c in cs])
+    b = plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2], L[:, 3], L[:, 4])
+    assert len(b) == len(cs)
+    for i, (s, g, Lc) in enumerate(cs):
+        p = plan_state_to_state(s, g, AxisLimits(*Lc))
+        assert_ulp_close(b.duration[i], p.duration, 4, err_msg=f"move {i}")
+        q = b.profile(i)
+        assert q.phase_durations == p.phase_durations
+        assert q.jerks == p.jerks
+        assert q.n_brake_phases == p.n_brake_phases
+        assert q.family == p.family
+        if i % 10 == 0:
+            assert verify_state_profile(q).ok
+
+
+def test_batch_fixed_durations():
+    rng = np.random.default_rng(9)
+    cs = [random_case(rng, symmetric=True) for _ in range(100)]
+    cs = [c for c in cs if c[0] != c[1]]
+    lims = [AxisLimits(*c[2]) for c in cs]
+    T = np.array([feasible_durations(c[0], c[1], lim).next_feasible(
+        1.5 * plan_state_to_state(c[0], c[1], lim).duration) for c, lim in zip(cs, lims)])
+    T[::7] = np.nan  # the minimum for these
+    S = np.array([c[0] for c in cs])
+    G = np.array([c[1] for c in cs])
+    L = np.array([c[2] for c in cs])
+    b = plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2], durations=T)
+    for i, (c, lim) in enumerate(zip(cs, lims)):
+        p = plan_state_to_state(c[0], c[1], lim, duration=None if np.isnan(T[i]) else T[i])
+        assert_ulp_close(b.duration[i], p.duration, 4, err_msg=f"move {i}")
+        assert b.profile(i).phase_durations == p.phase_durations
+
+
+def test_batch_errors_name_the_move():
+    S = np.zeros((3, 3))
+    G = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 5.0, 0.0]])  # |vf| > v_max
+    with pytest.raises(InvalidInputError, match=r"goals\[2\]"):
+        plan_state_moves(S, G, 1.0, 1.0, 1.0)
+    with pytest.raises(InvalidInputError, match="shape"):
+        plan_state_moves(np.zeros((3, 2)), np.zeros((3, 2)), 1.0, 1.0, 1.0)
+    with pytest.raises(InvalidInputError, match=r"v_max\[1\]"):
+        plan_state_moves(S, S, [1.0, -1.0, 1.0], 1.0, 1.0)
+    with pytest.raises(InvalidInputError, match="outside the supported range"):
+        plan_state_moves(S, S, 1e-40, 1.0, 1.0)
+    G[2, 1] = 0.0
+    with pytest.raises(InfeasibleError, match=r"durations\[1\]"):
+        plan_state_moves(S, G, 1.0, 1.0, 1.0, durations=[5.0, 0.1, 5.0])
+
+
+def test_compiled_sync_equals_the_python_path(monkeypatch):
+    rng = np.random.default_rng(10)
+    trajs = []
+    for _ in range(40):
+        cs = [random_case(rng, symmetric=True) for _ in range(4)]
+        S = [c[0] for c in cs]
+        G = [c[1] for c in cs]
+        lims = [AxisLimits(*c[2]) for c in cs]
+        trajs.append((S, G, lims, plan_ptp_states(S, G, lims)))
+    monkeypatch.setattr(sync_states, "_sync_time_compiled", lambda *a: None)
+    for S, G, lims, fast in trajs:
+        slow = plan_ptp_states(S, G, lims)
+        assert_ulp_close(fast.duration, slow.duration, 4)
+        assert verify_trajectory(fast).ok
+        for a, b in zip(fast.axes, slow.axes):
+            assert_ulp_close(a.duration, b.duration, 4)
+            assert a.goal_state == b.goal_state
+
+
+def test_compiled_sync_requested_duration_and_errors():
+    lim = AxisLimits(1.0, 1.0, 1.0)
+    S = [(0.0, 0.5, 0.0), (0.0, 0.0, 0.0)]
+    G = [(0.5, 0.5, 0.0), (0.01, 0.0, 0.0)]
+    t = plan_ptp_states(S, G, lim)
+    assert verify_trajectory(t).ok
+    t2 = plan_ptp_states(S, G, lim, duration=t.duration * 2 + 3.0)
+    assert t2.duration == pytest.approx(t.duration * 2 + 3.0, rel=1e-12)
+    with pytest.raises(InfeasibleError, match="below the minimum"):
+        plan_ptp_states(S, G, lim, duration=0.5 * t.duration)
+    # axis 0 has a blocked interval (1.078 s, 3.350 s): a duration inside it is refused
+    with pytest.raises(InfeasibleError, match="blocked interval"):
+        plan_ptp_states(S, G, lim, duration=2.0)
+
+
+def test_sync_moves_on_when_step2_finds_no_profile(caplog):
+    """Asymmetric limits with a reversal: step 2 of axis 1 finds no profile of
+    the minimum common duration (12.71 s, a gap of the step-2 families); the
+    common duration moves up to one every axis fills, with a warning."""
+    cs = [((-1.9931397937526203, 3.3691646428468474, -0.30036739222919967),
+           (-1.9931397937526203, -2.987883453134689, -0.4685450086222319),
+           (7.126955178120614, 0.6404324503828689, 1.152414829166557, 0.5285527758909313,
+            0.2824226894294262)),
+          ((0.6027210000646839, 2.6293109379055264, 0.41655084856356034),
+           (26.20601643993708, -1.1333807935320261, 0.19487237139788888),
+           (2.8011353116475397, 0.7896102423721866, 1.2070748106516003, 2.570995917319238,
+            4.988926877759679))]
+    S = [c[0] for c in cs]
+    G = [c[1] for c in cs]
+    lims = [AxisLimits(*c[2]) for c in cs]
+    with caplog.at_level("WARNING", logger="trajkit.sync"):
+        t = plan_ptp_states(S, G, lims)
+    assert verify_trajectory(t).ok
+    mins = [feasible_durations(s, g, lim).minimum for s, g, lim in zip(S, G, lims)]
+    assert t.duration >= max(mins)
+    assert "step 2 found no profile" in caplog.text
