@@ -108,7 +108,8 @@ def arm_suite(name: str):
     y = np.array([0.0, 1.0, 0.0])
     out.append(("LIN 0.8 m lateral", q0, [lin(at(0.4 * y))], at(-0.4 * y)))
     out.append(("LIN 0.16 m short", q0, [lin(at([0.0, 0.15, 0.05]))], None))
-    out.append(("LIN with 90 + 30 deg turn", q0, [lin(at([0.05, 0.25, 0.0], rot_z(math.pi / 2) @ rot_x(math.pi / 6)))], None))
+    turn = rot_z(math.pi / 2) @ rot_x(math.pi / 6)
+    out.append(("LIN with 90 + 30 deg turn", q0, [lin(at([0.05, 0.25, 0.0], turn))], None))
     radial = pos * np.array([1.0, 1.0, 0.0])
     out.append(("LIN radial toward reach", q0, [lin(at(0.12 * radial / np.linalg.norm(radial)))], None))
     out.append(("CIRC half circle", q0, [Circ(CartesianTarget(at([0.15, 0.15, 0.0])),
@@ -161,9 +162,7 @@ def run_arms(quick: bool):
         for label, q0, mots, first in suite[: 2 if quick else None]:
             if first is not None:  # move to the start of the line first (not timed)
                 q0 = rob.ik_near(first, q0)
-            t0 = time.perf_counter()
             run = run_motions(rob, mots, q0)
-            plan_s = time.perf_counter() - t0
             chains = [sg.chain for sg in run.segments if sg.kind == "CP"]
             for ch in chains:
                 tm = ch.timing
@@ -228,7 +227,7 @@ def run_waypoints(quick: bool):
     rng = np.random.default_rng(2026)
     lims = [AxisLimits(2.0, 10.0, 100.0) for _ in range(6)]
     rows = []
-    for k in range(2 if quick else 8):
+    for _ in range(2 if quick else 8):
         n = int(rng.integers(5, 21))
         W = np.cumsum(rng.uniform(-0.6, 0.6, (n, 6)), axis=0)
         otg = Ruckig(6)

@@ -32,7 +32,7 @@ import os
 import platform
 import sys
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -332,7 +332,7 @@ def print_report(r: dict) -> None:
     ]
     head = ("measurement", "trajkit", "ruckig", "ratio (trajkit faster by)", "target")
     widths = [max(len(str(x[i])) for x in rows + [head]) for i in range(5)]
-    line = "  ".join("{:<%d}" % w for w in widths)
+    line = "  ".join(f"{{:<{w}}}" for w in widths)
     print(line.format(*head))
     print("  ".join("-" * w for w in widths))
     for row in rows:

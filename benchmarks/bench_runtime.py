@@ -138,13 +138,13 @@ def bench_jitter(seconds: float, seed: int) -> dict:
 def bench_pallet() -> dict:
     from trajkit.palletizing import PAPER_TABLE1, plan_cycle, seed_scenario
     from trajkit.runtime import simulate
-    from trajkit.runtime.servo import seed000_servo
+    from trajkit.runtime.servo import cao2012_servo
 
     sc = seed_scenario()
     out = {}
     for name in ("ptp", "merged"):
         plan = plan_cycle(sc, name)
-        rep = simulate(plan, 0.001, seed000_servo(sc.robot), record=False)
+        rep = simulate(plan, 0.001, cao2012_servo(sc.robot), record=False)
         out[name] = {"planned_s": rep.planned_s, "simulated_s": rep.simulated_s,
                      "paper_planned_s": PAPER_TABLE1[name]["planned_s"],
                      "paper_measured_s": PAPER_TABLE1[name].get("measured_s")}

@@ -116,7 +116,7 @@ def main(argv=None):
             inp.max_jerk = [L[2]]
             r.calculate(inp, traj)
 
-        tk.append(_best(lambda: plan_state_to_state(s, g, lim), args.repeat))
+        tk.append(_best(lambda s=s, g=g, lim=lim: plan_state_to_state(s, g, lim), args.repeat))
         rk.append(_best(one_rk, args.repeat))
         worst = max(worst, abs(plan_state_to_state(s, g, lim).duration - traj.duration) / traj.duration)
     print()
@@ -145,7 +145,7 @@ def main(argv=None):
             inp6.max_jerk = [c[2][2] for c in cs]
             r6.calculate(inp6, traj6)
 
-        tk.append(_best(lambda: plan_ptp_states(S, G, lims), args.repeat))
+        tk.append(_best(lambda S=S, G=G, lims=lims: plan_ptp_states(S, G, lims), args.repeat))
         rk.append(_best(six_rk, args.repeat))
         d = plan_ptp_states(S, G, lims).duration
         worst = max(worst, abs(d - traj6.duration) / traj6.duration)
@@ -171,13 +171,13 @@ def main(argv=None):
         s, g, L = c
         lim = AxisLimits(*L)
         T = feasible_durations(s, g, lim).next_feasible(1.3 * min_state_duration(s, g, lim))
-        tf.append(_best(lambda: plan_state_to_state(s, g, lim, duration=T), args.repeat))
+        tf.append(_best(lambda s=s, g=g, lim=lim, T=T: plan_state_to_state(s, g, lim, duration=T), args.repeat))
     for _ in range(args.n):
         s, g, L = random_case(rng, symmetric=False)
         if s == g:
             continue
         lim = AxisLimits(*L)
-        ta.append(_best(lambda: min_state_duration(s, g, lim), args.repeat))
+        ta.append(_best(lambda s=s, g=g, lim=lim: min_state_duration(s, g, lim), args.repeat))
     for name, xs in (("fixed duration T = 1.3 T_min (symmetric)", tf),
                      ("min_state_duration (asymmetric limits)", ta)):
         a = np.asarray(xs) * 1e6

@@ -48,7 +48,7 @@ class ServerThread:
                                                     log_level="warning", ws="auto", lifespan="on"))
         self.thread = threading.Thread(target=self.server.run, daemon=True)
 
-    def __enter__(self) -> "ServerThread":
+    def __enter__(self) -> ServerThread:
         import time
 
         self.thread.start()

@@ -1,4 +1,4 @@
-"""Coarse stage: chord error (seed 003, eqs. 11-13), adaptive discretisation,
+"""Coarse stage: chord error (Chen et al., 2013, eqs. 11-13), adaptive discretisation,
 and the seed's worked example for r = 100."""
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def test_chord_error_is_the_circle_sagitta():
 
 
 def test_seed_003_worked_example_corrected():
-    """Seed 003: r = 100, 100 points per turn (3.6 deg) and 200 (1.8 deg).
+    """Chen et al. (2013): r = 100, 100 points per turn (3.6 deg) and 200 (1.8 deg).
 
     The chord of a 3.6 deg step is L = 2 r sin(1.8 deg); eq. 11 gives
     E = r (1 - cos 1.8 deg) = 4.934e-2, and 1.233e-2 for 1.8 deg. The seed

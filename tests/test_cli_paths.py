@@ -39,7 +39,7 @@ def test_saddle_json_csv_and_plot(tmp_path, capsys):
     assert data.shape[0] == out["setpoints"]
     t, x, y, z, th, za = data.T
     assert np.allclose(np.diff(t), 0.005)
-    # units: mm and deg; the seam equation holds on every row (seed 003, eq. 3)
+    # units: mm and deg; the seam equation holds on every row (Chen et al., 2013, eq. 3)
     assert np.allclose(np.hypot(x, y), 100.0, atol=1e-9)
     assert np.allclose(z, np.sqrt(110.0**2 - x**2), atol=1e-9)
     assert np.allclose(z, za, atol=0)

@@ -7,8 +7,14 @@ import math
 import pytest
 
 from trajkit import (
-    AxisLimits, InfeasibleError, InvalidInputError, TrajkitError, min_duration, plan_move,
-    plan_moves, plan_ptp,
+    AxisLimits,
+    InfeasibleError,
+    InvalidInputError,
+    TrajkitError,
+    min_duration,
+    plan_move,
+    plan_moves,
+    plan_ptp,
 )
 
 LIM = AxisLimits(1.0, 2.0, 10.0, position_min=-1.0, position_max=6.0, name="B")

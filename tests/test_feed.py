@@ -62,7 +62,7 @@ def test_setpoint_times_errors():
 
 
 def test_chord_error_at_the_period_slows_the_feed_and_holds_the_band():
-    """Seed 002: too high a speed for the period leaves the path. A 20 mm
+    """Jiang (1987): too high a speed for the period leaves the path. A 20 mm
     circle at 0.5 m/s and a 10 ms period would step 5 mm (sagitta 0.16 mm);
     with a 10 um tolerance the feed drops to arc(K, E) / period."""
     K, E, dt = 0.02, 1e-5, 0.01

@@ -273,6 +273,31 @@ def test_jog_teach_build_and_files(client, tmp_path):
     assert client.get("/api/programs/..%2Fcell_1").status_code in (400, 404)
 
 
+def test_jog_steps_while_moving_chain_on_one_online_target(client):
+    """A jog step while the joint still moves re-plans from the commanded state (no stop between)."""
+    sess = client.session
+    q0 = sess.q.copy()
+    assert client.post("/api/jog", json={"joint": "J1", "step": 40, "speed_pct": 50}).status_code == 200
+    run = sess.run_id
+    assert client.get("/api/status").json()["motion"] == "online target"
+    # two more steps while it moves: one ahead, one back
+    assert client.post("/api/jog", json={"joint": "J1", "step": 20, "speed_pct": 50}).status_code == 200
+    assert client.post("/api/jog", json={"joint": "J1", "step": -50, "speed_pct": 50}).status_code == 200
+    assert wait_state(client, "idle", "fault") == "idle"
+    assert sess.run_id == run  # one run: the steps were targets of the same streamer
+    evs = sess.drive.streamer.events
+    assert [e.kind for e in evs].count("target") == 3 and evs[-1].kind == "target_reached"
+    assert not [e for e in evs if e.kind in ("fault", "rejected", "stop")]
+    assert math.degrees(sess.q[0] - q0[0]) == pytest.approx(10.0, abs=1e-9)
+    np.testing.assert_array_equal(sess.q[1:], q0[1:])
+    # a step past the range is refused against the goal, not the current position
+    assert client.post("/api/jog", json={"joint": "J3", "step": 150}).status_code == 200
+    msg = error_of(client.post("/api/jog", json={"joint": "J3", "step": 60}), 400)
+    assert "210.000 mm leaves its range" in msg
+    assert wait_state(client, "idle", "fault") == "idle"
+    assert sess.q[2] == pytest.approx(0.15, abs=1e-12)
+
+
 def test_change_robot(client):
     assert client.post("/api/robot", json={"robot": "arm6"}).json()["robot"] == "arm6"
     assert len(client.session.q) == 6

@@ -10,6 +10,7 @@ the test's tmp dir.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import shutil
@@ -172,7 +173,7 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     # start: live values change
     page.click("#btn-start")
     _wait_state(page, "running")
-    until(page, 
+    until(page,
         "document.querySelector('#axes tr[data-axis=\"theta\"] .axis-pos').textContent.startsWith('-') === false"
         " && parseFloat(document.querySelector('#axes tr[data-axis=\"theta\"] .axis-pos').textContent) > 1")
     th1 = _axis_value(page, "theta", "pos")
@@ -191,7 +192,7 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     assert _axis_value(page, "theta", "vel") == 0.0
     page.click("#btn-resume")
     _wait_state(page, "running")
-    until(page, 
+    until(page,
         f"parseFloat(document.querySelector('#axes tr[data-axis=\"theta\"] .axis-pos').textContent) > {p1 + 1}")
 
     # emergency stop: fault shown, axes frozen, start refused until reset
@@ -291,6 +292,25 @@ def test_jog_teach_build_save_load(hmi_server, page):
                            " && document.getElementById('msg').textContent === 'jogging J1'")
     page.click("#btn-teach")  # p2
     until(page, "document.querySelectorAll('#step-point option').length === 2")
+    # jog steps while the jog moves are taken as new targets of the same run
+    run = sess.run_id
+    page.fill("#jog-speed", "2")
+    page.fill("#jog-step", "10")
+    page.click("#jog-plus")
+    until(page, "document.getElementById('state').textContent === 'running'")
+    page.click("#jog-plus")
+    page.click("#jog-minus")
+    page.click("#jog-plus")
+    until(page, "document.getElementById('state').textContent === 'idle'"
+                " && document.getElementById('msg').textContent === 'jogging J1'")
+    assert "40.000 deg" in page.inner_text("#joints"), (page.inner_text("#msg"), sess.events[-8:])
+    assert sess.run_id == run + 1 and math.degrees(sess.q[0]) == pytest.approx(40.0, abs=1e-9)
+    assert [e.kind for e in sess.drive.streamer.events].count("target") == 4
+    page.fill("#jog-speed", "20")
+    page.fill("#jog-step", "-20")
+    page.click("#jog-plus")
+    until(page, "document.getElementById('state').textContent === 'idle'"
+                " && document.querySelector('#joints').textContent.includes('20.000 deg')")
     assert set(sess.points) == {"p1", "p2"}
 
     page.select_option("#step-op", "PTP")

@@ -8,8 +8,8 @@ import pytest
 pytest.importorskip("fastapi")
 pytest.importorskip("httpx")
 
-from starlette.websockets import WebSocketDisconnect  # noqa: E402
 from hmi_support import WS_BASE, page_client  # noqa: E402
+from starlette.websockets import WebSocketDisconnect  # noqa: E402
 
 from trajkit.hmi.app import MAX_WS_CLIENTS, WS_CLOSE_BUSY, WS_RATE_HZ, create_app  # noqa: E402
 from trajkit.hmi.security import WS_CLOSE_REFUSED, WS_CLOSE_TOKEN  # noqa: E402

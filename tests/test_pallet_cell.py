@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 import yaml
-
 from conftest import sweep_size
+
 from trajkit.errors import InvalidInputError
 from trajkit.io import load_job, seed_cell_job_path
 from trajkit.io.pallet_job import scenario_from_job
@@ -205,7 +205,7 @@ def test_seed_cell_settle_zones_are_vertical(seed_cell):
     sc, plan, _ = seed_cell
     tl = plan.timeline
     ends = plan.trip_starts + plan.trip_times()
-    for tp, ts, te in zip(plan.trips, plan.trip_starts, ends):
+    for _tp, ts, te in zip(plan.trips, plan.trip_starts, ends):
         t = np.linspace(ts, te, 2001)
         s = tl.sample(t)
         z0, z3 = s.position[0, 1], s.position[-1, 1]

@@ -9,6 +9,7 @@ import os
 import numpy as np
 import pytest
 from scipy.optimize import linprog, minimize
+from test_pallet_planners import _random_scenario
 
 from trajkit import AxisLimits
 from trajkit.errors import InfeasibleError, InvalidInputError, UnreachableError
@@ -35,8 +36,6 @@ from trajkit.palletizing.planners import HORIZONTAL_JOINTS, CyclePlan, _horizont
 from trajkit.palletizing.report import bound_lines, summarize
 from trajkit.profiles.state import StateProfile, min_state_duration, plan_state_to_state
 from trajkit.verify import verify_state_profile
-
-from test_pallet_planners import _random_scenario
 
 SWEEP = bool(os.environ.get("TRAJKIT_SWEEP"))
 N_SCEN = 30 if SWEEP else 3

@@ -1,4 +1,4 @@
-"""Palletizing planners: seed 000 numbers, independent oracles, verification, sweeps."""
+"""Palletizing planners: Cao et al. (2012) numbers, independent oracles, verification, sweeps."""
 
 from __future__ import annotations
 
@@ -149,7 +149,7 @@ def test_time_at_position_inverts_sampling():
 
 # ---------------------------------------------------------- verification
 def test_both_plans_verify(plans):
-    for n, plan in plans.items():
+    for plan in plans.values():
         rep = verify_plan(plan)
         assert rep.ok, rep.violations
         assert rep.checks["places"] == 25 and rep.checks["crossings"] == 100

@@ -1,4 +1,4 @@
-"""Cylindrical palletizer (seed 000): FK/IK, wrist choice, ranges, unit conversion."""
+"""Cylindrical palletizer (Cao et al., 2012): FK/IK, wrist choice, ranges, unit conversion."""
 
 from __future__ import annotations
 

@@ -83,8 +83,8 @@ def test_named_case_shape_and_limits(start, goal, limits, shape, reached):
         assert np.all(np.sign(s.velocity[1:-1]) * np.sign(goal - start) >= 0.0)
 
 
-def test_seed000_full_profile_closed_form():
-    """Seed 000: full profile accel time t1 = a/J + V/a, T = D/V + V/a + a/J (symmetric)."""
+def test_cao2012_full_profile_closed_form():
+    """Cao et al. (2012): full profile accel time t1 = a/J + V/a, T = D/V + V/a + a/J (symmetric)."""
     V, A, J, D = 1.0, 2.0, 10.0, 5.0
     p = _checked(0.0, D, SYM)
     t = p.phase_durations
@@ -93,8 +93,8 @@ def test_seed000_full_profile_closed_form():
     assert t == pytest.approx((0.2, 0.3, 0.2, 4.3, 0.2, 0.3, 0.2), rel=EXACT)
 
 
-def test_seed000_no_const_accel_no_cruise_closed_form():
-    """Seed 000: t2 = 2 (S / (2J))^(1/3) per half when neither a nor v is reached."""
+def test_cao2012_no_const_accel_no_cruise_closed_form():
+    """Cao et al. (2012): t2 = 2 (S / (2J))^(1/3) per half when neither a nor v is reached."""
     S, J = 0.1, 10.0
     p = _checked(0.0, S, SYM)
     half = 2.0 * (S / (2.0 * J)) ** (1.0 / 3.0)

@@ -28,7 +28,7 @@ GOAL = [1.5, -0.3, 0.7, 0.5]  # D does not move
 
 def _random_problem(rng, n):
     lims = []
-    for k in range(n):
+    for _ in range(n):
         v, a, j = np.exp(rng.uniform(np.log(1e-2), np.log(1e2), 3))
         ra, rj = np.exp(rng.uniform(np.log(0.05), np.log(20.0), 2))
         jd = j * rj

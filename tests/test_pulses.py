@@ -1,4 +1,4 @@
-"""Step pulses (seed 001): no drift, no lost position, rate check, edge times."""
+"""Step pulses (patent CN105892402): no drift, no lost position, rate check, edge times."""
 
 from __future__ import annotations
 

@@ -131,3 +131,33 @@ def test_target_errors_and_refusals():
         if st.state == "idle":
             break
     assert st.state == "idle" and st._v[0] == 0.0
+
+
+def test_target_with_lower_limits_brakes_to_them_and_keeps_them():
+    """A target with its own (lower) limits: a faster axis is braked down to them first."""
+    lim = AxisLimits(1.0, 4.0, 40.0, name="X")
+    st = Streamer.hold_at([0.0], PERIOD, [lim])
+    st.set_target([5.0])
+    for _ in range(int(1.0 / PERIOD)):  # at full speed after 0.35 s
+        st.step()
+    assert st._v[0] == pytest.approx(1.0)
+    slow = AxisLimits(0.25, 4.0, 40.0, name="X")
+    st.set_target([1.5], limits=[slow])
+    v, a, q = [], [], []
+    for _ in range(10000):
+        sp = st.step()
+        v.append(sp.velocity[0])
+        a.append(sp.acceleration[0])
+        q.append(sp.position[0])
+        if st.state == "idle":
+            break
+    assert st.state == "idle" and q[-1] == 1.5
+    v, a = np.array(v), np.array(a)
+    assert np.all(np.abs(a) <= 4.0 * (1 + 1e-9))
+    # once braked below the slow speed, the axis stays within it
+    k = int(np.argmax(v <= 0.25 * (1 + 1e-9)))
+    assert k > 0 and np.all(v[k:] <= 0.25 * (1 + 1e-9))
+    with pytest.raises(InvalidInputError, match=r"limits\[0\].v_max = 2.0 exceeds the axis' limit 1.0 \(X\)"):
+        st.set_target([0.0], limits=[AxisLimits(2.0, 4.0, 40.0)])
+    with pytest.raises(InvalidInputError, match="target limits must be 1 AxisLimits"):
+        st.set_target([0.0], limits=[slow, slow])

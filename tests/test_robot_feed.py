@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import os
+import pathlib
 
 import numpy as np
 import pytest
-
-import pathlib
 
 from trajkit.robot._feed import Run, plan_feed, speed_change
 

@@ -1,4 +1,4 @@
-"""Saddle curves (seed 003): exact implicit equations, arc length with a tested
+"""Saddle curves (Chen et al., 2013): exact implicit equations, arc length with a tested
 error bound, machine-axis derivatives, and the saddle machine's axis limits."""
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ import pytest
 from arms import load_arm
 from conftest import sweep_size
 
-from trajkit import AxisLimits, plan_move
+from trajkit import plan_move
 from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_x, rot_z
 from trajkit.robot import CartesianTarget, Circ, Lin, run_motions

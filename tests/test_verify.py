@@ -12,11 +12,19 @@ import numpy as np
 import pytest
 
 from trajkit import (
-    AxisLimits, InvalidInputError, Profile, TrajkitError, plan_move, plan_ptp,
+    AxisLimits,
+    InvalidInputError,
+    Profile,
+    TrajkitError,
+    plan_move,
+    plan_ptp,
 )
 from trajkit.trajectory import Trajectory
 from trajkit.verify import (
-    QUANTITIES, VerificationError, verify_profile, verify_trajectory,
+    QUANTITIES,
+    VerificationError,
+    verify_profile,
+    verify_trajectory,
 )
 
 SYM = AxisLimits(1.0, 2.0, 10.0, name="B")

@@ -18,7 +18,7 @@ import contextlib
 import contextvars
 import itertools
 import os
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 __all__ = ["atomic_write", "write_file", "check_target", "output_group", "OutputGroup", "output_folder", "TEMP_GLOB"]
 
@@ -47,7 +47,7 @@ class OutputGroup:
         """Rename every staged file onto its target."""
         staged, self._staged = self._staged, []
         try:
-            for i, (tmp, path) in enumerate(staged):
+            for tmp, path in staged:
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:

@@ -26,7 +26,7 @@ class AxisLimits:
 
     The *accel* limits (``a_max``, ``j_max``) apply while the axis speeds up
     (|v| grows), the *decel* limits (``a_max_decel``, ``j_max_decel``) while it
-    slows down (|v| shrinks), whatever the direction of motion (seed 001:
+    slows down (|v| shrinks), whatever the direction of motion (patent CN105892402:
     J1, A1 versus J2, A2).
 
     Parameters
@@ -118,7 +118,7 @@ class AxisLimits:
         """True when the decel leg has the same limits as the accel leg."""
         return self.a_max == self.a_max_decel and self.j_max == self.j_max_decel
 
-    def with_name(self, name: str | int | None) -> "AxisLimits":
+    def with_name(self, name: str | int | None) -> AxisLimits:
         """Return a copy carrying ``name`` for error messages (no re-validation)."""
         new = object.__new__(AxisLimits)
         for f in ("v_max", "a_max", "j_max", "a_max_decel", "j_max_decel",
@@ -128,7 +128,7 @@ class AxisLimits:
         object.__setattr__(new, "_thresholds", self._thresholds)
         return new
 
-    def scaled(self, factor: float) -> "AxisLimits":
+    def scaled(self, factor: float) -> AxisLimits:
         """Return limits for a coordinate scaled by ``factor`` > 0 (unit change).
 
         Velocity, acceleration, jerk and the range are all multiplied by
@@ -141,7 +141,7 @@ class AxisLimits:
             self.position_min * f, self.position_max * f, self.name,
         )
 
-    def derated(self, accel: float = 1.0, jerk: float = 1.0, velocity: float = 1.0) -> "AxisLimits":
+    def derated(self, accel: float = 1.0, jerk: float = 1.0, velocity: float = 1.0) -> AxisLimits:
         """Return limits reduced by factors in (0, 1] (a planning reserve).
 
         Both legs are scaled: ``a_max`` and ``a_max_decel`` by ``accel``,

@@ -1,4 +1,4 @@
-"""Compatibility module: :func:`plan_ptp_states` now lives in :mod:`trajkit.sync`."""
+"""Alias module: :func:`plan_ptp_states` is defined in :mod:`trajkit.sync.states`."""
 
 from __future__ import annotations
 

@@ -102,7 +102,7 @@ class VerificationError(TrajkitError):
         Everything found (the message names the first).
     """
 
-    def __init__(self, message: str, violations: tuple["Violation", ...] = ()):
+    def __init__(self, message: str, violations: tuple[Violation, ...] = ()):
         super().__init__(message)
         self.violations = violations
 
@@ -201,7 +201,7 @@ class VerificationReport:
             "violations": [dataclasses.asdict(v) for v in self.violations],
         }
 
-    def raise_if_failed(self) -> "VerificationReport":
+    def raise_if_failed(self) -> VerificationReport:
         """Raise :class:`VerificationError` naming axis, quantity, value, limit.
 
         Returns
@@ -256,7 +256,7 @@ class TrajectoryReport:
             "violations": [dataclasses.asdict(v) for v in self.violations],
         }
 
-    def raise_if_failed(self) -> "TrajectoryReport":
+    def raise_if_failed(self) -> TrajectoryReport:
         """Raise :class:`VerificationError` for the first failed check."""
         if not self.ok:
             v = self.violations[0]
@@ -344,7 +344,7 @@ class _Worst:
         if not (error <= tol):
             self._fail(quantity, value, limit, t)
 
-    def report(self, goal_err, end_v, end_a, cont, dur_err, n_samples) -> "VerificationReport":
+    def report(self, goal_err, end_v, end_a, cont, dur_err, n_samples) -> VerificationReport:
         """The :class:`VerificationReport` of everything checked so far."""
         return VerificationReport(
             axis=self.axis, ok=not self.violations, ratios=dict(self.ratios),

@@ -1485,7 +1485,7 @@ def insert_cruise(phases, v0, dT):
     if not pts:
         return []
     out = []
-    for v_e, k, tz in {min(pts), max(pts)}:
+    for _v_e, k, tz in {min(pts), max(pts)}:
         ph = list(phases[:k])
         if k < n and tz > 0.0:
             dt, j, a = phases[k]

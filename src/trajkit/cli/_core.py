@@ -14,19 +14,19 @@ import math
 import os
 import re
 import sys
-from typing import Any, Literal, Sequence
+from collections.abc import Sequence
+from typing import Any, Literal
 
 import numpy as np
-
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .._atomicio import atomic_write
 from .._csvio import csv_text, unit_suffix
 from .._sampling import MAX_SAMPLES, count_samples
 from .._validate import check_finite
+from ..errors import InvalidInputError
 from ..io.document import plain, read_document
 from ..io.schema import Real, RealOrInf, short_repr, validation_message
-from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
 from ..sync import plan_ptp
@@ -139,7 +139,7 @@ class PtpJob(BaseModel):
         return [v] if isinstance(v, dict) else v
 
 
-def load_ptp_job(path: str | os.PathLike) -> "PtpJob":
+def load_ptp_job(path: str | os.PathLike) -> PtpJob:
     """Read and validate a ``ptp`` job file.
 
     Parameters

@@ -18,8 +18,9 @@ import io
 import math
 import os
 import sys
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from ..errors import InvalidInputError
 from ._console import print_json, print_table

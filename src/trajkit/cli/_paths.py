@@ -18,9 +18,9 @@ from .._atomicio import atomic_write
 from .._csvio import csv_text
 from .._sampling import count_samples
 from ..errors import InvalidInputError
+from ..interpolation import SaddleMachine, plan_feed, plan_saddle
 from ..limits import AxisLimits
 from ..paths import Arc3, CompositePath, Line, SaddleCurve, circle_through, discretize, uniform_chord_count
-from ..interpolation import SaddleMachine, plan_feed, plan_saddle
 from ._console import print_json, print_table
 
 __all__ = ["register", "load_path_file", "build_path"]

@@ -57,7 +57,7 @@ from .._atomicio import atomic_write
 from ..errors import InvalidInputError, TrajkitError
 from ..io.document import parse_document
 from .engine import COMMAND_WAIT_S, ConflictError, Session
-from .jobs import plan_jog, plan_job
+from .jobs import plan_job
 from .models import (
     NAME_PATTERN,
     BuildProgramRequest,
@@ -85,6 +85,9 @@ __all__ = ["create_app", "WS_RATE_HZ", "MAX_WS_CLIENTS", "WS_CLOSE_BUSY"]
 
 log = logging.getLogger("trajkit")
 
+#: How long a jog waits for another request's jog to be applied [s].
+JOG_LOCK_WAIT_S = 0.5
+
 #: Live updates per second over the WebSocket.
 WS_RATE_HZ = 25.0
 
@@ -94,8 +97,6 @@ MAX_WS_CLIENTS = 16
 #: WebSocket close code when :data:`MAX_WS_CLIENTS` are connected ("try again later").
 WS_CLOSE_BUSY = 1013
 
-#: Control period of a jog when no job is loaded [s].
-JOG_PERIOD_S = 0.004
 
 _JOB_MODELS = {"saddle": SaddleJob, "pallet": PalletJob, "program": ProgramJob}
 _RUN_COMMANDS = ("start", "pause", "resume", "stop", "estop", "reset")
@@ -315,15 +316,13 @@ def create_app(token: str | None = None, programs_dir: str | os.PathLike | None 
                                     f"{sess.robot_name}, got {echo(req.joint)}")
         k = rb.joint_names.index(req.joint)
         unit = math.pi / 180.0 if rb.joint_kinds[k] == "revolute" else 1e-3
-        q_now = sess.check_idle("jog")
-        period = sess.job.period if sess.job is not None else JOG_PERIOD_S
-        if not sess.plan_lock.acquire(blocking=False):
+        # a job being planned holds the lock for long (409); another jog only briefly
+        if not sess.plan_lock.acquire(timeout=JOG_LOCK_WAIT_S):
             raise ConflictError("a job is being planned: wait for it")
         try:
-            table = plan_jog(rb, q_now, k, req.step * unit, req.speed_pct, period)
+            sess.jog(k, req.step * unit, req.speed_pct)
         finally:
             sess.plan_lock.release()
-        sess.start(table)  # checks the state again (one run at a time)
         return sess.joint_info()
 
     @app.post("/api/teach")

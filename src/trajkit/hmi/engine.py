@@ -49,6 +49,9 @@ MAX_EVENTS = 500
 #: Points of the actual tool path kept for the path view.
 TRAIL_POINTS = 4000
 
+#: Control period of a jog when no job is loaded [s].
+JOG_PERIOD_S = 0.004
+
 #: Longest wait of a command for the run loop to apply it [s].
 COMMAND_WAIT_S = 2.0
 
@@ -93,12 +96,17 @@ class RuntimeDrive:
                                  limits=table.machine_limits)
         self._seen = 0
         self.last = None
+        #: where a jog run is going [SI] (the last target), None for a job
+        self.jog_goal: np.ndarray | None = None
 
     def command(self, name: str, value: Any = None) -> None:
         """Queue a command for the next control period."""
         st = self.streamer
         if name == "override":
             st.set_override(100.0 * value)
+        elif name == "target":
+            goal, limits = value
+            st.set_target(goal, sync="none", limits=limits)
         else:
             getattr(st, {"estop": "estop", "start": "start", "pause": "pause", "resume": "resume",
                          "stop": "stop", "reset": "reset"}[name])()
@@ -359,14 +367,7 @@ class Session:
             drive = self.drive
             resume = drive is not None and drive.table is table and not drive.finished
             if not resume:
-                drive = RuntimeDrive(table)
-                drive.command("override", self.override)
-                with self._feed_lock:
-                    self.run_id += 1
-                    self.trail.clear()
-                    self._trail_total = 0
-                self.ticks = 0
-                self.drive = drive
+                drive = self._new_drive(table)
             cmd = _Command("start", self._clock())
             self._cmds.append(cmd)
             self.state = "running"
@@ -375,6 +376,64 @@ class Session:
         self.event("info", f"run {self.run_id} {'continued' if resume else 'started'}: {table.title}")
         cmd.done.wait(COMMAND_WAIT_S)
         return self.run_id
+
+    def jog(self, joint: int, step_si: float, speed_pct: float) -> None:
+        """Jog ``joint`` of the jog robot by ``step_si`` [rad or m] at ``speed_pct`` % of its speed.
+
+        At rest a jog run starts; while a jog moves, the step is added to its
+        goal and the streamer re-plans from the commanded state in the next
+        control period (online target), so repeated steps chain without
+        stopping. The goal must stay in the joint's range.
+
+        Raises
+        ------
+        ConflictError
+            While a job runs or during an emergency stop.
+        InvalidInputError
+            A goal outside the joint's range.
+        """
+        from .jobs import jog_goal, jog_limits, jog_table
+
+        with self._lock:
+            drive = self.drive
+            moving = (self.state == "running" and drive is not None and drive.jog_goal is not None
+                      and drive.table.robot == self.robot_name)
+            if not moving:
+                self._require_inactive("jog")
+            base = drive.jog_goal if moving else self.q
+            goal = jog_goal(self.robot, base, joint, step_si)
+            target = (goal, jog_limits(self.robot, joint, speed_pct))
+            if moving:
+                cmd = _Command("target", self._clock(), target)
+                self._cmds.append(cmd)
+                drive.jog_goal = goal
+                self._wake.set()
+            else:
+                period = self.job.period if self.job is not None else JOG_PERIOD_S
+                drive = self._new_drive(jog_table(self.robot, self.q, period))
+                drive.jog_goal = goal
+                now = self._clock()
+                self._cmds.append(_Command("start", now))
+                cmd = _Command("target", now, target)
+                self._cmds.append(cmd)
+                self.state = "running"
+                self._ensure_thread()
+                self._wake.set()
+        if not moving:
+            self.event("info", f"run {self.run_id} started: jog {self.robot.joint_names[joint]}")
+        cmd.done.wait(COMMAND_WAIT_S)
+
+    def _new_drive(self, table: JobTable) -> RuntimeDrive:
+        """A fresh run of ``table`` as the session's drive (called with the session lock held)."""
+        drive = RuntimeDrive(table)
+        drive.command("override", self.override)
+        with self._feed_lock:
+            self.run_id += 1
+            self.trail.clear()
+            self._trail_total = 0
+        self.ticks = 0
+        self.drive = drive
+        return drive
 
     def command(self, name: str, value: Any = None, wait: bool = True) -> None:
         """Queue a run command (pause, resume, stop, estop, reset, override) for the next period.
@@ -415,7 +474,7 @@ class Session:
         if wait:
             cmd.done.wait(COMMAND_WAIT_S)
 
-    def request_estop(self, arrival: float | None = None) -> "_Command | None":
+    def request_estop(self, arrival: float | None = None) -> _Command | None:
         """Queue an emergency stop without waiting for anything; return its command.
 
         A machine with a run (or the rest of one) gets the stop in the first
@@ -584,7 +643,7 @@ class Session:
 
             self.robot_name, self.robot, self.points = drive.table.robot, robot_by_name(drive.table.robot), {}
         q = np.array(sp.position, dtype=float)
-        if drive.finished:
+        if drive.finished and drive.jog_goal is None:
             # the streamer's last setpoint is Q(duration - period), one period short of
             # the goal (reported to the runtime's owner); the machine ends at the goal
             q = drive.streamer.source.sample(np.array([drive.streamer.source.duration]))[0][0]
@@ -612,11 +671,16 @@ class Session:
             snap["run_title"] = tb.title
             snap["cycle"] = st.cycle
             snap["plan_time_s"] = st.tau
-            T = st.source.duration
+            online = st.target_motion
+            if online is not None:  # a jog: the motion to its current target
+                snap["plan_time_s"], T = online
+                snap["motion"] = "online target"
+            else:
+                T = st.source.duration
+                snap["motion"] = st.source.motion_labels[st.source.motion_at(st.tau)]
             snap["duration_s"] = T
-            snap["progress"] = st.tau / T if T > 0 else 1.0
+            snap["progress"] = snap["plan_time_s"] / T if T > 0 else 1.0
             snap["rate"] = st.s
-            snap["motion"] = st.source.motion_labels[st.source.motion_at(st.tau)]
             snap["fault"] = None if st.fault is None else str(st.fault)
             sp = drive.last
             if sp is not None:

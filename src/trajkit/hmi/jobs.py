@@ -15,9 +15,10 @@ the job runs at its planned speed at 100 %.
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass, field
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -27,7 +28,7 @@ from ..limits import AxisLimits
 from ..runtime.streamer import OVERRIDE_RESERVE, override_limits
 from .models import PalletJob, ProgramJob, SaddleJob
 
-__all__ = ["JobTable", "plan_job", "plan_jog", "check_size", "summary_view", "MM",
+__all__ = ["JobTable", "plan_job", "jog_goal", "jog_limits", "jog_table", "check_size", "summary_view", "MM",
            "PATH_PREVIEW_POINTS", "MAX_SETPOINTS"]
 
 MM = 1e-3  # metres per millimetre
@@ -289,7 +290,6 @@ def plan_program_job(req: ProgramJob, source: str = "program", urdf_dirs=()) -> 
     ``urdf_dirs``: folders whose URDF files the program may name (none by default).
     """
     from ..io.program import parse_program
-
     from ..robot.execute import run_motions
 
     prog = parse_program(req.text, source=source, urdf_dirs=urdf_dirs)
@@ -323,19 +323,16 @@ def plan_job(req, urdf_dirs=()) -> JobTable:
     raise InvalidInputError(f"unknown job type {type(req).__name__}")
 
 
-def plan_jog(robot, q_now: np.ndarray, joint: int, step_si: float, speed_pct: float,
-             period: float) -> JobTable:
-    """A jog: one jerk-limited rest-to-rest move of one joint (:func:`trajkit.plan_ptp`).
+def jog_goal(robot, base: np.ndarray, joint: int, step_si: float) -> np.ndarray:
+    """Where a jog of ``joint`` by ``step_si`` [rad or m] from ``base`` goes.
 
     Raises
     ------
     InvalidInputError
-        When the target leaves the joint's range (nothing is clamped).
+        When the goal leaves the joint's range (nothing is clamped).
     """
-    from ..trajectory import plan_ptp
-
     lim = robot.limits[joint]
-    goal = np.array(q_now, dtype=float)
+    goal = np.array(base, dtype=float)
     goal[joint] += step_si
     units, scale = _scale(robot.joint_kinds)
     lo, hi = lim.position_min, lim.position_max
@@ -345,18 +342,35 @@ def plan_jog(robot, q_now: np.ndarray, joint: int, step_si: float, speed_pct: fl
             f"{units[joint]} leaves its range [{lo * scale[joint]:.3f}, {hi * scale[joint]:.3f}] "
             f"{units[joint]}"
         )
-    limits = [lm.scaled(1.0) for lm in robot.limits]
-    limits[joint] = AxisLimits(lim.v_max * speed_pct / 100.0, lim.a_max, lim.j_max,
-                               lim.a_max_decel, lim.j_max_decel, name=lim.name)
-    traj = plan_ptp(q_now, goal, override_limits(limits), sync="none")
-    t = _times(traj.duration, period)
-    smp = traj.sample(t)
-    q, qd = smp.position, smp.velocity
-    xyz = np.array([robot.fk(row).position for row in q])
-    return JobTable("jog", f"jog {robot.joint_names[joint]}", tuple(robot.joint_names), units,
-                    scale, t, q, qd, xyz, period, {"duration_s": traj.duration}, robot=robot.name,
-                    v_max=np.array([lm.v_max for lm in robot.limits]),
-                    source=lambda: _as_source(traj), tool_of=lambda q: np.asarray(robot.fk(q).position),
+    return goal
+
+
+def jog_limits(robot, joint: int, speed_pct: float) -> list[AxisLimits]:
+    """The limits a jog of ``joint`` moves with: its speed at ``speed_pct`` %, the rest as the machine's."""
+    limits = [dataclasses.replace(lm) for lm in robot.limits]
+    lim = limits[joint]
+    limits[joint] = dataclasses.replace(lim, v_max=lim.v_max * speed_pct / 100.0)
+    return limits
+
+
+def jog_table(robot, q_now: np.ndarray, period: float) -> JobTable:
+    """The run a jog drives: the robot standing at ``q_now``, moved by online targets.
+
+    Every jog step is a target of the streamer
+    (:meth:`trajkit.runtime.Streamer.set_target`): a step while the joint still
+    moves re-plans from the commanded state in the same control period.
+    """
+    from ..runtime import as_source
+    from ..trajectory import plan_ptp
+
+    q = np.array(q_now, dtype=float)
+    units, scale = _scale(robot.joint_kinds)
+    hold = plan_ptp(q, q, list(robot.limits))
+    xyz = np.array([robot.fk(q).position])
+    return JobTable("jog", f"jog {robot.name}", tuple(robot.joint_names), units, scale,
+                    np.zeros(1), q[None, :], np.zeros((1, q.size)), xyz, period, {"duration_s": 0.0},
+                    robot=robot.name, v_max=np.array([lm.v_max for lm in robot.limits]),
+                    source=lambda: as_source(hold), tool_of=lambda q: np.asarray(robot.fk(q).position),
                     machine_limits=tuple(robot.limits))
 
 

@@ -9,7 +9,7 @@ seconds. A request that fails validation changes nothing; the API answers
 from __future__ import annotations
 
 import re
-from typing import Literal, Optional, Union
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -119,7 +119,7 @@ class ProgramJob(_Model):
     period_s: float = Field(default=0.004, ge=MIN_PERIOD_S, le=MAX_PERIOD_S, allow_inf_nan=False)
 
 
-JobRequest = Union[SaddleJob, PalletJob, ProgramJob]
+JobRequest = SaddleJob | PalletJob | ProgramJob
 
 
 class OverrideRequest(_Model):
@@ -160,9 +160,9 @@ class ProgramStep(_Model):
 
     op: Literal["PTP", "LIN", "CIRC"]
     point: str = Field(pattern=NAME_PATTERN)
-    via: Optional[str] = Field(default=None, pattern=NAME_PATTERN)
-    speed_pct: Optional[float] = Field(default=None, gt=0, le=100, allow_inf_nan=False)
-    speed_mm_s: Optional[float] = Field(default=None, gt=0, le=5_000, allow_inf_nan=False)
+    via: str | None = Field(default=None, pattern=NAME_PATTERN)
+    speed_pct: float | None = Field(default=None, gt=0, le=100, allow_inf_nan=False)
+    speed_mm_s: float | None = Field(default=None, gt=0, le=5_000, allow_inf_nan=False)
 
 
 class BuildProgramRequest(_Model):

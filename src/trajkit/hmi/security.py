@@ -202,7 +202,7 @@ class AccessPolicy:
     @classmethod
     def build(cls, token: str | None = None, allowed_hosts: Iterable[str] | None = None,
               allowed_origins: Iterable[str] | None = None,
-              max_body_bytes: int = MAX_BODY_BYTES) -> "AccessPolicy":
+              max_body_bytes: int = MAX_BODY_BYTES) -> AccessPolicy:
         """Validate and normalise the settings.
 
         Raises
@@ -418,7 +418,7 @@ class Guard:
         while True:
             try:
                 msg = await asyncio.wait_for(receive(), max(deadline - loop.time(), 0.0))
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 raise _Refused(408, f"the request body did not arrive within {BODY_TIMEOUT_S:g} s") from None
             if msg["type"] == "http.disconnect":
                 raise _Refused(400, "the client went away")

@@ -14,8 +14,9 @@ or merged with its neighbour. Composite paths stop at corners.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -32,7 +32,7 @@ import math
 import os
 from importlib import resources
 from pathlib import Path
-from typing import Any, Literal, Optional
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
@@ -43,7 +43,16 @@ from ..palletizing.cell import Cell, GripperVolume, Obstacle
 from ..palletizing.patterns import BoxSize, LayerPattern, StackPattern, make_pattern
 from ..palletizing.scenario import PalletScenario
 from .document import plain, read_document
-from .schema import Angle_deg, Coordinate_mm, Count, Length_mm, LimitValue, PositiveLength_mm, Time_s, validation_message
+from .schema import (
+    Angle_deg,
+    Coordinate_mm,
+    Count,
+    Length_mm,
+    LimitValue,
+    PositiveLength_mm,
+    Time_s,
+    validation_message,
+)
 
 __all__ = ["PalletJob", "load_job", "scenario_from_job", "seed_job_path", "seed_cell_job_path",
            "parse_job"]
@@ -71,8 +80,8 @@ class JointSpec(_Model):
     j_max: LimitValue
     min: Coordinate_mm
     max: Coordinate_mm
-    a_max_decel: Optional[LimitValue] = None
-    j_max_decel: Optional[LimitValue] = None
+    a_max_decel: LimitValue | None = None
+    j_max_decel: LimitValue | None = None
 
 
 class RobotSpec(_Model):
@@ -113,7 +122,7 @@ class BoxPlace(_Model):
 class PatternSpec(_Model):
     name: Literal["seed", "column", "interlock", "pinwheel", "custom"] = "interlock"
     alternate: Literal["none", "rotate180", "mirror"] = "rotate180"
-    boxes: Optional[list[BoxPlace]] = Field(default=None, min_length=1, max_length=MAX_BOXES_PER_LAYER)
+    boxes: list[BoxPlace] | None = Field(default=None, min_length=1, max_length=MAX_BOXES_PER_LAYER)
 
 
 class GripperSpec(_Model):
@@ -145,8 +154,8 @@ class GripperVolumeSpec(_Model):
     """The gripper above the gripper point; length/width default to the box's."""
 
     height_mm: PositiveLength_mm = 100.0
-    length_mm: Optional[PositiveLength_mm] = None
-    width_mm: Optional[PositiveLength_mm] = None
+    length_mm: PositiveLength_mm | None = None
+    width_mm: PositiveLength_mm | None = None
 
 
 class CellSpec(_Model):
@@ -172,7 +181,7 @@ class PalletJob(_Model):
     lift_mm: Length_mm = 400.0
     approach_mm: Length_mm = 200.0
     gripper: GripperSpec = Field(default_factory=GripperSpec)
-    cell: Optional[CellSpec] = None
+    cell: CellSpec | None = None
 
 
 def cell_from_spec(spec: CellSpec) -> Cell:

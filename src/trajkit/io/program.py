@@ -39,7 +39,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Optional, Union
+from typing import Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -110,14 +110,14 @@ class Defaults(_Model):
 
 
 class PointSpec(_Model):
-    joints_deg: Optional[list[Angle_deg]] = Field(default=None, max_length=MAX_JOINTS)
-    joints: Optional[dict[str, Angle_deg]] = Field(default=None, max_length=MAX_JOINTS)
-    xyz_mm: Optional[list[Coordinate_mm]] = Field(default=None, min_length=3, max_length=3)
-    abc_deg: Optional[list[Angle_deg]] = Field(default=None, min_length=3, max_length=3)
-    config: Optional[Union[str, dict[str, str]]] = None
+    joints_deg: list[Angle_deg] | None = Field(default=None, max_length=MAX_JOINTS)
+    joints: dict[str, Angle_deg] | None = Field(default=None, max_length=MAX_JOINTS)
+    xyz_mm: list[Coordinate_mm] | None = Field(default=None, min_length=3, max_length=3)
+    abc_deg: list[Angle_deg] | None = Field(default=None, min_length=3, max_length=3)
+    config: str | dict[str, str] | None = None
 
     @model_validator(mode="after")
-    def _one_kind(self) -> "PointSpec":
+    def _one_kind(self) -> PointSpec:
         kinds = [k for k in ("joints_deg", "joints", "xyz_mm") if getattr(self, k) is not None]
         if len(kinds) != 1:
             raise ValueError(
@@ -134,21 +134,21 @@ class PointSpec(_Model):
 
 class PtpSpec(_Model):
     PTP: str
-    speed_pct: Optional[Real] = Field(default=None, gt=0, le=100, allow_inf_nan=False)
-    zone_mm: Optional[Length_mm] = None
+    speed_pct: Real | None = Field(default=None, gt=0, le=100, allow_inf_nan=False)
+    zone_mm: Length_mm | None = None
 
 
 class LinSpec(_Model):
     LIN: str
-    speed_mm_s: Optional[PositiveLength_mm] = None
-    zone_mm: Optional[Length_mm] = None
+    speed_mm_s: PositiveLength_mm | None = None
+    zone_mm: Length_mm | None = None
 
 
 class CircSpec(_Model):
     CIRC: str
     via: str
-    speed_mm_s: Optional[PositiveLength_mm] = None
-    zone_mm: Optional[Length_mm] = None
+    speed_mm_s: PositiveLength_mm | None = None
+    zone_mm: Length_mm | None = None
 
 
 class WaitBody(_Model):
@@ -163,9 +163,9 @@ _SPECS = {"PTP": PtpSpec, "LIN": LinSpec, "CIRC": CircSpec, "WAIT": WaitSpec}
 
 
 class ProgramFile(_Model):
-    robot: Union[str, UrdfSpec]
+    robot: str | UrdfSpec
     defaults: Defaults = Defaults()
-    start: Optional[str] = None
+    start: str | None = None
     points: dict[str, PointSpec] = Field(min_length=1, max_length=MAX_POINTS)
     program: list[dict[str, Any]] = Field(min_length=1, max_length=MAX_INSTRUCTIONS)
 

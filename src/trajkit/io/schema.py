@@ -13,7 +13,8 @@ from typing import Annotated, Any
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, Strict, ValidationError
 
 __all__ = ["Real", "RealOrInf", "Count", "Coordinate_mm", "Length_mm", "PositiveLength_mm", "Angle_deg", "Time_s",
-           "LimitValue", "MAX_LENGTH_MM", "MAX_ANGLE_DEG", "MAX_TIME_S", "MAX_LIMIT_VALUE", "FileModel", "validation_message", "short_repr"]
+           "LimitValue", "MAX_LENGTH_MM", "MAX_ANGLE_DEG", "MAX_TIME_S", "MAX_LIMIT_VALUE", "FileModel",
+           "validation_message", "short_repr"]
 
 #: A real number field: int or float, never a bool or a string.
 Real = Annotated[float, Strict()]

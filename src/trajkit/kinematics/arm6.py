@@ -43,7 +43,8 @@ a = 4 v per second and j = 10 a per second.
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 

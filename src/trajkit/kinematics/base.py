@@ -20,8 +20,9 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -150,7 +151,7 @@ class Pose:
         object.__setattr__(self, "rotation", r)
 
     @classmethod
-    def trusted(cls, position: np.ndarray, rotation: np.ndarray) -> "Pose":
+    def trusted(cls, position: np.ndarray, rotation: np.ndarray) -> Pose:
         """Build without validation (for internal hot loops: inputs already float arrays)."""
         obj = object.__new__(cls)
         object.__setattr__(obj, "position", position)
@@ -158,7 +159,7 @@ class Pose:
         return obj
 
     @classmethod
-    def from_xyz_abc(cls, xyz: Any, abc: Any = (0.0, 0.0, 0.0)) -> "Pose":
+    def from_xyz_abc(cls, xyz: Any, abc: Any = (0.0, 0.0, 0.0)) -> Pose:
         """Pose from a position [m] and KUKA angles A, B, C [rad]."""
         return cls(np.asarray(xyz, dtype=np.float64), rotation_from_abc(abc))
 
@@ -174,7 +175,7 @@ class Pose:
         m[:3, 3] = self.position
         return m
 
-    def distance(self, other: "Pose") -> tuple[float, float]:
+    def distance(self, other: Pose) -> tuple[float, float]:
         """(position error [m], rotation angle error [rad]) to ``other``."""
         dp = float(np.linalg.norm(self.position - other.position))
         # |Ra - Rb|_F = 2 sqrt(2) sin(angle / 2): accurate for small angles.
@@ -324,7 +325,7 @@ class RobotModel(ABC):
                 f"{cfg!r} of {self.name}"
             )
         last_err = None
-        for c, q in candidates:
+        for _, q in candidates:
             try:
                 return self._fit_ranges(q, seed_arr)
             except UnreachableError as exc:

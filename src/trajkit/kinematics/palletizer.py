@@ -17,8 +17,9 @@ shape (n, 4).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -104,7 +105,7 @@ class CylindricalPalletizer:
         table: dict[str, Sequence[float]] | None = None,
         decel: dict[str, Sequence[float]] | None = None,
         name: str = "cylindrical palletizer",
-    ) -> "CylindricalPalletizer":
+    ) -> CylindricalPalletizer:
         """Build a robot from a table in deg and mm (the units of :data:`DEFAULT_JOINT_TABLE`).
 
         Parameters

@@ -9,6 +9,17 @@ Quick start::
     print(plan.total_s, plan.per_box_s)
 """
 
+from ._crossing import time_at_position
+from .cell import Cell, GripperVolume, Obstacle
+from .cellcheck import CellFinding, CellReport, check_cell
+from .cellplan import CellTrip, plan_cycle_cell
+from .optimal import (
+    OptimalTrip,
+    clearance_window,
+    plan_cycle_optimal,
+    plan_trip_optimal,
+    trip_lower_bound,
+)
 from .patterns import (
     ALTERNATE_MODES,
     PATTERN_NAMES,
@@ -33,21 +44,10 @@ from .planners import (
     plan_trip_ptp,
     register_planner,
 )
-from .optimal import (
-    OptimalTrip,
-    clearance_window,
-    plan_cycle_optimal,
-    plan_trip_optimal,
-    trip_lower_bound,
-)
-from .cell import Cell, GripperVolume, Obstacle
-from .cellcheck import CellFinding, CellReport, check_cell
-from .cellplan import CellTrip, plan_cycle_cell
 from .report import PAPER_TABLE1, summarize, table_rows
 from .scenario import PalletScenario, TripSpec, seed_scenario
 from .timeline import Piece, Timeline, TimelineSample
 from .verify import PlanVerificationError, VerificationReport, verify_plan
-from ._crossing import time_at_position
 
 __all__ = [
     "ALTERNATE_MODES", "PATTERN_NAMES", "BoxSize", "LayerPattern", "StackPattern",

@@ -193,7 +193,7 @@ def position_peak(profile) -> tuple[float, float, float]:
         boundaries and the zeros of the velocity.
     """
     cands = []
-    for t0, dt, p, v, a, j, pe in _monotone_pieces(profile):
+    for t0, dt, p, _v, _a, _j, pe in _monotone_pieces(profile):
         cands.append((p, t0))
         cands.append((pe, t0 + dt))
     if not cands:

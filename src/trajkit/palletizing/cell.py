@@ -32,8 +32,9 @@ All quantities in SI (m, rad).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -162,7 +163,7 @@ class Cell:
         object.__setattr__(self, "settle", s)
         object.__setattr__(self, "box_at_pick", bool(self.box_at_pick))
 
-    def static_prisms(self) -> "Prisms":
+    def static_prisms(self) -> Prisms:
         """The static obstacles as :class:`Prisms` (yaw 0)."""
         if not self.obstacles:
             return Prisms.empty()
@@ -225,20 +226,20 @@ class Prisms:
     names: tuple = ()
 
     @staticmethod
-    def empty() -> "Prisms":
+    def empty() -> Prisms:
         z = np.zeros(0)
         return Prisms(z, z, z, z, z, z, z, ())
 
     def __len__(self) -> int:
         return int(np.shape(self.cx)[0]) if np.ndim(self.cx) else 1
 
-    def concat(self, other: "Prisms") -> "Prisms":
+    def concat(self, other: Prisms) -> Prisms:
         """Both batches in one (1-D batches)."""
         f = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
         return Prisms(*(np.concatenate([getattr(self, k), getattr(other, k)]) for k in f),
                       names=tuple(self.names) + tuple(other.names))
 
-    def take(self, idx: Any) -> "Prisms":
+    def take(self, idx: Any) -> Prisms:
         """A sub-batch (1-D batches)."""
         idx = np.asarray(idx, dtype=int)
         f = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")

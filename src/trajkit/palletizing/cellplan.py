@@ -688,7 +688,7 @@ PEAK_TURNS = (1.0, 0.5)
 PEAK_XTOL = 1e-4
 
 
-def _peak(srch: "_BSearch", zp: float, ap: float, check: bool = True):
+def _peak(srch: _BSearch, zp: float, ap: float, check: bool = True):
     """B alone to a peak ``(zp, 0, ap)`` and down, minimum time each way; the
     block placed at the earliest start its floor allows (or None).
 
@@ -723,7 +723,7 @@ def _peak(srch: "_BSearch", zp: float, ap: float, check: bool = True):
     return None if got is None else (prof, lo, got[1])
 
 
-def _best_peak(srch: "_BSearch"):
+def _best_peak(srch: _BSearch):
     """The ``peak`` candidate with the lowest feasible peak, over :data:`PEAK_TURNS`."""
     lb = srch.lb
     zlo = max(float(np.max(srch.E[srch.m])) if srch.m.any() else -math.inf, *srch.zs)

@@ -1,6 +1,6 @@
 """The ``optimal`` palletizing planner: B passes its clearance heights at speed.
 
-Same clearance rule as seed 000's ``merged`` plan: the horizontal joints A, C,
+Same clearance rule as Cao et al.'s (2012) ``merged`` plan: the horizontal joints A, C,
 D move only while B is above ``Z1`` near the pick (going up) and above ``Z2``
 near the place (coming down). ``merged`` moves B rest-to-rest to a top
 height ``Zmax`` and back, so B stops at the top. Here B's whole trip is one

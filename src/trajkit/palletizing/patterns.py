@@ -89,11 +89,11 @@ class LayerPattern:
     def n_boxes(self) -> int:
         return int(self.offsets.shape[0])
 
-    def rotated180(self) -> "LayerPattern":
+    def rotated180(self) -> LayerPattern:
         """The layer turned 180 degrees about the pallet centre."""
         return LayerPattern(-self.offsets, self.yaw + math.pi, self.box, self.name + " (rot 180)")
 
-    def mirrored(self) -> "LayerPattern":
+    def mirrored(self) -> LayerPattern:
         """The layer mirrored about the pallet's x axis (y -> -y, yaw -> -yaw)."""
         return LayerPattern(self.offsets * np.array([1.0, -1.0]), -self.yaw, self.box,
                             self.name + " (mirror)")

@@ -1,4 +1,4 @@
-"""Cycle planners for palletizing: classic ``ptp`` and seed 000's ``merged`` plan.
+"""Cycle planners for palletizing: classic ``ptp`` and Cao et al.'s (2012) ``merged`` plan.
 
 A planner takes a :class:`~trajkit.palletizing.scenario.PalletScenario` and
 returns a :class:`CyclePlan`: the whole job as a :class:`Timeline` of
@@ -9,8 +9,8 @@ per-joint rest-to-rest profiles (which can be sampled and verified), plus a
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from scipy.optimize import brentq
@@ -197,7 +197,7 @@ def _merged_parts(scenario: PalletScenario, spec: TripSpec, zmax: float, t_h: fl
 
 
 def merged_trip_times(scenario: PalletScenario, spec: TripSpec, zmax) -> dict:
-    """Seed 000's trip-time terms as functions of ``Zmax`` (figures 9 to 12).
+    """Cao et al.'s (2012) trip-time terms as functions of ``Zmax`` (figures 9 to 12).
 
     Parameters
     ----------
@@ -262,7 +262,7 @@ def optimal_zmax(scenario: PalletScenario, spec: TripSpec) -> float:
 
 
 def plan_trip_merged(scenario: PalletScenario, spec: TripSpec, zmax: float | None = None) -> TripPlan:
-    """Seed 000's merged plan of one trip: B moves Z0 -> Zmax -> Z3 in two moves.
+    """Cao et al.'s (2012) merged plan of one trip: B moves Z0 -> Zmax -> Z3 in two moves.
 
     A, C and D start together (time-synchronised, shortest common duration
     ``tH``) when B passes ``Z1`` going up; B starts down as early as
@@ -323,7 +323,7 @@ def plan_cycle_ptp(scenario: PalletScenario) -> CyclePlan:
 
 
 def plan_cycle_merged(scenario: PalletScenario) -> CyclePlan:
-    """Seed 000's merged plan of the whole job (see :func:`plan_trip_merged`)."""
+    """Cao et al.'s (2012) merged plan of the whole job (see :func:`plan_trip_merged`)."""
     return _assemble("merged", scenario, [plan_trip_merged(scenario, s) for s in scenario.trips()])
 
 

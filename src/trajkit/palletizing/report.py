@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -177,7 +177,7 @@ def table_rows(summary: dict) -> list[list]:
     """Rows for :func:`table_columns` from a :func:`summarize` result (strings/floats)."""
     rows = []
     for name, d in summary["plans"].items():
-        def pct(key):
+        def pct(key, d=d):
             return f"{d[key]:.1f} %" if key in d else "-"
         rows.append([
             name,

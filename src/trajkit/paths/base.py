@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InvalidInputError
 from .._validate import check_array
+from ..errors import InvalidInputError
 from ._tolerances import MAX_COORDINATE, MIN_FEATURE, MIN_RELATIVE_FEATURE, S_RANGE_RTOL
 
 __all__ = ["Path", "check_point", "check_size"]

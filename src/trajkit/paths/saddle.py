@@ -32,10 +32,10 @@ from scipy.special import roots_legendre
 from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError
 from ._tolerances import (
-    MAX_COORDINATE,
     ARC_INVERSION_MAX_ITER,
     ARC_INVERSION_RTOL,
     GAUSS_ORDER,
+    MAX_COORDINATE,
     NEWTON_LAST_STEP,
     SADDLE_LENGTH_RTOL,
     THETA_RANGE_ATOL,

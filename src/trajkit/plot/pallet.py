@@ -6,8 +6,8 @@ it (atomically) when given ``path``. Units on the axes: mm, mm/s, s.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Mapping, Sequence
 
 import numpy as np
 

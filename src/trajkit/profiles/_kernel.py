@@ -319,8 +319,8 @@ def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
 @jit
 def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     """Brake candidate ``cand`` (0, 1: paths; 2, 3: bumps to +-v_max; 4: natural;
-    5: hold; 6: ruckig's rule; only 0 = none when the start is inside): (phase count or -1, duration); ``s1[:6]`` gets the
-    problem from its end."""
+    5: hold; 6: ruckig's rule; only 0 = none when the start is inside): (phase count or -1,
+    duration); ``s1[:6]`` gets the problem from its end."""
     if start_inside:
         if cand > 0:
             return -1, 0.0

@@ -114,8 +114,10 @@ def _peak_velocity(d, vmax, a1, j1, a2, j2, thr1, thr2):
         ak = np.where(first, a1, a2)
         jk = np.where(first, j1, j2)
         jo = np.where(first, j2, j1)
-        dist_lo = np.where(np.isfinite(lo), 0.5 * lo * (_leg_time(lo, a1, j1, thr1) + _leg_time(lo, a2, j2, thr2)), _inf)
-        dist_hi = np.where(np.isfinite(hi), 0.5 * hi * (_leg_time(hi, a1, j1, thr1) + _leg_time(hi, a2, j2, thr2)), _inf)
+        dist_lo = np.where(np.isfinite(lo),
+                           0.5 * lo * (_leg_time(lo, a1, j1, thr1) + _leg_time(lo, a2, j2, thr2)), _inf)
+        dist_hi = np.where(np.isfinite(hi),
+                           0.5 * hi * (_leg_time(hi, a1, j1, thr1) + _leg_time(hi, a2, j2, thr2)), _inf)
         rest = ~cruise
         above_lo = rest & np.isfinite(lo) & (dist_lo < d)
         both = above_lo & np.isfinite(hi) & (dist_hi <= d)

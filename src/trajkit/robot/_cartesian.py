@@ -14,18 +14,19 @@ jerk. Sampling solves IK at every sample.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
 from ..errors import InvalidInputError, UnreachableError
+from ..interpolation.feed import ramp_mask, stretch_speed
 from ..kinematics.base import Pose, RobotModel
 from ..paths._tolerances import COINCIDENT_DIST
 from ..paths.arc import Arc3
 from ..paths.line import Line
 from ..timing import PathTiming, plan_path_timing
-from ..interpolation.feed import ramp_mask, stretch_speed
 from ._jointpath import ChainJointPath
 from ._pieces import (
     BezierBlend,

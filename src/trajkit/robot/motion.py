@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 
@@ -51,7 +51,7 @@ class CartesianTarget:
     name: str = "point"
 
 
-Target = Union[JointTarget, CartesianTarget]
+Target = JointTarget | CartesianTarget
 
 
 def _check_target(t: Any, field_name: str) -> None:
@@ -166,4 +166,4 @@ class Wait:
             raise InvalidInputError(f"{self.label}: time must be >= 0 s, got {t!r}")
 
 
-Motion = Union[Ptp, Lin, Circ, Wait]
+Motion = Ptp | Lin | Circ | Wait

@@ -8,7 +8,7 @@ return numbers/arrays; :class:`Streamer` runs them once per control period.
 from ._brake import BrakeProfile, brake_profile, stop_position
 from .pulses import PulseAxis, PulseRateFault, edge_times, pulse_count, pulse_counts
 from .safety import QUANTITIES, REACTIONS, RuntimeFault, SafetyConfig
-from .servo import ServoBank, ServoParams, seed000_servo
+from .servo import ServoBank, ServoParams, cao2012_servo
 from .simulate import MotionTiming, SimulationReport, simulate
 from .source import ProgramSource, as_source
 from .streamer import STATES, RuntimeEvent, Setpoint, Streamer
@@ -35,7 +35,7 @@ __all__ = [
     "edge_times",
     "pulse_count",
     "pulse_counts",
-    "seed000_servo",
+    "cao2012_servo",
     "simulate",
     "stop_position",
 ]

@@ -1,8 +1,8 @@
 """Step/direction pulse output (patent CN105892402): commanded positions -> pulses per period.
 
 The count is computed from the *absolute* commanded position every period,
-``count = floor(position / pulse_equivalent + 1/2)`` (:func:`pulse_count`), and the pulses of a period are the difference to the
-previous count. Nothing is accumulated from increments, so there is no drift
+``count = floor(position / pulse_equivalent + 1/2)`` (:func:`pulse_count`), and the pulses of a
+period are the difference to the previous count. Nothing is accumulated from increments, so there is no drift
 and no lost position over any number of moves: after every period the
 accumulated pulse count equals the commanded position rounded to one pulse.
 """

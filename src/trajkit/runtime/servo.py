@@ -272,7 +272,7 @@ class ServoBank:
         self.x, self.v, self.integ = x, v, integ
 
 
-def seed000_servo(robot: Any = None, inertia_ratio: float = 1.3) -> list[ServoParams]:
+def cao2012_servo(robot: Any = None, inertia_ratio: float = 1.3) -> list[ServoParams]:
     """Servo parameters for the palletizing comparison with Cao et al. (2012) (joints A, B, C, D).
 
     The paper gives none. These describe a moderately tuned industrial drive:

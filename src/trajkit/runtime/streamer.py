@@ -603,7 +603,7 @@ class Streamer:
 
     @classmethod
     def hold_at(cls, position: Any, period: float, limits: Sequence[AxisLimits],
-                **kwargs: Any) -> "Streamer":
+                **kwargs: Any) -> Streamer:
         """A streamer whose program is to stand still at ``position``: for online
         targets only (:meth:`set_target`; e.g. a jog without a loaded job).
 
@@ -665,7 +665,7 @@ class Streamer:
         self._push("reset")
 
     def set_target(self, position: Any, velocity: Any = None, acceleration: Any = None, *,
-                   sync: str = "time") -> None:
+                   sync: str = "time", limits: Sequence[AxisLimits] | None = None) -> None:
         """Move to a goal state now, re-planning from the commanded state (online target).
 
         Applied at the start of the next cycle: the axes leave the current
@@ -688,11 +688,18 @@ class Streamer:
         sync : {"time", "none"}
             ``"time"``: all axes arrive together; ``"none"``: each as fast as
             it can.
+        limits : sequence of AxisLimits, optional
+            One per axis: plan this target with lower limits than
+            :attr:`limits` (e.g. a jog at a reduced speed). Each value must
+            be within the streamer's own limit for that axis; a current
+            velocity or acceleration above them is braked time-optimally
+            first.
 
         Raises
         ------
         InvalidInputError
-            A malformed goal (shape, NaN/inf) or an unknown ``sync``; a goal
+            A malformed goal (shape, NaN/inf), an unknown ``sync`` or
+            ``limits`` above the streamer's own; a goal
             the limits cannot reach or a position outside an axis' range is
             refused when the command is applied (event ``rejected``, the
             motion goes on unchanged).
@@ -721,7 +728,29 @@ class Streamer:
             goal[:, col] = arr
         if sync not in ("time", "none"):
             raise InvalidInputError(f"target sync must be 'time' or 'none', got {sync!r}")
-        self._push("target", goal, sync)
+        self._push("target", goal, sync, None if limits is None else self._target_limits(limits))
+
+    def _target_limits(self, limits: Sequence[AxisLimits]) -> list[AxisLimits]:
+        """``limits`` checked against the streamer's own, one per axis."""
+        lims = list(limits) if isinstance(limits, (list, tuple)) else None
+        if lims is None or len(lims) != self.n_axes or not all(isinstance(lm, AxisLimits) for lm in lims):
+            raise InvalidInputError(f"target limits must be {self.n_axes} AxisLimits (one per axis), "
+                                    f"got {type(limits).__name__}")
+        for k, (lm, own) in enumerate(zip(lims, self.limits)):
+            for field in ("v_max", "a_max", "j_max", "a_max_decel", "j_max_decel"):
+                val, bound = getattr(lm, field), getattr(own, field)
+                if val > bound:
+                    raise InvalidInputError(f"target limits[{k}].{field} = {val!r} exceeds the axis' "
+                                            f"limit {bound!r} ({own.name or f'axis {k}'})")
+        return lims
+
+    @property
+    def target_motion(self) -> tuple[float, float] | None:
+        """``(elapsed, duration)`` [s] of the motion to the current online target, or None."""
+        if self._mode != "target" or self._online is None:
+            return None
+        traj, i = self._online
+        return min(i * self.period, traj.duration), traj.duration
 
     def inject_encoder_jump(self, axis: int, delta: float) -> None:
         """Fault injection: the measured position of ``axis`` jumps by ``delta`` [unit]."""
@@ -800,7 +829,7 @@ class Streamer:
                 f = RuntimeFault("all", "emergency stop", 0.0, 0.0, self.cycle, self.t)
                 self._emergency(f)
         elif kind == "target":
-            self._apply_target(cmd[1], cmd[2])
+            self._apply_target(cmd[1], cmd[2], cmd[3])
         elif kind == "reset":
             if self.state == "fault":
                 self.state = "reset"
@@ -817,14 +846,14 @@ class Streamer:
             else:
                 self._event("rejected", f"reset rejected in state {self.state}")
 
-    def _apply_target(self, goal: np.ndarray, sync: str) -> None:
+    def _apply_target(self, goal: np.ndarray, sync: str, limits: list[AxisLimits] | None) -> None:
         """Re-plan from the commanded state to ``goal`` (see :meth:`set_target`)."""
         if self.state not in ("idle", "running") or self._mode == "brake":
             self._event("rejected", f"target rejected in state {self.state}")
             return
         start = np.column_stack([self._q, self._v, self._a])
         try:
-            traj = plan_ptp_states(start, goal, self.limits, sync=sync)
+            traj = plan_ptp_states(start, goal, self.limits if limits is None else limits, sync=sync)
         except TrajkitError as err:
             self._event("rejected", f"target rejected: {err}")
             return

@@ -9,7 +9,8 @@ joint-space straight line.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 from .._constants import DURATION_RTOL
 from ..errors import InfeasibleError, InvalidInputError
@@ -51,7 +52,7 @@ def plan_ptp_rest(
         One set of limits for every axis, or one per axis.
     sync : {"time", "phase", "none"}
         ``"time"``: every axis starts and arrives together at the slowest
-        axis' minimum time (seed 002's synchronisation, with S-curves), each
+        axis' minimum time (Jiang, 1987's synchronisation, with S-curves), each
         keeping its own limits. ``"phase"``: every axis follows the same
         normalised profile, so the motion is a straight line in joint space,
         within every axis' limits. ``"none"``: each axis at its own minimum

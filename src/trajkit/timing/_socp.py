@@ -393,7 +393,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
         sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
-    for rnd in range(max_rounds):
+    for _ in range(max_rounds):
         eq = _Rows(nv)
         eq.add([ix[0:1]], [np.ones(1)], np.array([p.x0]))
         eq.add([iu[0:1]], [np.ones(1)], np.array([p.u0]))

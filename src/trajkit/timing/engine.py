@@ -33,17 +33,18 @@ jerk-free optimum on the same grid is reported beside it as a lower bound
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 
 from .._validate import check_positive
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
+from ..profiles import plan_move
 from ..profiles._pieces import eval_pieces
 from ._hermite import hermite_pieces
-from ..profiles import plan_move
 from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, solve_grid
 from .paths import JointPath
 
@@ -356,7 +357,8 @@ def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
 
 
 def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
-            breaks: np.ndarray = np.zeros(0), rtol: float = GRID_RTOL) -> tuple:
+            breaks: np.ndarray | None = None, rtol: float = GRID_RTOL) -> tuple:
+    breaks = np.zeros(0) if breaks is None else breaks
     for _ in range(GRID_PASSES):
         if s.size >= GRID_MAX:
             break

@@ -14,8 +14,9 @@ limits. The motion stops only where the path reverses (a corner of nearly
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -24,7 +25,7 @@ from scipy.interpolate import CubicSpline
 from .._validate import check_array, check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
-from .engine import PathTiming, plan_path_timing
+from .engine import plan_path_timing
 
 __all__ = ["BlendedJointPath", "SplineJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
            "MAX_WAYPOINTS", "REVERSAL_ANGLE"]

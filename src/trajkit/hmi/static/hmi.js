@@ -7,7 +7,7 @@
   const TOKEN = params.get("token");
   const HISTORY_S = 20;
   let jobLoaded = false, plannedPath = [], trail = [], axesKey = "", charts = null;
-  let chartData = null, t0 = null, lastState = null, lastTool = null, steps = [], lastRun = null;
+  let chartData = null, t0 = null, lastState = null, lastTool = null, steps = [], lastRun = null, jogging = false;
   let lastJobId = null;
 
   // ------------------------------------------------------------------ API
@@ -232,14 +232,18 @@
     en("btn-resume", st === "paused" || st === "pausing");
     en("btn-stop", st === "running" || st === "paused" || st === "pausing");
     en("btn-reset", st === "fault");
-    for (const id of ["jog-minus", "jog-plus", "btn-teach", "robot"]) en(id, st === "idle");
+    // a jog step while a jog moves re-targets it (the server re-plans from the commanded state)
+    for (const id of ["jog-minus", "jog-plus"]) en(id, st === "idle" || (st === "running" && jogging));
+    for (const id of ["btn-teach", "robot"]) en(id, st === "idle");
   }
   function onLive(snap) {
     const st = snap.state;
     const badge = $("state");
     badge.textContent = st === "fault" ? "E-STOP" : st;
     badge.className = "state state-" + st;
-    if (st !== lastState) {
+    const jog = st === "running" && snap.motion === "online target";
+    if (st !== lastState || jog !== jogging) {
+      jogging = jog;
       updateButtons(st);
       if (st === "idle" && lastState !== null) refreshRobot();
       lastState = st;
