@@ -133,6 +133,11 @@ FINE_SPAN = 0.06
 #: margin of the exact checks; a micrometre).
 FLOOR_MARGIN = 1e-6
 
+#: A B motion placed at the earliest start its binding floor point allows
+#: touches the envelope by construction: its margin there is 0 up to round-off
+#: of the profile's phases [m]. Within FLOOR_MARGIN, so the clearance holds.
+TOUCH_TOL = 1e-12
+
 #: Distances within this of the clearance count as keeping it [m]: the
 #: resolution of the certified check between grid points (the verifier
 #: uses the same tolerance).
@@ -574,7 +579,7 @@ def _hold(z0, z3, zh, t_h, lb, tau, E, zs):
     prof = _trip_profile(phases, z0, z3, lb, "cell:hold")
     t_s = up.duration
     m = _check(prof, t_s, tau, E)
-    if m < 0.0 or not _settle_ok(prof, t_s, t_h, *zs):
+    if m < -TOUCH_TOL or not _settle_ok(prof, t_s, t_h, *zs):
         return None
     return prof, t_s, m
 
@@ -641,7 +646,7 @@ class _BSearch:
         if t_s + self.t_h > prof.duration + 1e-12:
             return None
         mg = _check(prof, t_s, self.tau, self.E)
-        if mg >= 0.0 and _settle_ok(prof, t_s, self.t_h, *self.zs):
+        if mg >= -TOUCH_TOL and _settle_ok(prof, t_s, self.t_h, *self.zs):
             return prof, mg
         return None
 
