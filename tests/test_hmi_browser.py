@@ -301,9 +301,11 @@ def test_jog_teach_build_save_load(hmi_server, page):
     page.click("#jog-plus")
     page.click("#jog-minus")
     page.click("#jog-plus")
-    until(page, "document.getElementById('state').textContent === 'idle'"
-                " && document.getElementById('msg').textContent === 'jogging J1'")
-    assert "40.000 deg" in page.inner_text("#joints"), (page.inner_text("#msg"), sess.events[-8:])
+    try:
+        until(page, "document.getElementById('state').textContent === 'idle'"
+                    " && document.querySelector('#joints').textContent.includes('40.000 deg')")
+    except Exception as exc:
+        raise AssertionError((page.inner_text("#msg"), sess.events[-8:])) from exc
     assert sess.run_id == run + 1 and math.degrees(sess.q[0]) == pytest.approx(40.0, abs=1e-9)
     assert [e.kind for e in sess.drive.streamer.events].count("target") == 4
     page.fill("#jog-speed", "20")

@@ -33,6 +33,7 @@ from trajkit.palletizing.cell import (
     volume_floors,
 )
 from trajkit.palletizing.cellcheck import CLEARANCE_ATOL
+from trajkit.palletizing.cellplan import FLOOR_MARGIN, TOUCH_TOL
 from trajkit.palletizing.planners import CyclePlan
 from trajkit.palletizing.report import cycle_rows
 from trajkit.palletizing.timeline import Piece, Timeline
@@ -184,7 +185,9 @@ def test_seed_cell_targets(seed_cell):
     for tp, info in zip(plan.trips, plan.info["trips"]):
         assert info.duration == pytest.approx(tp.duration, rel=1e-12)
         assert info.lower_bound <= tp.duration * (1 + 1e-9)
-        assert info.margin >= 0.0
+        # over the floor, which keeps FLOOR_MARGIN (1 um) above the obstacles: a B motion
+        # placed on its binding floor point touches it up to round-off
+        assert info.margin >= -TOUCH_TOL and TOUCH_TOL < 1e-3 * FLOOR_MARGIN
 
 
 def test_seed_cell_order_and_wrists(seed_cell):

@@ -41,8 +41,8 @@ def _run(lims, seed, n_targets):
     plans = []
     orig = st._apply_target
 
-    def spy(goal, sync):
-        orig(goal, sync)
+    def spy(goal, sync, limits):
+        orig(goal, sync, limits)
         if st._online is not None and st._online[1] == 0:
             plans.append((np.column_stack([st._q, st._v, st._a]), st._online[0]))
 
