@@ -20,7 +20,7 @@ def _leg_threshold(a: float, j: float) -> float:
     return a * a / j
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class AxisLimits:
     """Kinematic limits of one axis, validated at construction.
 
@@ -54,25 +54,44 @@ class AxisLimits:
         field, the axis and the value.
     """
 
+    # After construction every limit is a float: a ``None`` decel limit has been
+    # replaced by the accel one, hence the explicit ``__init__`` below.
     v_max: float
     a_max: float
     j_max: float
-    a_max_decel: float | None = None
-    j_max_decel: float | None = None
-    position_min: float = -math.inf
-    position_max: float = math.inf
-    name: str | int | None = field(default=None, compare=False)
+    a_max_decel: float
+    j_max_decel: float
+    position_min: float
+    position_max: float
+    name: str | int | None = field(compare=False)
+    # derived once per instance (not parameters, not compared, not shown):
+    # the velocity ``a^2/j`` of each leg (accel, decel), the larger acceleration
+    # limit of both legs and ``1/(2 j)`` for the smaller jerk limit (0 for none)
+    _thresholds: tuple[float, float] = field(init=False, repr=False, compare=False)
+    _amax: float = field(init=False, repr=False, compare=False)
+    _kmin2: float = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self) -> None:
-        ax = self.name
-        v = check_positive(self.v_max, "maximum velocity limit v_max", ax, allow_inf=True)
-        a = check_positive(self.a_max, "maximum acceleration limit a_max", ax, allow_inf=True)
-        j = check_positive(self.j_max, "maximum jerk limit j_max", ax, allow_inf=True)
-        ad = a if self.a_max_decel is None else check_positive(
-            self.a_max_decel, "maximum deceleration limit a_max_decel", ax, allow_inf=True
+    def __init__(
+        self,
+        v_max: float,
+        a_max: float,
+        j_max: float,
+        a_max_decel: float | None = None,
+        j_max_decel: float | None = None,
+        position_min: float = -math.inf,
+        position_max: float = math.inf,
+        name: str | int | None = None,
+    ) -> None:
+        ax = name
+        object.__setattr__(self, "name", name)
+        v = check_positive(v_max, "maximum velocity limit v_max", ax, allow_inf=True)
+        a = check_positive(a_max, "maximum acceleration limit a_max", ax, allow_inf=True)
+        j = check_positive(j_max, "maximum jerk limit j_max", ax, allow_inf=True)
+        ad = a if a_max_decel is None else check_positive(
+            a_max_decel, "maximum deceleration limit a_max_decel", ax, allow_inf=True
         )
-        jd = j if self.j_max_decel is None else check_positive(
-            self.j_max_decel, "maximum deceleration jerk limit j_max_decel", ax, allow_inf=True
+        jd = j if j_max_decel is None else check_positive(
+            j_max_decel, "maximum deceleration jerk limit j_max_decel", ax, allow_inf=True
         )
         if math.isinf(a) and math.isinf(j):
             raise InvalidInputError(
@@ -85,12 +104,12 @@ class AxisLimits:
                 "(the velocity would jump)"
             )
         try:
-            pmin = float(self.position_min)
-            pmax = float(self.position_max)
+            pmin = float(position_min)
+            pmax = float(position_max)
         except (TypeError, ValueError):
             raise InvalidInputError(
                 f"position range{axis_label(ax)} must be numbers, got "
-                f"[{self.position_min!r}, {self.position_max!r}]"
+                f"[{position_min!r}, {position_max!r}]"
             ) from None
         if math.isnan(pmin) or math.isnan(pmax):
             raise InvalidInputError(
@@ -112,6 +131,9 @@ class AxisLimits:
         object.__setattr__(self, "position_min", pmin)
         object.__setattr__(self, "position_max", pmax)
         object.__setattr__(self, "_thresholds", (_leg_threshold(a, j), _leg_threshold(ad, jd)))
+        object.__setattr__(self, "_amax", max(a, ad))
+        jm = min(j, jd)
+        object.__setattr__(self, "_kmin2", 0.5 / jm if jm < math.inf else 0.0)
 
     @property
     def symmetric(self) -> bool:
@@ -122,10 +144,9 @@ class AxisLimits:
         """Return a copy carrying ``name`` for error messages (no re-validation)."""
         new = object.__new__(AxisLimits)
         for f in ("v_max", "a_max", "j_max", "a_max_decel", "j_max_decel",
-                  "position_min", "position_max"):
+                  "position_min", "position_max", "_thresholds", "_amax", "_kmin2"):
             object.__setattr__(new, f, getattr(self, f))
         object.__setattr__(new, "name", name)
-        object.__setattr__(new, "_thresholds", self._thresholds)
         return new
 
     def scaled(self, factor: float) -> AxisLimits:

@@ -300,7 +300,7 @@ def plan_feed(
     fns: list[tuple[SpeedLimitFn, int]] = []
     if speed_limit is not None:
         fns.append((speed_limit, 0))
-    if tolerance is not None:
+    if tolerance is not None and period is not None:  # both or neither (checked above)
         fns.append((chord_speed_limit(path, tolerance, period), len(names)))
         names.append(CHORD_REASON)
 

@@ -301,6 +301,7 @@ def plan_saddle(
         if chk.ok:
             return last
         scale *= SHRINK_MARGIN / float(np.max(chk.ratio))
+    assert last is not None  # MAX_ROUNDS >= 1: at least one round ran
     raise InfeasibleError(  # pragma: no cover - not reached in the sweeps
         f"no saddle plan within the axis limits after {MAX_ROUNDS} rounds "
         f"(worst ratio {float(np.max(last.check.ratio))!r})"

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -116,9 +116,9 @@ def wrap_angle(a: Any) -> Any:
         w = math.fmod(a + math.pi, 2.0 * math.pi)
         w = (w + 2.0 * math.pi if w < 0.0 else w) - math.pi
         return math.pi if w == -math.pi else w
-    w = np.mod(np.asarray(a, dtype=np.float64) + math.pi, 2.0 * math.pi) - math.pi
-    w = np.where(w == -math.pi, math.pi, w)
-    return float(w) if np.ndim(w) == 0 else w
+    wa = np.mod(np.asarray(a, dtype=np.float64) + math.pi, 2.0 * math.pi) - math.pi
+    wa = np.where(wa == -math.pi, math.pi, wa)
+    return float(wa) if np.ndim(wa) == 0 else wa
 
 
 @dataclass(frozen=True)
@@ -371,7 +371,7 @@ class RobotModel(ABC):
         return out
 
 
-def _fmt_xyz(p: Sequence[float]) -> str:
+def _fmt_xyz(p: Iterable[float]) -> str:
     return "(" + ", ".join(f"{1e3 * float(v):.3f}" for v in p) + ") mm"
 
 

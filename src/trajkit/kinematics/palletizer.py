@@ -17,7 +17,7 @@ shape (n, 4).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -102,8 +102,8 @@ class CylindricalPalletizer:
     @classmethod
     def from_table(
         cls,
-        table: dict[str, Sequence[float]] | None = None,
-        decel: dict[str, Sequence[float]] | None = None,
+        table: Mapping[str, Sequence[float]] | None = None,
+        decel: Mapping[str, Sequence[float | None]] | None = None,
         name: str = "cylindrical palletizer",
     ) -> CylindricalPalletizer:
         """Build a robot from a table in deg and mm (the units of :data:`DEFAULT_JOINT_TABLE`).
@@ -116,15 +116,16 @@ class CylindricalPalletizer:
             C. Defaults to :data:`DEFAULT_JOINT_TABLE`.
         decel : dict, optional
             ``{"B": (a_max_decel, j_max_decel), ...}`` in the same units for
-            joints with asymmetric limits.
+            joints with asymmetric limits; a ``None`` entry takes the accel
+            leg's limit.
         """
-        table = DEFAULT_JOINT_TABLE if table is None else table
+        rows: Mapping[str, Sequence[float]] = DEFAULT_JOINT_TABLE if table is None else table
         decel = decel or {}
         lims = []
         for jn in JOINT_NAMES:
-            if jn not in table:
+            if jn not in rows:
                 raise InvalidInputError(f"joint table has no row for joint {jn}")
-            row = tuple(table[jn])
+            row = tuple(rows[jn])
             if len(row) != 5:
                 raise InvalidInputError(
                     f"joint table row of joint {jn} must be (v_max, a_max, j_max, min, max), "
@@ -135,7 +136,8 @@ class CylindricalPalletizer:
                 ad, jd = decel[jn]
             lim = AxisLimits(row[0], row[1], row[2], ad, jd, row[3], row[4], name=jn)
             lims.append(lim.scaled(TABLE_TO_SI[jn]))
-        return cls(tuple(lims), name=name)  # type: ignore[arg-type]
+        a, b, c, d = lims  # one per joint of JOINT_NAMES
+        return cls((a, b, c, d), name=name)
 
     # ------------------------------------------------------------ properties
     @property

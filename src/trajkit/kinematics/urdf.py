@@ -134,8 +134,9 @@ class UrdfRobot(RobotModel):
             kinds.append(_KINDS[short])
         self.joint_names = tuple(names)
         self.joint_kinds = tuple(kinds)
+        lims: list[AxisLimits]
         if limits is not None:
-            lims = tuple(limits)
+            lims = list(limits)
             if len(lims) != len(names):
                 raise InvalidInputError(f"limits has {len(lims)} entries, the URDF has {len(names)} joints")
         else:

@@ -15,11 +15,13 @@ them recompiles every kernel (no stale machine code).
 
 from __future__ import annotations
 
+import importlib
 import os
 import types
 
+numba: types.ModuleType | None
 try:  # pragma: no cover - depends on the install
-    import numba
+    numba = importlib.import_module("numba")
 except ImportError:  # pragma: no cover
     numba = None
 
@@ -70,13 +72,20 @@ if ENABLED:
     _install_cache_locator()
 
 
+def _numba() -> types.ModuleType:
+    """The numba module; called only when :data:`ENABLED` (which implies it is installed)."""
+    if numba is None:  # pragma: no cover - ENABLED is False without numba
+        raise RuntimeError("the compiled kernels need numba, which is not installed")
+    return numba
+
+
 def jit(fn):
     """Compile ``fn`` with ``numba.njit`` (cached, no fast-math, numpy's float
     error model: a division by zero gives inf/nan as in the Python path, where
     the kernels run on numpy floats) when :data:`ENABLED`."""
     if not ENABLED:
         return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    return _numba().njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 def jit_parallel(fn):
@@ -84,11 +93,11 @@ def jit_parallel(fn):
     run on every core); plain Python when not :data:`ENABLED`."""
     if not ENABLED:
         return fn
-    return numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")(fn)
+    return _numba().njit(cache=True, nogil=True, parallel=True, error_model="numpy")(fn)
 
 
 #: ``numba.prange`` when :data:`ENABLED`, else ``range``.
-prange = numba.prange if ENABLED else range
+prange = _numba().prange if ENABLED else range
 
 
 def compiled_twins(namespace: dict, names) -> dict:
@@ -103,6 +112,7 @@ def compiled_twins(namespace: dict, names) -> dict:
     """
     if not ENABLED:
         return {n: namespace[n] for n in names}
+    njit = _numba().njit
     g = dict(namespace)
     out = {}
     for n in names:
@@ -110,6 +120,6 @@ def compiled_twins(namespace: dict, names) -> dict:
         twin = types.FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__)
         twin.__module__ = f.__module__
         twin.__qualname__ = f.__qualname__
-        out[n] = numba.njit(cache=True, nogil=True, error_model="numpy")(twin)
+        out[n] = njit(cache=True, nogil=True, error_model="numpy")(twin)
     g.update(out)  # compiled lazily: every call between twins resolves to a twin
     return out

@@ -399,6 +399,7 @@ def plan_moves(
         bad, dur, tmin, phases, jerks, vpk, ap1, ap2 = _jit.plan_batch(
             s, g, vm, a1, j1, a2, j2, thr1, thr2, T)
         if bad >= 0:
+            assert T is not None  # a move is too short only for a requested duration
             raise InfeasibleError(
                 f"durations[{bad}] = {float(T[bad])!r} s is below the minimum duration "
                 f"{tmin[bad]:.15g} s",

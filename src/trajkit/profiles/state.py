@@ -251,9 +251,6 @@ def _check_limits(limits: Any) -> AxisLimits:
             f"limits{axis_label(limits.name)}: v_max and a_max cannot both be infinite for a "
             "profile between moving states")
     check_limits_range(limits, states=True)
-    object.__setattr__(limits, "_amax", max(limits.a_max, limits.a_max_decel))
-    jm = min(limits.j_max, limits.j_max_decel)
-    object.__setattr__(limits, "_kmin2", 0.5 / jm if jm < math.inf else 0.0)
     object.__setattr__(limits, "_states_ok", True)
     return limits
 

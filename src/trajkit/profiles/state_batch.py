@@ -219,9 +219,11 @@ def plan_state_moves(
         if st == B.ST_GOAL:
             raise InvalidInputError(f"goals[{i}] {tuple(g[i])!r} cannot be reached within the limits")
         if st == K.ST_SHORT:
+            assert T is not None  # a move is too short only for a requested duration
             raise InfeasibleError(f"durations[{i}] = {float(T[i])!r} s is below the minimum "
                                   f"duration {float(tmin[i])!r} s", minimum=float(tmin[i]))
         if st == K.ST_BLOCKED:
+            assert T is not None  # a duration is blocked only when one is requested
             raise InfeasibleError(f"durations[{i}] = {float(T[i])!r} s lies in a blocked interval "
                                   f"of move {i}", minimum=float(tmin[i]))
         if st == K.ST_BRAKE:

@@ -40,7 +40,7 @@ Pure math: arrays in, arrays out. The SOCP solver is Clarabel.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -139,6 +139,8 @@ class GridSolution:
     converged : bool
     status : str
         The solver's status of the last round.
+    history : list of float
+        The model's duration after every round [s].
     """
 
     x: np.ndarray
@@ -148,7 +150,7 @@ class GridSolution:
     rounds: int
     converged: bool
     status: str
-    history: list = None  # time of every round [s]
+    history: list[float] = field(default_factory=list)  # time of every round [s]
 
 
 class _Rows:
@@ -436,6 +438,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                      [0.5 * np.ones(cm.size), 0.5 * np.ones(cm.size), 0.25 * D[cm], -0.25 * D[cm]],
                      capm[cm])
         # joint accelerations at the free nodes, both legs
+        nn: np.ndarray
+        kk: np.ndarray
         nn, kk = np.meshgrid(inner, np.arange(m), indexing="ij")
         nn, kk = nn.ravel(), kk.ravel()
         sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
@@ -452,6 +456,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             S = np.maximum(S, 0.5 * (sq[ii] + sq[ii + 1]))
             # jerk leg from the previous round: accel leg where the joint speeds up
             qdd_bar = d2 * x_bar[:, None] + d1 * u_bar[:, None]
+            it: np.ndarray
             for node_of in (ii, ii + 1):
                 nn, kk = np.meshgrid(node_of, np.arange(m), indexing="ij")
                 it, _ = np.meshgrid(ii, np.arange(m), indexing="ij")

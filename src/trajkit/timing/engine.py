@@ -45,7 +45,7 @@ from ..limits import AxisLimits
 from ..profiles import plan_move
 from ..profiles._pieces import eval_pieces
 from ._hermite import hermite_pieces
-from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, solve_grid
+from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, solve_grid
 from .paths import JointPath
 
 __all__ = ["PathTiming", "plan_path_timing", "CHECK_PER_PIECE", "MAX_TIGHTEN", "LimitUse"]
@@ -685,6 +685,13 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
     return _use_of(lim, *cat)
 
 
+#: The best attempt of :func:`plan_path_timing` so far: (score, solution, piece
+#: durations, piece jerks, limit use, uniform time scale, interval of every
+#: piece, (grid, derivatives, speed cap, curvature, velocity cap)).
+_Best = tuple[float, GridSolution, np.ndarray, np.ndarray, LimitUse, float, np.ndarray,
+              tuple[np.ndarray, tuple, np.ndarray, np.ndarray | None, np.ndarray]]
+
+
 # --------------------------------------------------------------------------- public
 def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                      speed: float | Callable[[np.ndarray], np.ndarray] = math.inf,
@@ -784,7 +791,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     rest0 = start_speed == 0.0 and start_accel == 0.0
     restN = end_speed == 0.0 and end_accel == 0.0
 
-    best = None
+    best: _Best | None = None
+    sol: GridSolution | None  # the solution kept; None for the fallback timing
+    piv: np.ndarray | None  # the grid interval of every piece (with sol)
     try:
         # per-node limits, lowered where the check finds an excess
         scale_v = np.ones((n, m))
@@ -810,7 +819,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             cap = cap_fn(s)
             with np.errstate(divide="ignore"):
                 vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1), cap)
-            if kappa is not None:
+            if curvature is not None:
                 kappa = np.abs(np.asarray(curvature(s), dtype=float))
             n = s.size
             x_cap = cap ** 2
@@ -874,7 +883,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 with np.errstate(divide="ignore"):
                     vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf),
                                              axis=1), cap)
-                if kappa is not None:
+                if curvature is not None:
                     kappa = np.abs(np.asarray(curvature(s), dtype=float))
                 splits += 1
                 continue
@@ -898,8 +907,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 np.minimum.at(xmid_scale, c, f * xmid_scale[c])
     except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
         best = None
-    fallback = best is None
-    if fallback:
+    if best is None:
         if not (rest0 and restN):
             raise InfeasibleError("no timing found for a path with a moving boundary state")
         dur0, jk0 = _fallback(s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
@@ -914,7 +922,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 "down uniformly with a moving boundary state")
         dur = dur0 * k_scale
         jk = jk0 / k_scale**3
-        if fallback:
+        if sol is None or piv is None:  # the fallback
             t, st = _pieces_state(dur, jk, 0.0, 0.0, 0.0)
             st[-1] = (L, 0.0, 0.0)
         else:
@@ -936,7 +944,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if extra <= 1.0:
             break
         k_scale *= extra
-    if fallback:
+    if sol is None:
         tt = np.linspace(0.0, t[-1], 20 * s.size)
         sv = _sample_pieces(t, st, jk, tt)
         grid_speed = np.interp(s, sv[0], sv[1])
@@ -944,8 +952,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         grid_speed = np.sqrt(sol.x) / k_scale
     return PathTiming(path=path, limits=lims, duration=float(t[-1]), t=t, state=st, jerk=jk,
                       grid=s, grid_speed=grid_speed, speed_cap=vcap, jerk_free_time=jerk_free_time,
-                      time_scale=k_scale, limit_use=use, rounds=0 if fallback else sol.rounds,
+                      time_scale=k_scale, limit_use=use, rounds=0 if sol is None else sol.rounds,
                       grid_derivatives=der,
                       info={"nodes": int(s.size), "tightened": tightened,
-                            "status": "fallback" if fallback else sol.status,
-                            "converged": (not fallback) and sol.converged, "round_rtol": ROUND_RTOL})
+                            "status": "fallback" if sol is None else sol.status,
+                            "converged": sol is not None and sol.converged, "round_rtol": ROUND_RTOL})

@@ -214,20 +214,31 @@ def _least_bending(points: np.ndarray, knots: np.ndarray, tol: float) -> np.ndar
             vals += [2.0 * h[i] / 3.0, 2.0 * h[i] / 3.0, h[i] / 3.0]
     Q = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nv, 2 * nv))
     # equalities: fixed ends, natural ends, the spline's continuity relations
-    er, ec, ev, eb = [], [], [], []
+    er: list[int] = []  # row, column and value of every entry of A
+    ec: list[int] = []
+    ev: list[float] = []
+    eb: list[float] = []  # right-hand side of every row
+
+    def entry(row: int, col: int, val: float) -> None:
+        er.append(row)
+        ec.append(col)
+        ev.append(val)
+
     r = 0
     for j in range(m):
         for i, want in ((0, points[0, j]), (k - 1, points[-1, j])):
-            er.append(r), ec.append(pi[i, j]), ev.append(1.0), eb.append(want)
+            entry(r, pi[i, j], 1.0)
+            eb.append(want)
             r += 1
-            er.append(r), ec.append(mi[i, j]), ev.append(1.0), eb.append(0.0)
+            entry(r, mi[i, j], 1.0)
+            eb.append(0.0)
             r += 1
         for i in range(1, k - 1):
             h0, h1 = h[i - 1], h[i]
             for col, val in ((mi[i - 1, j], h0), (mi[i, j], 2.0 * (h0 + h1)), (mi[i + 1, j], h1),
                              (pi[i + 1, j], -6.0 / h1), (pi[i, j], 6.0 / h1 + 6.0 / h0),
                              (pi[i - 1, j], -6.0 / h0)):
-                er.append(r), ec.append(col), ev.append(val)
+                entry(r, col, val)
             eb.append(0.0)
             r += 1
     n_eq = r
@@ -236,7 +247,8 @@ def _least_bending(points: np.ndarray, knots: np.ndarray, tol: float) -> np.ndar
         eb.append(tol)
         r += 1
         for j in range(m):
-            er.append(r), ec.append(pi[i, j]), ev.append(-1.0), eb.append(-points[i, j])
+            entry(r, pi[i, j], -1.0)
+            eb.append(-points[i, j])
             r += 1
     A = sp.csc_matrix((ev, (er, ec)), shape=(r, 2 * nv))
     cones = [clarabel.ZeroConeT(n_eq)] + [clarabel.SecondOrderConeT(m + 1)] * (k - 2)
@@ -411,6 +423,7 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     turn = np.arccos(np.clip(np.sum(dirs[:-1] * dirs[1:], axis=1), -1.0, 1.0))
     stops = [0] + [i + 1 for i, a in enumerate(turn) if a > REVERSAL_ANGLE] + [pts.shape[0] - 1]
     deviation = np.zeros(pts.shape[0])
+    paths: Sequence[SplineJointPath | BlendedJointPath]
     if shape == "spline":
         paths, stops = _spline_paths(pts, stops, tol, lims, deviation)
     else:
