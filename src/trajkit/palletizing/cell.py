@@ -46,6 +46,7 @@ __all__ = [
     "GripperVolume",
     "Cell",
     "Prisms",
+    "PRISM_FIELDS",
     "prism_signed_distance",
     "footprint_signed_distance",
     "moving_prisms",
