@@ -131,6 +131,14 @@ def test_volume_floor_is_the_lowest_clear_height(rng):
             assert np.all(d < 0.01)
 
 
+def test_volume_floors_without_obstacles_constrain_nothing():
+    q = np.array([[0.0, 1.0, 1.5, 0.0], [1.0, 0.5, 1.0, 0.3]])
+    F = volume_floors(q, (0.6, 0.4, 0.2), (0.6, 0.4, 0.1), True, Prisms.empty(), 0.01)
+    assert F.shape == (2, 0) and F.dtype == np.float64
+    empty = Cell().static_prisms()
+    assert volume_floors(q, (0.6, 0.4, 0.2), (0.6, 0.4, 0.1), False, empty, 0.01).shape == (2, 0)
+
+
 # ------------------------------------------------------------------ job file
 def test_cell_section_is_validated_with_field_names():
     job = yaml.safe_load(seed_cell_job_path().read_text())

@@ -305,14 +305,14 @@ def _roots_in(dt: float, v0: float, a0: float, j: float) -> list[float]:
 class _Worst:
     """Tracks the worst ratio per quantity and the violations."""
 
-    def __init__(self, axis, rtol):
+    def __init__(self, axis: str | int | None, rtol: float) -> None:
         self.axis = axis
         self.rtol = rtol
         self.ratios = {q: 0.0 for q in QUANTITIES}
         self.violations: list[Violation] = []
         self._seen: set[str] = set()
 
-    def ratio(self, quantity, value, limit, t):
+    def ratio(self, quantity: str, value: float, limit: float, t: float) -> None:
         if not math.isfinite(limit):
             if not math.isfinite(value):
                 self._fail(quantity, value, limit, t)
@@ -323,7 +323,7 @@ class _Worst:
         if not (r <= 1.0 + self.rtol):
             self._fail(quantity, value, limit, t)
 
-    def position(self, value, pmin, pmax, scale, t):
+    def position(self, value: float, pmin: float, pmax: float, scale: float, t: float) -> None:
         if value < pmin:
             ex, lim = pmin - value, pmin
         elif value > pmax:
@@ -339,7 +339,8 @@ class _Worst:
         if not (r <= self.rtol):
             self._fail("position", value, lim, t)
 
-    def check(self, quantity, error, tol, value, limit, t=math.nan):
+    def check(self, quantity: str, error: float, tol: float, value: float, limit: float,
+              t: float = math.nan) -> None:
         """Fail ``quantity`` when the relative ``error`` exceeds ``tol``."""
         if not (error <= tol):
             self._fail(quantity, value, limit, t)
@@ -353,7 +354,7 @@ class _Worst:
             violations=tuple(self.violations),
         )
 
-    def _fail(self, quantity, value, limit, t):
+    def _fail(self, quantity: str, value: float, limit: float, t: float) -> None:
         # keep the first violation of each quantity (the report stays small)
         if quantity in self._seen:
             return

@@ -15,7 +15,7 @@ import os
 import re
 import sys
 from collections.abc import Sequence
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
@@ -25,7 +25,7 @@ from .._csvio import csv_text, unit_suffix
 from .._sampling import MAX_SAMPLES, count_samples
 from .._validate import check_finite
 from ..errors import InvalidInputError
-from ..io.document import plain, read_document
+from ..io.document import Kind, plain, read_document
 from ..io.schema import Real, RealOrInf, short_repr, validation_message
 from ..limits import AxisLimits
 from ..profiles import PHASE_NAMES, Profile, plan_move
@@ -43,7 +43,7 @@ MAX_CSV_ROWS = MAX_SAMPLES
 MAX_PTP_AXES = 1024
 
 #: Suffixes accepted by ``--file``.
-_JOB_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
+_JOB_SUFFIXES: dict[str, Kind] = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
 
 #: (option, AxisLimits field, required) for the limit options shared by both commands.
 _LIMIT_OPTIONS = (
@@ -310,11 +310,21 @@ def _note(args: argparse.Namespace, text: str) -> None:
     print(text, file=sys.stderr if args.json else sys.stdout)
 
 
+@overload
+def _limits_from_options(args: argparse.Namespace, n: None) -> AxisLimits: ...
+
+
+@overload
+def _limits_from_options(args: argparse.Namespace, n: int,
+                         names: Sequence[str] | None = None) -> list[AxisLimits]: ...
+
+
 def _limits_from_options(
     args: argparse.Namespace, n: int | None, names: Sequence[str] | None = None
 ) -> list[AxisLimits] | AxisLimits:
     """AxisLimits from the limit options: one (``n=None``) or one per axis."""
-    values: dict[str, list[float] | float | None] = {}
+    # keyword arguments of AxisLimits: a number or None (n=None), else a list of them
+    values: dict[str, Any] = {}
     for opt, field, required in _LIMIT_OPTIONS:
         raw = getattr(args, field)
         if raw is None:

@@ -237,7 +237,7 @@ def load_path_file(filename: str) -> dict:
 def build_path(start: Any, segments: list, corner_angle_deg: float = DEFAULT_CORNER_DEG) -> CompositePath:
     """Build a composite path from a start point and (kind, value) segments [mm]."""
     cur = _point(start, "start")
-    segs = []
+    segs: list[Line | Arc3] = []
     for i, (kind, val) in enumerate(segments):
         what = f"segment {i} ({kind})"
         if kind == "line":

@@ -41,6 +41,7 @@ import logging
 import math
 import os
 import re
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import asynccontextmanager
 from importlib import resources
@@ -106,7 +107,7 @@ def _static_dir() -> str:
     return str(resources.files("trajkit.hmi") / "static")
 
 
-def _fmt_validation(errors: list) -> str:
+def _fmt_validation(errors: Sequence[Any]) -> str:
     parts = []
     for err in errors:
         loc = [str(x) if len(str(x)) <= MAX_ECHO_CHARS else echo(str(x))

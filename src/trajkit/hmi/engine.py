@@ -22,12 +22,16 @@ import math
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import InvalidInputError, TrajkitError
 from .jobs import MM, JobTable
+
+if TYPE_CHECKING:
+    from ..kinematics.base import RobotModel
+    from ..runtime import Setpoint
 
 __all__ = ["Session", "ConflictError", "STATES", "RuntimeDrive", "SNAPSHOT_PERIOD_S"]
 
@@ -88,6 +92,8 @@ class RuntimeDrive:
         from ..runtime import ServoParams, Streamer
 
         self.table = table
+        if table.source is None:
+            raise InvalidInputError(f"job {table.title!r} has no program source to run")
         src = table.source()
         # the jobs are planned with the override reserve (hmi.jobs) and the monitors
         # enforce the machine's full limits: at 100 % a job runs at its planned
@@ -95,7 +101,7 @@ class RuntimeDrive:
         self.streamer = Streamer(src, table.period, servo=ServoParams(),
                                  limits=table.machine_limits)
         self._seen = 0
-        self.last = None
+        self.last: Setpoint | None = None
         #: where a jog run is going [SI] (the last target), None for a job
         self.jog_goal: np.ndarray | None = None
 
@@ -111,10 +117,10 @@ class RuntimeDrive:
             getattr(st, {"estop": "estop", "start": "start", "pause": "pause", "resume": "resume",
                          "stop": "stop", "reset": "reset"}[name])()
 
-    def step(self):
+    def step(self) -> Setpoint:
         """Run one control period; return the streamer's setpoint."""
-        self.last = self.streamer.step()
-        return self.last
+        sp = self.last = self.streamer.step()
+        return sp
 
     @property
     def state(self) -> str:
@@ -212,8 +218,8 @@ class Session:
         self._snap: dict = {}
         # jog and teach
         self.robot_name = "scara"
-        self.robot = None
-        self.q = None
+        self.robot: RobotModel  # the jog/teach robot and its joints [SI], set by set_robot
+        self.q: np.ndarray
         self.points: dict[str, np.ndarray] = {}
         self.set_robot("scara", log_event=False)
         self._publish()
@@ -361,9 +367,10 @@ class Session:
         """
         with self._lock:
             self._require_inactive("start")
-            if table is None and self.job is None:
-                raise ConflictError("no job loaded: plan a job first")
-            table = table or self.job
+            if table is None:
+                if self.job is None:
+                    raise ConflictError("no job loaded: plan a job first")
+                table = self.job
             drive = self.drive
             resume = drive is not None and drive.table is table and not drive.finished
             if not resume:
@@ -396,19 +403,21 @@ class Session:
 
         with self._lock:
             drive = self.drive
-            moving = (self.state == "running" and drive is not None and drive.jog_goal is not None
-                      and drive.table.robot == self.robot_name)
-            if not moving:
-                self._require_inactive("jog")
-            base = drive.jog_goal if moving else self.q
-            goal = jog_goal(self.robot, base, joint, step_si)
-            target = (goal, jog_limits(self.robot, joint, speed_pct))
-            if moving:
+            jogging = (drive if self.state == "running" and drive is not None
+                       and drive.table.robot == self.robot_name else None)
+            base = jogging.jog_goal if jogging is not None else None  # None: no jog moves
+            moving = base is not None
+            if jogging is not None and base is not None:
+                goal = jog_goal(self.robot, base, joint, step_si)
+                target = (goal, jog_limits(self.robot, joint, speed_pct))
                 cmd = _Command("target", self._clock(), target)
                 self._cmds.append(cmd)
-                drive.jog_goal = goal
+                jogging.jog_goal = goal
                 self._wake.set()
             else:
+                self._require_inactive("jog")
+                goal = jog_goal(self.robot, self.q, joint, step_si)
+                target = (goal, jog_limits(self.robot, joint, speed_pct))
                 period = self.job.period if self.job is not None else JOG_PERIOD_S
                 drive = self._new_drive(jog_table(self.robot, self.q, period))
                 drive.jog_goal = goal
@@ -535,7 +544,7 @@ class Session:
                 busy = drive is not None and (self._cmds or self.state in _ACTIVE)
             if latched:
                 self.event("fault", "EMERGENCY STOP (machine at rest)")
-            if not busy:
+            if drive is None or not busy:
                 self._wake.wait(0.1)
                 self._wake.clear()
                 continue
@@ -654,7 +663,7 @@ class Session:
         """Refresh the live values (called with the session lock held)."""
         drive = self.drive
         job = self.job
-        snap = {
+        snap: dict[str, Any] = {
             "state": self.state,
             "run_id": self.run_id,
             "override_pct": 100.0 * self.override,

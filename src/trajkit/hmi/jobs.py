@@ -105,7 +105,7 @@ class JobTable:
     def state_at(self, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions, velocities [SI] and tool point [m] at plan time ``tau`` (linear between setpoints)."""
         tau = min(max(tau, 0.0), self.duration)
-        i = int(min(np.searchsorted(self.t, tau, side="right") - 1, self.t.size - 2))
+        i = min(int(np.searchsorted(self.t, tau, side="right")) - 1, self.t.size - 2)
         i = max(i, 0)
         if self.t.size == 1:
             return self.q[0].copy(), self.qd[0].copy(), self.xyz[0].copy()

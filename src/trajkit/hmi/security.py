@@ -385,7 +385,7 @@ class Guard:
     def _check_origin(self, kind: str, method: str, path: str, headers: dict) -> None:
         host = headers.get("host")
         name = normalize_host(host)
-        if name is None:
+        if host is None or name is None:  # (no header gives no name)
             raise _Refused(403, "missing or malformed Host header")
         if name not in self.policy.allowed_hosts:
             raise _Refused(403, f"host {echo(name)} is not allowed (the HMI's operator can add it "

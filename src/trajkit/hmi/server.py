@@ -97,7 +97,9 @@ def default_allowed_hosts(host: str, extra: Iterable[str] = ()) -> list[str]:
             for n in list(names):
                 try:
                     for info in socket.getaddrinfo(n, None):
-                        names.add(info[4][0].split("%", 1)[0])
+                        addr = info[4][0]
+                        if isinstance(addr, str):  # IPv4/IPv6 (the only families a name resolves to)
+                            names.add(addr.split("%", 1)[0])
                 except OSError:
                     pass
         hosts += sorted(n.lower() for n in names if n)

@@ -184,12 +184,17 @@ class PalletJob(_Model):
     cell: CellSpec | None = None
 
 
+def _si_interval(iv_mm: tuple[float, float]) -> tuple[float, float]:
+    """An interval ``[min, max]`` in mm, in m."""
+    return (iv_mm[0] * _MM, iv_mm[1] * _MM)
+
+
 def cell_from_spec(spec: CellSpec) -> Cell:
     """The SI :class:`~trajkit.palletizing.cell.Cell` of a job's ``cell`` section."""
     g = spec.gripper
     return Cell(
-        obstacles=tuple(Obstacle(tuple(v * _MM for v in o.x_mm), tuple(v * _MM for v in o.y_mm),
-                                 tuple(v * _MM for v in o.z_mm), o.name) for o in spec.obstacles),
+        obstacles=tuple(Obstacle(_si_interval(o.x_mm), _si_interval(o.y_mm), _si_interval(o.z_mm), o.name)
+                        for o in spec.obstacles),
         gripper=GripperVolume(g.height_mm * _MM,
                               None if g.length_mm is None else g.length_mm * _MM,
                               None if g.width_mm is None else g.width_mm * _MM),
@@ -229,7 +234,7 @@ def scenario_from_job(job: PalletJob | dict, source: str = "job") -> PalletScena
     if not isinstance(job, PalletJob):
         job = parse_job(job, source)
     table = {k: DEFAULT_JOINT_TABLE[k] for k in JOINT_NAMES}
-    decel = {}
+    decel: dict[str, tuple[float | None, float | None]] = {}
     for jn, js in job.robot.joints.items():
         table[jn] = (js.v_max, js.a_max, js.j_max, js.min, js.max)
         if js.a_max_decel is not None or js.j_max_decel is not None:

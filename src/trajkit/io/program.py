@@ -39,7 +39,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -48,6 +48,10 @@ from ..errors import InvalidInputError, UnreachableError
 from ..kinematics.base import Pose, RobotModel
 from .document import MAX_DOCUMENT_BYTES, LineDict, LineList, parse_document, plain
 from .schema import Angle_deg, Coordinate_mm, Length_mm, PositiveLength_mm, Real, Time_s, short_repr
+
+if TYPE_CHECKING:
+    from ..robot.execute import RobotRun
+    from ..robot.motion import Motion, Target
 
 __all__ = ["Program", "load_program", "parse_program", "make_robot", "ROBOT_MODELS"]
 
@@ -159,7 +163,7 @@ class WaitSpec(_Model):
     WAIT: WaitBody
 
 
-_SPECS = {"PTP": PtpSpec, "LIN": LinSpec, "CIRC": CircSpec, "WAIT": WaitSpec}
+_SPECS: dict[str, type[_Model]] = {"PTP": PtpSpec, "LIN": LinSpec, "CIRC": CircSpec, "WAIT": WaitSpec}
 
 
 class ProgramFile(_Model):
@@ -190,13 +194,13 @@ class Program:
     """
 
     robot: RobotModel
-    points: dict
-    motions: list
+    points: dict[str, Target]
+    motions: list[Motion]
     start: np.ndarray
     source: str
-    lines: list
+    lines: list[int]
 
-    def run(self):
+    def run(self) -> RobotRun:
         """Plan the program: a :class:`trajkit.robot.RobotRun`."""
         from ..robot.execute import run_motions
 
@@ -280,7 +284,7 @@ def parse_program(text: str | bytes, source: str = "<string>",
     if not isinstance(raw, dict):
         raise InvalidInputError(f"{source}: a program must be a mapping with robot, points, program")
 
-    def fail(loc: tuple, msg: str, cls: type = InvalidInputError):
+    def fail(loc: tuple[str | int, ...], msg: str, cls: type[Exception] = InvalidInputError) -> NoReturn:
         raise cls(f"{source}:{_line_of(raw, loc)}: {_loc_str(loc)}: {msg}")
 
     try:
@@ -301,7 +305,7 @@ def parse_program(text: str | bytes, source: str = "<string>",
     from ..robot.motion import CartesianTarget, Circ, JointTarget, Lin, Ptp, Wait
 
     # ---- points
-    points: dict[str, Any] = {}
+    points: dict[str, Target] = {}
     for name, pt in spec.points.items():
         loc = ("points", name)
         try:
@@ -334,14 +338,14 @@ def parse_program(text: str | bytes, source: str = "<string>",
                 raise
             fail(loc, str(exc))
 
-    def point(ref: str, loc: tuple):
+    def point(ref: str, loc: tuple[str | int, ...]) -> Target:
         if ref not in points:
             fail(loc, f"unknown point {ref!r} (known: {', '.join(points)})")
         return points[ref]
 
     # ---- instructions
     d = spec.defaults
-    motions = []
+    motions: list[Motion] = []
     lines = []
     for i, item in enumerate(spec.program):
         loc = ("program", i)
@@ -361,25 +365,27 @@ def parse_program(text: str | bytes, source: str = "<string>",
         lines.append(line)
         ref = getattr(ins, kind) if kind != "WAIT" else None
         label = f"instruction {i} ({kind}{' ' + ref if ref else ''}, line {line})"
-        if kind == "PTP":
+        # the spec class of each instruction kind (_SPECS)
+        if isinstance(ins, PtpSpec):
             pct = d.speed_pct if ins.speed_pct is None else ins.speed_pct
             z = (d.zone_mm if ins.zone_mm is None else ins.zone_mm) * _MM
-            motions.append(Ptp(point(ref, loc + ("PTP",)), pct, label, z))
-        elif kind == "LIN":
+            motions.append(Ptp(point(ins.PTP, loc + ("PTP",)), pct, label, z))
+        elif isinstance(ins, LinSpec):
             v = (d.speed_mm_s if ins.speed_mm_s is None else ins.speed_mm_s) * _MM
             z = (d.zone_mm if ins.zone_mm is None else ins.zone_mm) * _MM
-            motions.append(Lin(point(ref, loc + ("LIN",)), v, z, label))
-        elif kind == "CIRC":
+            motions.append(Lin(point(ins.LIN, loc + ("LIN",)), v, z, label))
+        elif isinstance(ins, CircSpec):
             v = (d.speed_mm_s if ins.speed_mm_s is None else ins.speed_mm_s) * _MM
             z = (d.zone_mm if ins.zone_mm is None else ins.zone_mm) * _MM
-            motions.append(Circ(point(ins.via, loc + ("via",)), point(ref, loc + ("CIRC",)), v, z, label))
+            motions.append(Circ(point(ins.via, loc + ("via",)), point(ins.CIRC, loc + ("CIRC",)), v, z, label))
         else:
+            assert isinstance(ins, WaitSpec)
             motions.append(Wait(ins.WAIT.time_s, label))
 
     # ---- start joints
     if spec.start is not None:
         start_t = point(spec.start, ("start",))
-        start_loc = ("start",)
+        start_loc: tuple[str | int, ...] = ("start",)
     else:
         first = motions[0]
         if not isinstance(first, Ptp):

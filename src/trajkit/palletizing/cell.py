@@ -32,7 +32,7 @@ All quantities in SI (m, rad).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,6 +46,7 @@ __all__ = [
     "GripperVolume",
     "Cell",
     "Prisms",
+    "PRISM_FIELDS",
     "prism_signed_distance",
     "footprint_signed_distance",
     "moving_prisms",
@@ -139,7 +140,7 @@ class Cell:
     keeps the clearance.
     """
 
-    obstacles: tuple = ()
+    obstacles: tuple[Obstacle, ...] = ()
     gripper: GripperVolume = field(default_factory=GripperVolume)
     clearance: float = DEFAULT_CLEARANCE
     settle: float = DEFAULT_SETTLE
@@ -198,6 +199,10 @@ class Cell:
 
 
 # ------------------------------------------------------------------ prisms
+#: The array fields of :class:`Prisms`, in constructor order.
+PRISM_FIELDS = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
+
+
 @dataclass(frozen=True)
 class Prisms:
     """A batch of prisms (arrays of equal shape, SI units).
@@ -223,28 +228,33 @@ class Prisms:
     yaw: np.ndarray
     z0: np.ndarray
     z1: np.ndarray
-    names: tuple = ()
+    names: tuple[str, ...] = ()
 
     @staticmethod
     def empty() -> Prisms:
         z = np.zeros(0)
         return Prisms(z, z, z, z, z, z, z, ())
 
+    @staticmethod
+    def from_fields(arrays: Iterable[np.ndarray], names: tuple[str, ...] = ()) -> Prisms:
+        """Prisms from the arrays of :data:`PRISM_FIELDS`, in that order."""
+        cx, cy, hx, hy, yaw, z0, z1 = arrays
+        return Prisms(cx, cy, hx, hy, yaw, z0, z1, names)
+
     def __len__(self) -> int:
         return int(np.shape(self.cx)[0]) if np.ndim(self.cx) else 1
 
     def concat(self, other: Prisms) -> Prisms:
         """Both batches in one (1-D batches)."""
-        f = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
-        return Prisms(*(np.concatenate([getattr(self, k), getattr(other, k)]) for k in f),
-                      names=tuple(self.names) + tuple(other.names))
+        return Prisms.from_fields((np.concatenate([getattr(self, k), getattr(other, k)])
+                                   for k in PRISM_FIELDS),
+                                  names=tuple(self.names) + tuple(other.names))
 
     def take(self, idx: Any) -> Prisms:
         """A sub-batch (1-D batches)."""
         idx = np.asarray(idx, dtype=int)
-        f = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
         names = tuple(self.names[i] for i in idx) if self.names else ()
-        return Prisms(*(np.asarray(getattr(self, k))[idx] for k in f), names=names)
+        return Prisms.from_fields((np.asarray(getattr(self, k))[idx] for k in PRISM_FIELDS), names=names)
 
     def corners(self) -> np.ndarray:
         """Footprint corners, shape (..., 4, 2) [m]."""
@@ -336,14 +346,14 @@ def footprint_signed_distance(a: Prisms, b: Prisms) -> np.ndarray:
     cb, sb = np.cos(b.yaw), np.sin(b.yaw)
     dx, dy = b.cx - a.cx, b.cy - a.cy
     # separating-axis test on the four edge normals: overlap along each axis
-    overlap = None
+    overlap: np.ndarray | None = None
     for ux, uy in ((ca, sa), (-sa, ca), (cb, sb), (-sb, cb)):
         ra = _proj_radius(a.hx, a.hy, ca, sa, ux, uy)
         rb = _proj_radius(b.hx, b.hy, cb, sb, ux, uy)
         o = ra + rb - np.abs(dx * ux + dy * uy)
         overlap = o if overlap is None else np.minimum(overlap, o)
     # apart: the closest points include a vertex of one of the rectangles
-    dist = None
+    dist: np.ndarray | None = None
     for (p, q, cq, sq) in ((a, b, cb, sb), (b, a, ca, sa)):
         cp, sp = np.cos(p.yaw), np.sin(p.yaw)
         for sx, sy in ((1, 1), (-1, 1), (-1, -1), (1, -1)):
@@ -351,6 +361,7 @@ def footprint_signed_distance(a: Prisms, b: Prisms) -> np.ndarray:
             px, py = p.cx + cp * ex - sp * ey, p.cy + sp * ex + cp * ey
             dd = _point_rect_distance(px, py, q.cx, q.cy, cq, sq, q.hx, q.hy)
             dist = dd if dist is None else np.minimum(dist, dd)
+    assert overlap is not None and dist is not None  # the loops above are not empty
     return np.where(overlap > 0.0, -overlap, dist)
 
 
@@ -426,7 +437,7 @@ def footprint_distances(joints: Any, box: tuple[float, float, float],
     """
     q = np.asarray(joints, dtype=float).reshape(-1, 4)
     n, m = q.shape[0], len(obstacles)
-    keys = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
+    keys = PRISM_FIELDS
     ob = {k: np.asarray(getattr(obstacles, k), dtype=float) for k in keys}
     r_ob = np.hypot(ob["hx"], ob["hy"])
     out = []
@@ -438,8 +449,8 @@ def footprint_distances(joints: Any, box: tuple[float, float, float],
             near = cd <= r_mv[:, None] + r_ob[None, :] + reach
             ii, jj = np.nonzero(near)
             if ii.size:
-                a = Prisms(*(np.asarray(getattr(part, k))[ii] for k in keys))
-                b = Prisms(*(ob[k][jj] for k in keys))
+                a = Prisms.from_fields(np.asarray(getattr(part, k))[ii] for k in keys)
+                b = Prisms.from_fields(ob[k][jj] for k in keys)
                 d[ii, jj] = footprint_signed_distance(a, b)
         out.append((d, lo))
     return out
@@ -472,7 +483,7 @@ def volume_floors(joints: Any, box: tuple[float, float, float],
     """
     q = np.asarray(joints, dtype=float).reshape(-1, 4)
     out = np.full((q.shape[0], len(obstacles)), -np.inf)
-    top = np.asarray(obstacles.z1, dtype=float)[None, :] if len(obstacles) else None
+    top = np.asarray(obstacles.z1, dtype=float).reshape(1, -1)
     for d, lo in footprint_distances(q, box, gripper, carrying, obstacles, clearance):
         np.maximum(out, required_height(d, top, clearance) - lo, out=out)
     return out

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .cell import Prisms, moving_prisms, prism_signed_distance, stack_prisms
+from .cell import PRISM_FIELDS, Prisms, moving_prisms, prism_signed_distance, stack_prisms
 from .planners import HORIZONTAL_JOINTS, CyclePlan
 
 __all__ = ["CellFinding", "CellReport", "check_cell", "CLEARANCE_ATOL", "MIN_STEP"]
@@ -155,10 +155,11 @@ class CellReport:
         return sorted({f.box for f in self.findings})
 
 
-def _obstacles_per_trip(plan: CyclePlan):
+def _obstacles_per_trip(plan: CyclePlan) -> list[Prisms]:
     """Obstacles present during each trip (static, placed boxes, box at the pick)."""
     sc = plan.scenario
     cell = sc.cell
+    assert cell is not None  # a plan of a scenario with a cell (check_cell refuses others)
     dims = (sc.box.length, sc.box.width, sc.box.height)
     poses = sc.place_poses()
     static = cell.static_prisms()
@@ -186,11 +187,11 @@ def _distances(q, dims, grip, carrying, obst: Prisms, directions: bool = False):
     vectors from each obstacle towards the part along their closest points
     (n, m, 3; zero where they touch or overlap), as a list of pairs.
     """
-    keys = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
-    ob = Prisms(*(np.asarray(getattr(obst, k))[None, :] for k in keys))
+    keys = PRISM_FIELDS
+    ob = Prisms.from_fields(np.asarray(getattr(obst, k))[None, :] for k in keys)
     d, parts = None, []
     for part, _, _ in moving_prisms(q, dims, grip, carrying):
-        p = Prisms(*(np.asarray(getattr(part, k))[:, None] for k in keys))
+        p = Prisms.from_fields(np.asarray(getattr(part, k))[:, None] for k in keys)
         dd = prism_signed_distance(p, ob)
         if directions:
             parts.append((dd, _closest_direction(p, ob)))
@@ -315,7 +316,7 @@ def _b_range(tl, t0: float, t1: float) -> tuple[float, float]:
 
 def _rest_distance(q, dims, grip, carrying, obst: Prisms, zlo: float, zhi: float) -> np.ndarray:
     """Smallest signed distance to each obstacle over B in ``[zlo, zhi]`` (footprint fixed)."""
-    keys = ("cx", "cy", "hx", "hy", "yaw", "z0", "z1")
+    keys = PRISM_FIELDS
     out = np.full(len(obst), np.inf)
     qq = np.array(q, dtype=float)[None, :]
     for part, lo, hi in moving_prisms(qq, dims, grip, carrying):
@@ -326,7 +327,7 @@ def _rest_distance(q, dims, grip, carrying, obst: Prisms, zlo: float, zhi: float
             p = Prisms(np.full(len(obst), part.cx[0]), np.full(len(obst), part.cy[0]),
                        np.full(len(obst), part.hx[0]), np.full(len(obst), part.hy[0]),
                        np.full(len(obst), part.yaw[0]), zb + lo, zb + hi)
-            ob = Prisms(*(np.asarray(getattr(obst, k)) for k in keys))
+            ob = Prisms.from_fields(np.asarray(getattr(obst, k)) for k in keys)
             out = np.minimum(out, prism_signed_distance(p, ob))
     return out
 
@@ -368,7 +369,7 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
         kind, box = tp.spec.kind, tp.spec.box
         carrying = kind == "load"
         names = obst.names
-        worst = None  # (margin, t, k, d, req, moving)
+        worst: tuple[float, float, int, float, float, bool] | None = None  # (margin, t, k, d, req, moving)
         # when the horizontal joints move: from their pieces inside the trip
         hp = [pc for k in _H for pc in tl.pieces[k]
               if pc.t1 > ts + 1e-12 and pc.t0 < te - 1e-12 and pc.profile.duration > 0.0]
@@ -387,13 +388,13 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
             d = _rest_distance(q_rest, dims, grip, carrying, obst, zlo, zhi)
             req = np.where(contact, 0.0, c)
             rep.samples += 1
-            for k in np.flatnonzero(~contact):
-                rep.min_clearance_bound = min(rep.min_clearance_bound, float(d[k]))
-                if d[k] < rep.min_clearance:
-                    rep.min_clearance = float(d[k])
+            for kc in np.flatnonzero(~contact):
+                rep.min_clearance_bound = min(rep.min_clearance_bound, float(d[kc]))
+                if d[kc] < rep.min_clearance:
+                    rep.min_clearance = float(d[kc])
                     qq = q_rest.copy()
                     qq[_B] = zlo
-                    rep.min_clearance_at = (float(u0), it, names[k] if names else str(k), qq)
+                    rep.min_clearance_at = (float(u0), it, names[kc] if names else str(kc), qq)
             m = d - req
             k = int(np.argmin(m))
             if m[k] < -CLEARANCE_ATOL and (worst is None or m[k] < worst[0]):
@@ -447,7 +448,7 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
                 s_hi = _cat(sm, sh)
             tt = np.concatenate(all_t)
             dd = np.concatenate(all_d)
-            i, k = np.unravel_index(int(np.argmin(dd)), dd.shape)
+            i, k = map(int, np.unravel_index(int(np.argmin(dd)), dd.shape))
             if dd[i, k] < rep.min_clearance:
                 rep.min_clearance = float(dd[i, k])
                 rep.min_clearance_at = (float(tt[i]), it, names[k] if names else str(k),
@@ -455,9 +456,9 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
             if dd[i, k] - c < -CLEARANCE_ATOL and (worst is None or dd[i, k] - c < worst[0]):
                 worst = (float(dd[i, k] - c), float(tt[i]), int(k), float(dd[i, k]), c, True)
         if worst is not None:
-            _, tw, k, dw, req, moving = worst
-            rep.findings.append(CellFinding(it, kind, box, tw, names[k] if names else str(k),
-                                            dw, req, moving))
+            _, tw, kw, dw, req_w, moving = worst
+            rep.findings.append(CellFinding(it, kind, box, tw, names[kw] if names else str(kw),
+                                            dw, req_w, moving))
     return rep
 
 
@@ -485,7 +486,7 @@ def _interval_bound(p_lo, p_hi, s_lo, s_hi, dt, lims, rho) -> np.ndarray:
     T = dt[:, None]
     iso_lo = _full_speed(s_lo, dt, lims, rho)[:, None]
     iso_hi = _full_speed(s_hi, dt, lims, rho)[:, None]
-    out = None
+    out: np.ndarray | None = None
     for (d_lo, n_lo), (d_hi, n_hi) in zip(p_lo, p_hi):
         a = np.where(d_lo > 0.0, _directional_speed(s_lo, n_lo, dt, lims, rho), iso_lo)
         b = np.where(d_hi > 0.0, _directional_speed(s_hi, n_hi, dt, lims, rho), iso_hi)
@@ -495,6 +496,7 @@ def _interval_bound(p_lo, p_hi, s_lo, s_hi, dt, lims, rho) -> np.ndarray:
         tm = np.clip(tm, 0.0, T)
         lb = np.where(s > 0.0, d_lo - a * tm, np.minimum(d_lo, d_hi))
         out = lb if out is None else np.minimum(out, lb)
+    assert out is not None  # the volume has at least one part (the gripper)
     return out
 
 

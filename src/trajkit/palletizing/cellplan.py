@@ -96,7 +96,7 @@ from ..profiles import plan_move
 from ..profiles.state import min_state_duration, plan_state_to_state
 from ..trajectory import plan_ptp
 from ._crossing import _solve_phase, clearance_crossings, position_peak
-from .cell import Prisms, footprint_distances, required_height, stack_prisms, volume_floors
+from .cell import Cell, Prisms, footprint_distances, required_height, stack_prisms, volume_floors
 from .optimal import _best_turn, _phases_of, _reverse, _trip_profile, full_throttle_phases
 from .planners import HORIZONTAL_JOINTS, CyclePlan, TripPlan, _assemble, register_planner
 from .scenario import PalletScenario, TripSpec
@@ -240,7 +240,7 @@ class _Rise:
         self.A = np.array(A)
         self.J = np.array(J)
         self.dur = np.array([dt for dt, _, _ in self.phases])
-        self._table = None
+        self._table: tuple[np.ndarray, np.ndarray] | None = None  # (z, t) of the rise, for guesses
 
     def state(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(z, v, a)`` at times ``t`` >= 0 [s] after the start."""
@@ -276,10 +276,11 @@ class _Rise:
                 t[k] = _solve_phase(0.0, float(V[k]), float(A[k]), float(J[k]), float(d[k]),
                                     float(hi_f[k]), 1.0)
         elif fin.any():
-            if self._table is None:
+            tab = self._table
+            if tab is None:
                 ts = np.linspace(0.0, float(self.tb[-1]), _TABLE_SIZE)
-                self._table = (self.state(ts)[0], ts)
-            guess = np.interp(zz[fin], *self._table) - self.tb[i[fin]]
+                tab = self._table = (self.state(ts)[0], ts)
+            guess = np.interp(zz[fin], tab[0], tab[1]) - self.tb[i[fin]]
             t[fin] = _solve_cubic(P[fin] * 0.0, V[fin], A[fin], J[fin], d[fin], hi_f[fin],
                                   np.clip(guess, 0.0, hi_f[fin]))
         out[up] = self.tb[i] + t
@@ -411,6 +412,7 @@ class _Block:
         q[:, _H] = s.position
         self.q = q
         cell = scenario.cell
+        assert cell is not None  # the cell planner runs on scenarios with a cell (plan_cycle_cell)
         c = cell.clearance
         box = (scenario.box.length, scenario.box.width, scenario.box.height)
         grip = cell.gripper_size(box[0], box[1])
@@ -774,6 +776,7 @@ def _plan_b(scenario: PalletScenario, spec_levels, block: _Block):
     """
     lb = scenario.robot.limits[_B]
     z0, z3 = spec_levels
+    assert scenario.cell is not None  # the cell planner runs on scenarios with a cell (plan_cycle_cell)
     settle = scenario.cell.settle
     zs = (z0 + settle, z3 + settle)
     tau, t_h = block.tau, block.t_h
@@ -822,9 +825,9 @@ def _plan_b(scenario: PalletScenario, spec_levels, block: _Block):
 class _Ctx:
     """What the cycle planner shares between trips (geometry, caches)."""
 
-    def __init__(self, scenario: PalletScenario) -> None:
+    def __init__(self, scenario: PalletScenario, cell: Cell) -> None:
         self.sc = scenario
-        self.cell = scenario.cell
+        self.cell = cell
         self.lb = scenario.robot.limits[_B]
         b = scenario.box
         self.dims = (b.length, b.width, b.height)
@@ -833,6 +836,8 @@ class _Ctx:
         self.pick_box = (stack_prisms(scenario.pick[None, :], *self.dims, names=("box at the pick",))
                          if self.cell.box_at_pick else Prisms.empty())
         self.q_pick = scenario.pick_joints()
+        #: Joint vectors per box that place it (wrist_options), set by the planner.
+        self.wrists: list[list[np.ndarray]] = []
         self.throttles: dict = {}
         self.turn_cache: dict = {}
 
@@ -909,7 +914,7 @@ def _search_layer(ctx: _Ctx, idx: list[int], below: Prisms):
         return cost_cache[key]
 
     if exact:
-        dp = {0: (0.0, None)}
+        dp: dict[int, tuple[float, tuple[int, int] | None]] = {0: (0.0, None)}
         for S in range(full + 1):
             if S not in dp:
                 continue
@@ -924,7 +929,9 @@ def _search_layer(ctx: _Ctx, idx: list[int], below: Prisms):
         seq = []
         S = full
         while S:
-            P, i = dp[S][1]
+            prev = dp[S][1]
+            assert prev is not None  # every set but the empty one was reached from a smaller one
+            P, i = prev
             seq.append(i)
             S = P
         seq.reverse()
@@ -1042,7 +1049,7 @@ def plan_cycle_cell(scenario: PalletScenario) -> CyclePlan:
             f"the {PLANNER_NAME!r} planner needs a cell (obstacles, gripper, clearance): the "
             f"scenario {scenario.name!r} has none (add a `cell` section to the job file)"
         )
-    ctx = _Ctx(scenario)
+    ctx = _Ctx(scenario, scenario.cell)
     ctx.wrists = [wrist_options(scenario, p) for p in ctx.poses]
     n = scenario.pattern.layer.n_boxes
     order, dp_total = [], 0.0

@@ -53,7 +53,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from ..errors import InfeasibleError, InvalidInputError, TrajkitError
 from ..limits import AxisLimits
-from ..profiles.state import StateProfile, min_state_duration, plan_state_to_state
+from ..profiles.state import BlockedDurationError, StateProfile, min_state_duration, plan_state_to_state
 from ..sync import plan_ptp
 from ._crossing import _solve_phase, clearance_crossings, position_peak
 from .planners import HORIZONTAL_JOINTS, TripPlan, _assemble, _horizontal_time, register_planner
@@ -339,9 +339,7 @@ def _candidates(scenario: PalletScenario, spec: TripSpec, t_h: float, cache: dic
         w = max(t_h, min_state_duration(s1, s2, lb))
         try:
             mid = plan_state_to_state(s1, s2, lb, duration=w)
-        except InfeasibleError as e:  # a blocked duration: its upper end is feasible
-            if getattr(e, "interval", None) is None:
-                raise
+        except BlockedDurationError as e:  # a blocked duration: its upper end is feasible
             mid = plan_state_to_state(s1, s2, lb, duration=e.interval[1])
         yield "window", _trip_profile(up + _phases_of(mid) + dn, z0, z3, lb, "optimal:window")
     except TrajkitError:

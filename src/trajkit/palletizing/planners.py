@@ -171,7 +171,7 @@ def plan_trip_ptp(scenario: PalletScenario, spec: TripSpec) -> TripPlan:
     lower = plan_move(z2, z3, lims[_B])
     t_a = rise.duration
     t_b = t_a + tr.duration
-    pieces = [[] for _ in range(4)]
+    pieces: list[list[Piece]] = [[] for _ in range(4)]
     pieces[_B].append(Piece(0.0, rise))
     for k in range(4):
         pieces[k].append(Piece(t_a, tr.axes[k]))

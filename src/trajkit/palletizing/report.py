@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from .planners import CyclePlan
+from .verify import VerificationReport
 
 __all__ = ["PAPER_TABLE1", "PAPER_BOXES", "summarize", "table_rows", "bound_lines", "TABLE_COLUMNS",
            "CELL_COLUMNS", "cell_rows", "cell_lines", "cycle_rows"]
@@ -30,7 +32,7 @@ CELL_COLUMNS = ("plan", "total (s)", "lower bound (s)", "min clearance (mm)",
 
 
 def summarize(plans: Mapping[str, CyclePlan], baseline: str = "ptp",
-              reports: Mapping[str, object] | None = None) -> dict:
+              reports: Mapping[str, VerificationReport] | None = None) -> dict:
     """JSON-ready summary of several plans of the same scenario.
 
     Parameters
@@ -63,7 +65,7 @@ def summarize(plans: Mapping[str, CyclePlan], baseline: str = "ptp",
         out["cell"] = True
     for name in names:
         p = plans[name]
-        d = {"total_s": p.total_s, "per_box_s": p.per_box_s}
+        d: dict[str, Any] = {"total_s": p.total_s, "per_box_s": p.per_box_s}
         if base is not None:
             d["reduction_pct"] = 100.0 * (1.0 - p.total_s / base)
         if name in PAPER_TABLE1:
@@ -82,7 +84,7 @@ def summarize(plans: Mapping[str, CyclePlan], baseline: str = "ptp",
                 if key in p.info:
                     d[key] = float(p.info[key])
                     d["vs_" + key[:-2] + "_pct"] = 100.0 * (p.total_s / d[key] - 1.0)
-            cands: dict = {}
+            cands: dict[str, int] = {}
             for t in p.info.get("trips", ()):
                 cands[t.candidate] = cands.get(t.candidate, 0) + 1
             d["trip_candidates"] = cands
@@ -91,7 +93,7 @@ def summarize(plans: Mapping[str, CyclePlan], baseline: str = "ptp",
         rep = reports.get(name) if reports else None
         if rep is not None:
             d["verified"] = bool(rep.ok_without_cell if p.rule != "cell" else rep.ok)
-            cell = getattr(rep, "cell", None)
+            cell = rep.cell
             if cell is not None:
                 d["cell_ok"] = bool(cell.ok)
                 d["min_clearance_mm"] = 1000.0 * cell.min_clearance
@@ -155,7 +157,7 @@ def cell_rows(summary: dict) -> list[list]:
 
 def cell_lines(summary: dict, limit: int = 1) -> list[str]:
     """What the cell check found, per plan (a job with a cell)."""
-    out = []
+    out: list[str] = []
     if not summary.get("cell"):
         return out
     for name, d in summary["plans"].items():

@@ -136,7 +136,7 @@ class PalletScenario:
         check_layer_fit(self.pattern.layer_at(1), L, W, self.overhang)
         self._validate_reach()
         if self.cell is not None:
-            self._validate_cell()
+            self._validate_cell(self.cell)
 
     # ------------------------------------------------------------- geometry
     @property
@@ -187,9 +187,9 @@ class PalletScenario:
         q = rob.joints_from_pose(poses, qp[3], yaw_period=math.pi, check=False)
         rob.check_joints(q, "place")
 
-    def _validate_cell(self) -> None:
-        """No static obstacle may pierce a box at its place or the box at the pick."""
-        static = self.cell.static_prisms()
+    def _validate_cell(self, cell: Cell) -> None:
+        """No static obstacle of ``cell`` may pierce a box at its place or the box at the pick."""
+        static = cell.static_prisms()
         if not len(static):
             return
         b = self.box

@@ -217,7 +217,7 @@ def _base_pieces(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labe
         if float(np.dot(quat_prev, quat_end)) < 0:
             quat_end = -quat_end
         ang = rotation_angle(quat_prev, quat_end)
-        path = None
+        path: Arc3 | Line | None = None
         if isinstance(m, Circ):
             vpose, _ = _target_pose(robot, m.via, lab)
             try:
@@ -300,26 +300,26 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
             pieces.append(Piece("orient", L, constant_point(sp["p0"]), sp["quat0"], sp["quat1"],
                                 w_max * robot.length_scale, i, 0.0, "orientation speed"))
             continue
-        a, b = trim0[i], path.length - trim1[i]
-        frac0, frac1 = a / path.length, b / path.length
+        s0, s1 = trim0[i], path.length - trim1[i]
+        frac0, frac1 = s0 / path.length, s1 / path.length
         qa = slerp(sp["quat0"], sp["quat1"], frac0)
         qb = slerp(sp["quat0"], sp["quat1"], frac1)
         cap, reason = v, ""
         if sp["angle"] > 0 and w_max * path.length / sp["angle"] < v:
             cap, reason = w_max * path.length / sp["angle"], "orientation speed"
-        pieces.append(Piece("path", b - a, sub_path(path, a, b), qa, qb, cap, i, 1.0, reason, v))
+        pieces.append(Piece("path", s1 - s0, sub_path(path, s0, s1), qa, qb, cap, i, 1.0, reason, v))
         if i in blends:
             r = blends[i]
             nxt = specs[i + 1]
-            pa = path.point(b)
-            tang_a = path.tangent(b)
+            pa = path.point(s1)
+            tang_a = path.tangent(s1)
             pb = nxt["path"].point(r)
             tang_b = nxt["path"].tangent(r)
             qn = slerp(nxt["quat0"], nxt["quat1"], r / nxt["path"].length)
-            bz = BezierBlend(pa, tang_a, pb, tang_b, r, ka=curvature_vector(path, b),
+            bz = BezierBlend(pa, tang_a, pb, tang_b, r, ka=curvature_vector(path, s1),
                              kb=curvature_vector(nxt["path"], r), corner=sp["p1"])
             cap_b = min(v, nxt["speed"])
-            ori = blended_orientation(sp["quat0"], sp["quat1"], path.length, b,
+            ori = blended_orientation(sp["quat0"], sp["quat1"], path.length, s1,
                                       nxt["quat0"], nxt["quat1"], nxt["path"].length, r, bz.length)
             pieces.append(Piece("blend", bz.length, bz.point, qb, qn, cap_b, i, 1.0, "",
                                 quat_fn=ori))
@@ -373,8 +373,13 @@ def _check_continuous(robot: RobotModel, pieces: list[Piece], offsets: np.ndarra
 
 
 def plan_chain(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any], labels: Sequence[str],
-               motion_ids: Sequence[int]) -> CartesianChain:
+               motion_ids: Sequence[int]) -> CartesianChain | None:
     """Plan LIN/CIRC ``motions`` from joints ``q0`` as one chain (rest to rest).
+
+    Returns
+    -------
+    CartesianChain or None
+        None when nothing moves (every motion ends where it starts).
 
     Raises
     ------
@@ -563,7 +568,7 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
         for n, ln in zip(range(i, j + 1), hi - lo):
             nm = reason_at(n)
             weight[nm] = weight.get(nm, 0.0) + float(ln)
-        reason = max(weight, key=weight.get)
+        reason = max(weight, key=weight.__getitem__)
         mi = chain.motion_ids[chain.pieces[k[i]].motion]
         lab = chain.labels[chain.pieces[k[i]].motion]
         if speed < SLOWDOWN_FRACTION * float(prog[i]):

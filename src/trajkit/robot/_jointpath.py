@@ -13,6 +13,8 @@ derivative of the kinematics, not of a sampled grid.
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 
 from ..errors import UnreachableError
@@ -74,7 +76,7 @@ class ChainJointPath:
         self._seed = make_interp_spline(table_s, table_q, k=k) if k >= 1 else None
 
     # ---- geometry
-    def piece_of(self, s: np.ndarray, side: str = "right") -> np.ndarray:
+    def piece_of(self, s: np.ndarray, side: Literal["left", "right"] = "right") -> np.ndarray:
         k = np.searchsorted(self.offsets, s, side=side) - 1
         return np.clip(k, 0, len(self.pieces) - 1)
 

@@ -83,7 +83,7 @@ class BezierBlend:
         ka = np.zeros(3) if ka is None else np.asarray(ka, dtype=np.float64)
         kb = np.zeros(3) if kb is None else np.asarray(kb, dtype=np.float64)
         corner = pa + radius * ta if corner is None else np.asarray(corner, dtype=np.float64)
-        best = None
+        best: tuple[tuple[bool, float], np.ndarray, float] | None = None
         for beta in BLEND_HANDLES:
             h = beta * radius
             ctrl = np.array([pa, pa + h * ta, pa + 2.0 * h * ta + _G2_FACTOR * h * h * ka,
@@ -93,6 +93,7 @@ class BezierBlend:
             key = (not inside, rate)
             if best is None or key < best[0]:
                 best = (key, ctrl, beta)
+        assert best is not None  # BLEND_HANDLES is not empty
         self.ctrl = best[1]
         self.handle = best[2] * radius
         edges = np.linspace(0.0, 1.0, BLEND_TABLE + 1)

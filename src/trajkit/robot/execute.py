@@ -75,7 +75,11 @@ class Segment:
         A blended PTP group is the superposition of its moves, each started
         at its offset: ``q = q_start + sum_k (q_k(t - off_k) - q_k(0))``.
         """
-        parts = self.parts if self.parts is not None else [(0.0, self.ptp)]
+        if self.parts is not None:
+            parts = self.parts
+        else:
+            assert self.ptp is not None  # a PTP segment has its moves
+            parts = [(0.0, self.ptp)]
         q = np.broadcast_to(self.q_start, (tl.size, self.q_start.size)).copy()
         qd = np.zeros_like(q)
         qdd = np.zeros_like(q)

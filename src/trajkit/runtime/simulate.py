@@ -49,7 +49,7 @@ class MotionTiming:
     planned_s: float
     simulated_s: float
     settle_s: float
-    max_following_error: tuple
+    max_following_error: tuple[float, ...]
 
 
 @dataclass
@@ -65,20 +65,20 @@ class SimulationReport:
         Axis names.
     period : float [s]
     servo : tuple of ServoParams
-    t : ndarray, shape (n,)
-        Cycle times [s] (when recorded).
-    following_error : ndarray, shape (n, n_axes)
-        Commanded minus measured position [unit] (when recorded).
+    t : ndarray, shape (n,), or None
+        Cycle times [s] (None when not recorded).
+    following_error : ndarray, shape (n, n_axes), or None
+        Commanded minus measured position [unit] (None when not recorded).
     """
 
     planned_s: float
     simulated_s: float
-    motions: list
-    names: tuple
+    motions: list[MotionTiming]
+    names: tuple[str, ...]
     period: float
-    servo: tuple
-    t: np.ndarray = field(repr=False, default=None)
-    following_error: np.ndarray = field(repr=False, default=None)
+    servo: tuple[ServoParams, ...]
+    t: np.ndarray | None = field(repr=False, default=None)
+    following_error: np.ndarray | None = field(repr=False, default=None)
 
     @property
     def max_following_error(self) -> np.ndarray:
@@ -136,6 +136,8 @@ def simulate(program: Any, period: float, servo: ServoParams | Sequence[ServoPar
     servo = ServoParams() if servo is None else servo
     st = Streamer(program, period, limits=limits, servo=servo,
                   safety=SafetyConfig(following_error=math.inf), wait_in_position=exact_stop)
+    bank = st.servo
+    assert bank is not None  # a servo is always given above
     src = st.source
     n = src.n_axes
     ts, taus, fes = [], [], []
@@ -171,5 +173,5 @@ def simulate(program: Any, period: float, servo: ServoParams | Sequence[ServoPar
         prev_end_t, prev_plan = t_end, float(me)
     return SimulationReport(
         float(src.duration), float(prev_end_t), motions, src.names, float(period),
-        tuple(st.servo.params), t if record else None, fe if record else None,
+        tuple(bank.params), t if record else None, fe if record else None,
     )

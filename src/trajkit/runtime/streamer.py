@@ -86,7 +86,8 @@ from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError, TrajkitError
 from ..limits import AxisLimits
 from ..sync import plan_ptp, plan_ptp_states
-from ._brake import brake_profile
+from ..trajectory import Trajectory
+from ._brake import BrakeProfile, brake_profile
 from .pulses import PulseAxis, check_pulse_equivalents, pulse_count
 from .safety import Monitors, RuntimeFault, SafetyConfig
 from .servo import ServoBank, ServoParams
@@ -187,7 +188,8 @@ def _machine(limits: Sequence[AxisLimits]) -> tuple[np.ndarray, ...]:
     return v, a, ad, j, jm
 
 
-def _rate_bounds(envelope: np.ndarray, limits: Sequence[AxisLimits], top: float):
+def _rate_bounds(envelope: np.ndarray, limits: Sequence[AxisLimits],
+                 top: float) -> tuple[np.ndarray, ...]:
     """Per-axis bounds: sigma1 <= s1max, 3 A top sigma1 + V sigma2 <= sj, sigma2 <= s2v."""
     V, Aa, Ad, J = (np.asarray(x, dtype=float) for x in envelope)
     _, a, ad, j, jm = _machine(limits)
@@ -379,7 +381,7 @@ class Setpoint:
 
     def to_dict(self) -> dict:
         """JSON-ready dict (lists of floats / ints)."""
-        def lst(x):
+        def lst(x: np.ndarray | None) -> list[float | int] | None:
             return None if x is None else [float(v) if isinstance(v, (float, np.floating))
                                            else int(v) for v in x]
         return {
@@ -391,6 +393,24 @@ class Setpoint:
             "pulses": lst(self.pulses), "pulse_count": lst(self.pulse_count),
             "fault": None if self.fault is None else str(self.fault),
         }
+
+
+@dataclass(slots=True)
+class _Block:
+    """Setpoints sampled ahead while the rate is steady: program times
+    ``taus`` (shape (m,)), the program's ``Q, Q', Q''`` there (shape
+    (m, n_axes)) and the index ``i`` of the next row to output."""
+
+    taus: np.ndarray
+    Q: np.ndarray
+    Qd: np.ndarray
+    Qdd: np.ndarray
+    i: int
+
+
+#: A per-axis brake in progress: the profiles, their positions, velocities
+#: and accelerations per cycle (shape (m, n_axes)) and the next row.
+_BrakeRun = tuple[list[BrakeProfile], np.ndarray, np.ndarray, np.ndarray, int]
 
 
 @dataclass(frozen=True)
@@ -491,7 +511,7 @@ class Streamer:
         self.limits = tuple(lm.with_name(nm) if lm.name is None else lm
                             for lm, nm in zip(lims, src.names))
         self.safety = safety if safety is not None else SafetyConfig()
-        self.servo = None
+        self.servo: ServoBank | None = None
         if servo is not None:
             self.servo = ServoBank(servo, n, self.period, src.start_position)
         fe = self.safety.following_error
@@ -501,7 +521,8 @@ class Streamer:
         if np.any(~(fe > 0)):
             raise InvalidInputError(f"following_error limits must be > 0, got {fe.tolist()}")
         self.monitors = Monitors(self.limits, src.names, fe, self.safety.look_ahead)
-        self.pulse_axes = None
+        self.pulse_axes: list[PulseAxis] | None = None
+        self._peq: list[float] = []
         if pulse_equivalents is not None:
             eqs = check_pulse_equivalents(pulse_equivalents, n)
             rates = np.broadcast_to(np.asarray(max_pulse_rate, dtype=float), (n,))
@@ -567,7 +588,7 @@ class Streamer:
         self._ad = np.array([lm.a_max_decel for lm in self.limits])
         # ---- run state
         self._lock = threading.Lock()
-        self._cmds: deque = deque()
+        self._cmds: deque[tuple[Any, ...]] = deque()
         self.state = "idle"
         self.paused = False
         self.finished = False
@@ -579,22 +600,23 @@ class Streamer:
         self.s = 0.0
         self.sd = 0.0
         self._mode = "hold"  # hold | path | brake | detour | target
-        self._stop_kind = None  # None | "command" | "fault"
+        self._stop_kind: str | None = None  # None | "command" | "fault"
         self._path_stop = False
         self._q = src.start_position.copy()
         self._v = np.zeros(n)
         self._a = np.zeros(n)
-        self._blk = None
-        self._brake = None
-        self._detour = None
-        self._online = None
-        self._stops = list(src.stop_points) if self.wait_in_position else []
+        self._blk: _Block | None = None
+        self._brake: _BrakeRun | None = None
+        self._detour: tuple[Trajectory, int] | None = None
+        self._online: tuple[Trajectory, int] | None = None
+        self._stops: list[float] = list(src.stop_points) if self.wait_in_position else []
         self._settle = 0
         self._waiting = False
         self.stop_log: list[tuple[float, float, float]] = []
-        self._wait_since = None
-        self._last = None
-        self._mcache = None
+        self._wait_since: float | None = None
+        self._pause_logged = False
+        self._last: Setpoint | None = None
+        self._mcache: tuple[int, float, float] | None = None
         if self.rate_ceiling < self.max_rate:
             _log.info(
                 f"override changes are proven up to rate {self.rate_ceiling:.4g} only (the program "
@@ -623,7 +645,7 @@ class Streamer:
         return cls(plan_ptp(q, q, lims), period, limits=lims, **kwargs)
 
     # ================================================================ commands
-    def _push(self, *cmd) -> None:
+    def _push(self, *cmd: Any) -> None:
         with self._lock:
             self._cmds.append(cmd)
 
@@ -789,7 +811,7 @@ class Streamer:
     def _path_rest(self) -> bool:
         return self.s == 0.0 and self.sd == 0.0
 
-    def _apply(self, cmd) -> None:
+    def _apply(self, cmd: tuple[Any, ...]) -> None:
         kind = cmd[0]
         if kind in ("override", "pause", "resume"):
             self._blk = None  # the rate target changes: drop the block sampled ahead
@@ -797,6 +819,7 @@ class Streamer:
             self.override = cmd[1]
             self._event("override", f"override {100 * cmd[1]:g} %")
         elif kind == "encoder":
+            assert self.servo is not None  # queued only with the servo (inject_encoder_jump)
             self.servo.inject_encoder_jump(cmd[1], cmd[2])
             self._event("encoder", f"encoder of axis {self.source.names[cmd[1]]} jumps by {cmd[2]!r}")
         elif kind == "start":
@@ -892,7 +915,7 @@ class Streamer:
             return
         self._start_brake()
 
-    def _start_brake(self) -> None:
+    def _start_brake(self) -> _BrakeRun:
         n = self.n_axes
         profs = []
         for k in range(n):
@@ -907,10 +930,11 @@ class Streamer:
         for k, p in enumerate(profs):
             s = p.sample(tt)
             Q[:, k], V[:, k], A[:, k] = s.position, s.velocity, s.acceleration
-        self._brake = (profs, Q, V, A, 0)
+        brake = self._brake = (profs, Q, V, A, 0)
         self._online = None
         self._mode = "brake"
         self._blk = None
+        return brake
 
     def _emergency(self, fault: RuntimeFault) -> None:
         self.fault = fault
@@ -987,7 +1011,8 @@ class Streamer:
                 new = clipped
         return new
 
-    def _path_candidate(self):
+    def _path_candidate(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float]:
+        """This cycle's ``(q, q', q'')`` on the path, and the next ``(tau, s, s')``."""
         src = self.source
         dt = self.period
         target = self._target()
@@ -1002,18 +1027,18 @@ class Streamer:
                 stops = [min(stops[0], self._stops[0])]
         if steady and self.s > 0.0:
             blk = self._blk
-            if blk is None or blk[4] >= blk[0].size or blk[0][blk[4]] != self.tau:
+            if blk is None or blk.i >= blk.taus.size or blk.taus[blk.i] != self.tau:
                 taus = self.tau + self.s * dt * np.arange(BLOCK_CYCLES + 1)
                 nxt = stops[0] if stops else src.duration
                 taus = np.minimum(taus, nxt)
                 Q, Qd, Qdd = src.sample(taus)
-                blk = [taus, Q, Qd, Qdd, 0]
+                blk = _Block(taus, Q, Qd, Qdd, 0)
                 self._blk = blk
-            i = blk[4]
-            blk[4] = i + 1
-            q, qd, qdd = blk[1][i], blk[2][i], blk[3][i]
+            i = blk.i
+            blk.i = i + 1
+            q, qd, qdd = blk.Q[i], blk.Qd[i], blk.Qdd[i]
             sd = 0.0
-            tau_next = blk[0][i + 1] if i + 1 < blk[0].size else None
+            tau_next = blk.taus[i + 1] if i + 1 < blk.taus.size else None
             if self.s != target and not np.any(qd) and not np.any(qdd):
                 self.s = target  # at rest on the path: the rate switches at once
                 self._blk = None
@@ -1062,15 +1087,18 @@ class Streamer:
             q, v, a, tau_next, s_next, sd = self._path_candidate()
             path_next = (tau_next, s_next, sd)
         elif mode == "brake":
+            assert self._brake is not None  # set with the mode (_start_brake)
             profs, Q, V, A, i = self._brake
             q, v, a = Q[i], V[i], A[i]
             self._brake = (profs, Q, V, A, i + 1)
         elif mode == "target":
+            assert self._online is not None  # set with the mode (_apply_target)
             traj, i = self._online
             smp = traj.sample(np.array([(i + 1) * self.period]))
             q, v, a = smp.position[0], smp.velocity[0], smp.acceleration[0]
             self._online = (traj, i + 1)
         elif mode == "detour":
+            assert self._detour is not None  # set with the mode (_begin_motion)
             traj, i = self._detour
             smp = traj.sample(np.array([(i + 1) * self.period]))
             q, v, a = smp.position[0], smp.velocity[0], smp.acceleration[0]
@@ -1102,8 +1130,8 @@ class Streamer:
                     self.state = "stopping"
                     self._stop_kind = "fault"
                     self._path_stop = False
-                    self._start_brake()  # per-axis brake from the last good state
-                    profs, Q, V, A, i = self._brake
+                    # per-axis brake from the last good state
+                    profs, Q, V, A, i = self._start_brake()
                     q, v, a = Q[0], V[0], A[0]
                     self._brake = (profs, Q, V, A, 1)
                 path_next = None
@@ -1145,7 +1173,7 @@ class Streamer:
                 a = np.zeros(n)
         # rows of the sampled blocks are never written to: no copies needed
         self._q, self._v, self._a = q, v, a
-        pulses = None
+        pulses = pulse_counts = None
         if self.pulse_axes is not None:
             if counts is None:
                 counts = [math.floor(x / e + 0.5) for x, e in zip(q.tolist(), self._peq)]
@@ -1157,14 +1185,14 @@ class Streamer:
                     pa.direction = 1 if dj > 0 else -1
                 d.append(dj)
             pulses = np.array(d, dtype=np.int64)
-            counts = np.array(counts, dtype=np.int64)
+            pulse_counts = np.array(counts, dtype=np.int64)
         fe = None if measured is None else self._q - measured
         src = self.source
         sp = Setpoint(
             k, t, self.state, self.paused, tau_out,
             tau_out / src.duration if src.duration > 0 else 1.0,
             self._motion_index(tau_out), self.s, self._q, self._v, self._a,
-            None if measured is None else measured.copy(), fe, pulses, counts, fault_now,
+            None if measured is None else measured.copy(), fe, pulses, pulse_counts, fault_now,
         )
         self._last = sp
         self.cycle = k + 1
@@ -1180,12 +1208,12 @@ class Streamer:
             c = self._mcache = (i, lo, hi)
         return c[0]
 
-    def _path_bookkeeping(self, q, measured, tau_out: float) -> None:
+    def _path_bookkeeping(self, q: np.ndarray, measured: np.ndarray | None, tau_out: float) -> None:
         src = self.source
         if self._path_stop and self._path_rest():
             self._at_rest_after_stop()
             return
-        if self.paused and self._path_rest() and not getattr(self, "_pause_logged", False):
+        if self.paused and self._path_rest() and not self._pause_logged:
             self._pause_logged = True
             self._event("paused", f"paused on the path at program time {self.tau:.6g} s")
         if not self.paused:
@@ -1196,23 +1224,27 @@ class Streamer:
                 self._wait_since = self.t
                 self._settle = 0
                 self._blk = None
+            # stop points are waited for only with the servo (wait_in_position)
+            servo = self.servo
+            since = self._wait_since
+            assert servo is not None and measured is not None and since is not None
             fe = np.abs(q - measured)
-            self._settle = self._settle + 1 if np.all(fe <= self.servo.window) else 0
-            waited = self.t + self.period - self._wait_since
-            if self._settle < self.servo.settle_cycles and waited > self.servo.settle_timeout:
-                j = int(np.argmax(fe / self.servo.window))
+            self._settle = self._settle + 1 if np.all(fe <= servo.window) else 0
+            waited = self.t + self.period - since
+            if self._settle < servo.settle_cycles and waited > servo.settle_timeout:
+                j = int(np.argmax(fe / servo.window))
                 f = RuntimeFault(self.source.names[j], "in position", float(waited),
-                                 self.servo.settle_timeout, self.cycle, self.t,
-                                 f" s (following error {float(fe[j])!r} > window {float(self.servo.window[j])!r})")
+                                 servo.settle_timeout, self.cycle, self.t,
+                                 f" s (following error {float(fe[j])!r} > window {float(servo.window[j])!r})")
                 self.fault = f
                 self._waiting = False
                 self._stop_kind = "fault"
                 self._event("fault", str(f))
                 self._at_rest_after_stop()
                 return
-            if self._settle >= self.servo.settle_cycles:
+            if self._settle >= servo.settle_cycles:
                 sp_tau = self._stops.pop(0)
-                self.stop_log.append((sp_tau, self._wait_since, self.t + self.period))
+                self.stop_log.append((sp_tau, since, self.t + self.period))
                 self._waiting = False
                 self._event("in_position", f"in position at program time {sp_tau:.6g} s")
             else:
