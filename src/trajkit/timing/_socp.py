@@ -76,6 +76,10 @@ SCREEN_SLACK_LOOSE = 1.0
 #: solved again with every row.
 SCREEN_TOL = 1e-9
 
+#: ... or comes within this fraction of its bound (it would be active: solved
+#: again with it, so that the solver keeps it as accurately as the others).
+SCREEN_MARGIN = 1e-6
+
 #: Screening starts once a round changed the time by less than this fraction (the
 #: rounds' solutions are then close, and so are their active limits); with a
 #: starting point, the first round is compared with the starting point's time.
@@ -543,6 +547,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         ineq.add([ix[cm], ix[cm + 1], iu[cm], iu[cm + 1]],
                  [0.5 * np.ones(cm.size), 0.5 * np.ones(cm.size), 0.25 * D[cm], -0.25 * D[cm]],
                  capm[cm])
+    n_vel = ineq.n
     # joint accelerations at the free nodes, both legs
     nn = np.repeat(inner, m)
     kk = np.tile(np.arange(m), inner.size)
@@ -615,6 +620,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         if z_prev is not None and ((settled and not times)
                                    or (times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1])):
             keep = _near(A_in_all, b_in_all, z_prev)
+            # the velocity and speed-cap rows only loosely (a cruise at the cap stays exact)
+            keep[:n_vel] |= (b_static[:n_vel] - A_static[:n_vel] @ z_prev) < SCREEN_SLACK_LOOSE
         elif z_prev is not None:
             keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK_LOOSE
         else:
@@ -629,7 +636,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             sol = _clarabel_solve(clarabel, P, q, A, b, cones)
             if keep.all():
                 break
-            viol = (A_in_all @ np.asarray(sol.x) - b_in_all) > SCREEN_TOL
+            # a row left out must not be violated, nor come close to its bound
+            viol = (b_in_all - A_in_all @ np.asarray(sol.x)) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
             if not (viol & ~keep).any():
                 break
             keep[:] = True
