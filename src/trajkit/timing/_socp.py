@@ -62,14 +62,28 @@ PRIMAL_RTOL = 1e-7
 #: The cones are scaled by the previous round's x, but not below this fraction of its largest.
 SCALE_FLOOR = 1e-9
 
-#: Screening: an inequality (normalised to coefficients <= 1) whose slack at the
-#: previous round's solution is above this is left out of the next round ...
-SCREEN_SLACK = 1.0
+#: Screening: an inequality (a limit, bound > 0) whose slack at the previous
+#: round's solution (or at the starting point) is above this fraction of its
+#: bound is left out of the next round (after the jerk-free round: only the velocity and
+#: acceleration rows; the jerk rows are all kept) ...
+SCREEN_SLACK = 0.25
+
+#: Before the rounds have settled (SCREEN_SETTLED) only the rows whose slack, in
+#: the units of the row normalised to coefficients <= 1, is above this are left out.
+SCREEN_SLACK_LOOSE = 1.0
 
 #: ... unless the new solution violates it by more than this; then the round is
-#: solved again with it (at most SCREEN_ROUNDS times).
+#: solved again with every row.
 SCREEN_TOL = 1e-9
-SCREEN_ROUNDS = 3
+
+#: ... or comes within this fraction of its bound (it would be active: solved
+#: again with it, so that the solver keeps it as accurately as the others).
+SCREEN_MARGIN = 1e-6
+
+#: Screening starts once a round changed the time by less than this fraction (the
+#: rounds' solutions are then close, and so are their active limits); with a
+#: starting point, the first round is compared with the starting point's time.
+SCREEN_SETTLED = 0.02
 
 #: Node speeds^2 below this fraction of the largest are treated as zero in the
 #: tangent planes (guards a division near a stop in the path's interior).
@@ -192,6 +206,29 @@ class _Rows:
         return A.tocsc(), b
 
 
+def _near(A: sp.csr_matrix, b: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The rows ``A z <= b`` whose slack at ``z`` is below SCREEN_SLACK of their bound
+    (and every row whose bound is not positive)."""
+    return ((b - A @ z) < SCREEN_SLACK * b) | (b <= 0.0)
+
+
+def _clarabel_solve(clarabel, P, q, A, b, cones):
+    """Clarabel's solution of the cone program; without iterative refinement of the
+    linear systems first (the stopping criteria are on the true residuals, so a
+    solved status means the same accuracy), with it when that does not solve."""
+    for refine in (False, True):
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        settings.tol_gap_abs = SOLVER_TOL
+        settings.tol_gap_rel = SOLVER_TOL
+        settings.tol_feas = SOLVER_TOL
+        settings.iterative_refinement_enable = refine
+        sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
+        if str(sol.status).split(".")[-1] in ("Solved", "AlmostSolved"):
+            break
+    return sol
+
+
 def _legs(sig: np.ndarray, acc: np.ndarray, dec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Upper and lower bound of ``sigma * q_ddot`` per node and joint (sigma = sign(q'))."""
     hi = np.where(sig != 0, acc, np.minimum(acc, dec))
@@ -231,6 +268,100 @@ def _time_scale(p: GridProblem) -> float:
     return T if T > 0 and math.isfinite(T) else 1.0
 
 
+def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: np.ndarray,
+                      D: np.ndarray, rest0: bool, restN: bool) -> list[tuple[int, float, float]]:
+    """The rest intervals: one jerk phase, ``|q'| J <= j`` with ``J = sqrt(u^3 / (6 D))``,
+    as a bound on the inner node's ``u``: (node, sign, bound) of each."""
+    N = D.size
+    out = []
+    for flag, node, dd, sgn in ((rest0, 1, D[0], 1.0), (restN, N - 1, D[N - 1], -1.0)):
+        if not flag:
+            continue
+        qa = np.maximum(np.abs(d1[node]), np.abs(d1[0 if node == 1 else N]))
+        # from rest the joints speed up (accel leg), to rest they slow down
+        jl = np.where(qa > 0, (j_acc if node == 1 else j_dec)[node], np.inf)
+        with np.errstate(divide="ignore"):
+            ub = float(np.min((6.0 * dd) ** (1.0 / 3.0) * (jl / qa) ** (2.0 / 3.0)))
+        if math.isfinite(p.j_path):
+            ub = min(ub, (6.0 * dd) ** (1.0 / 3.0) * p.j_path ** (2.0 / 3.0))
+        if math.isfinite(ub):
+            out.append((node, sgn, ub))
+    return out
+
+
+def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.ndarray,
+               g: np.ndarray, ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray,
+               d1: np.ndarray, d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray,
+               j_dec: np.ndarray, j_both: np.ndarray, D: np.ndarray, n: int,
+               rest_rows: list[tuple[int, float, float]]) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The jerk rows linearised at ``(x_bar, u_bar)`` (see the module notes), normalised.
+
+    Every row of a free interval ``i`` has its coefficients on ``x_i, x_{i+1}, u_i,
+    u_{i+1}`` (columns ``i, i + 1, n + i, n + i + 1``): the joints' jerk at both ends
+    of the interval, both signs, then the path's jerk, then the rest intervals' bounds.
+    Returns the rows (CSR, over the ``3 n + N`` unknowns) and their right-hand side.
+    """
+    m = d1.shape[1]
+    N = n - 1
+    sq = np.sqrt(np.maximum(x_bar, TINY_X * max(float(x_bar.max()), TINY_X)))
+    S = sq[g] + sq[g + 1] + 2.0 * ecorr[g]
+    S = np.maximum(S, 0.5 * (sq[g] + sq[g + 1]))
+    qdd_bar = d2 * x_bar[:, None] + d1 * u_bar[:, None]  # the leg from the previous round
+    S2 = (S * S)[:, None]
+    Dg = D[g][:, None]
+    xi, xj = x_bar[g][:, None], x_bar[g + 1][:, None]
+    si, sj = sq[g][:, None], sq[g + 1][:, None]
+    coef: list[np.ndarray] = []  # (r, 4) each
+    rhs: list[np.ndarray] = []
+    cell: list[np.ndarray] = []
+    for e, nd in enumerate(ends):
+        speeding = sig[nd] * qdd_bar[nd]
+        jl = np.where(speeding > 0, j_acc[nd], np.where(speeding < 0, j_dec[nd], j_both[nd]))
+        f = 2.0 * jl / S[:, None]
+        gi = -jl / (S2 * si)
+        gj = -jl / (S2 * sj)
+        r = (f - gi * xi - gj * xj).ravel()
+        for sgn in (1.0, -1.0):
+            w = sgn * d1[nd] / Dg
+            c3, c2 = sgn * d3[nd], sgn * 3.0 * d2[nd]
+            if e == 0:
+                c = (c3 - gi, -gj, c2 - w, w)
+            else:
+                c = (-gi, c3 - gj, -w, c2 + w)
+            coef.append(np.stack(c, axis=-1).reshape(-1, 4))
+            rhs.append(r)
+            cell.append(np.repeat(g, m))
+    if math.isfinite(p.j_path):
+        f1 = 2.0 * p.j_path / S
+        gi1 = -p.j_path / (S * S * sq[g])
+        gj1 = -p.j_path / (S * S * sq[g + 1])
+        r1 = f1 - gi1 * x_bar[g] - gj1 * x_bar[g + 1]
+        for sgn in (1.0, -1.0):
+            w1 = sgn / D[g]
+            coef.append(np.column_stack([-gi1, -gj1, -w1, w1]))
+            rhs.append(r1)
+            cell.append(g)
+    C = np.concatenate(coef) if coef else np.zeros((0, 4))
+    b = np.concatenate(rhs) if rhs else np.zeros(0)
+    c0 = np.concatenate(cell) if cell else np.zeros(0, dtype=int)
+    cols = np.column_stack([c0, c0 + 1, n + c0, n + c0 + 1])
+    big = np.maximum(np.maximum(np.abs(C).max(axis=1, initial=0.0), np.abs(b)), 1e-300)
+    C = C / big[:, None]
+    b = b / big
+    nr = b.size
+    rows = np.repeat(np.arange(nr), 4)
+    data, rr, cc = [C.ravel()], [rows], [cols.ravel()]
+    extra = []
+    for k, (node, sgn, ub) in enumerate(rest_rows):
+        data.append(np.array([sgn / max(1.0, ub)]))
+        rr.append(np.array([nr + k]))
+        cc.append(np.array([n + node]))
+        extra.append(ub / max(1.0, ub))
+    A = sp.csr_matrix((np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))),
+                      shape=(nr + len(rest_rows), 3 * n + N))
+    return A, np.concatenate([b, np.asarray(extra, dtype=float)])
+
+
 #: Nodes within this fraction of the path's speed cap are put on it (a cruise
 #: at the programmed speed is exactly at that speed, not a solver tolerance below).
 SNAP_RTOL = 1e-6
@@ -252,14 +383,18 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
 
 
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
-               init: tuple[np.ndarray, np.ndarray] | None = None) -> GridSolution:
+               init: tuple[np.ndarray, np.ndarray] | None = None,
+               settled: bool = False) -> GridSolution:
     """Solve the grid problem (see the module notes); raises RuntimeError if the solver fails.
 
     The problem is solved in scaled units (``s / L``, ``t / T0`` with ``T0``
     from :func:`_time_scale`) and the result returned in the caller's.
     ``init`` (node ``x`` and ``u``, e.g. a coarser grid's solution interpolated)
     is the first linearisation point: the jerk-free round is skipped
-    (``jerk_free_time`` is then NaN).
+    (``jerk_free_time`` is then NaN). ``settled``: ``init`` is a solution of
+    this grid with about the same limits, so its active limits are those of the
+    first round (which then leaves out the rows far from them, see SCREEN_SLACK;
+    the result is the same, only sooner).
     """
     L = float(p.s[-1] - p.s[0])
     T0 = _time_scale(p)
@@ -274,7 +409,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
         x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
-    sol = _solve_scaled(scaled, max_rounds, init_s)
+    sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None)
     sol.x = sol.x * (L / T0) ** 2
     sol.u = sol.u * L / as_
     sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
@@ -286,7 +421,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
 
 
 def _solve_scaled(p: GridProblem, max_rounds: int,
-                  init: tuple[np.ndarray, np.ndarray] | None = None) -> GridSolution:
+                  init: tuple[np.ndarray, np.ndarray] | None = None,
+                  settled: bool = False) -> GridSolution:
     import clarabel
 
     s = p.s
@@ -389,12 +525,66 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         ta = _interval_tau(xx, uu, D)
         return sg, rh, ta * ta, (uu[:-1] - uu[1:]) * ta / 12.0
 
+    # the rows that do not change between rounds: the nodes' and the intervals'
+    # velocity, the path's speed cap, the joint accelerations of both legs, the
+    # path acceleration (normalised inequalities) and the signs of c and d
+    ineq = _Rows(nv)
+    ineq.add([ix[inner]], [np.ones(inner.size)], xv[inner])
+    # joint velocities in the middle of every interval too (x_mid as for the cap below;
+    # q' there from its cubic Hermite interpolation)
+    im = np.nonzero(np.isfinite(xv_mid))[0]
+    if im.size:
+        ineq.add([ix[im], ix[im + 1], iu[im], iu[im + 1]],
+                 [0.5 * np.ones(im.size), 0.5 * np.ones(im.size), 0.25 * D[im], -0.25 * D[im]],
+                 xv_mid[im])
+    # the path's speed cap also in the middle of every interval (the speed
+    # between nodes, not only at them): x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4
+    capm = np.minimum(p.x_cap[:-1], p.x_cap[1:])
+    if p.x_cap_mid is not None:
+        capm = np.minimum(capm, p.x_cap_mid)
+    cm = np.nonzero(np.isfinite(capm))[0]
+    if cm.size:
+        ineq.add([ix[cm], ix[cm + 1], iu[cm], iu[cm + 1]],
+                 [0.5 * np.ones(cm.size), 0.5 * np.ones(cm.size), 0.25 * D[cm], -0.25 * D[cm]],
+                 capm[cm])
+    n_vel = ineq.n
+    # joint accelerations at the free nodes, both legs
+    nn = np.repeat(inner, m)
+    kk = np.tile(np.arange(m), inner.size)
+    sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
+    ineq.add([ix[nn], iu[nn]], [sg * d2[nn, kk], sg * d1[nn, kk]], a_hi[nn, kk])
+    ineq.add([ix[nn], iu[nn]], [-sg * d2[nn, kk], -sg * d1[nn, kk]], a_lo[nn, kk])
+    if math.isfinite(p.a_path):
+        ineq.add([iu[inner]], [np.ones(inner.size)], np.full(inner.size, p.a_path))
+        ineq.add([iu[inner]], [-np.ones(inner.size)], np.full(inner.size, p.a_path))
+    A_static, b_static = ineq.matrix(normalise=True)
+    A_static = A_static.tocsr()
+    nonneg = _Rows(nv)
+    both = np.concatenate([ic[free], idd])
+    nonneg.add([both], [-np.ones(both.size)], np.zeros(both.size))
+    A_nn, b_nn = nonneg.matrix()
+
+    mid = np.arange(N)
+    special = np.zeros(N, dtype=bool)
+    special[0] = rest0
+    special[N - 1] |= restN
+    g = mid[~special]  # intervals with a free jerk (not the rest intervals)
+    # the jerk rows' limit (leg) at both ends of every free interval, both signs
+    ends = (g, g + 1)
+    rest_rows = _rest_jerk_bounds(p, d1, j_acc, j_dec, D, rest0, restN)
+
     jerk_rounds = 0
     best = None
     z_prev = None
+    t_init = math.nan
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
         sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
+        z_prev = np.zeros(nv)  # the inequalities only involve x and u
+        z_prev[ix], z_prev[iu] = x_bar, u_bar
+        sqi = np.sqrt(x_bar)
+        with np.errstate(divide="ignore"):
+            t_init = float(np.sum(wts / (sqi[:-1] + sqi[1:])))
     for _ in range(max_rounds):
         eq = _Rows(nv)
         eq.add([ix[0:1]], [np.ones(1)], np.array([p.x0]))
@@ -403,130 +593,54 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         eq.add([iu[N:]], [np.ones(1)], np.array([p.uN]))
         eq.add([ic[0:1]], [np.ones(1)], np.array([math.sqrt(p.x0)]))
         eq.add([ic[N:]], [np.ones(1)], np.array([math.sqrt(p.xN)]))
-        mid = np.arange(N)
-        special = np.zeros(N, dtype=bool)
         if rest0:
-            special[0] = True
             eq.add([ix[1:2], iu[1:2]], [np.ones(1), np.array([-1.5 * D[0]])], np.zeros(1))
         if restN:
-            special[N - 1] = True
             eq.add([ix[N - 1:N], iu[N - 1:N]], [np.ones(1), np.array([1.5 * D[N - 1]])], np.zeros(1))
-        g = mid[~special]
         eq.add([ix[g + 1], ix[g], iu[g], iu[g + 1]],
                [np.ones(g.size), -np.ones(g.size), -(D[g] - u_bar[g] * tau2[g] / 6.0),
                 -(D[g] + u_bar[g + 1] * tau2[g] / 6.0)],
                -(u_bar[g + 1] ** 2 - u_bar[g] ** 2) * tau2[g] / 12.0)
 
-        ineq = _Rows(nv)
-        ineq.add([ix[inner]], [np.ones(inner.size)], xv[inner])
-        # joint velocities in the middle of every interval too (x_mid as for the cap below;
-        # q' there from its cubic Hermite interpolation)
-        ivm = np.isfinite(xv_mid)
-        if ivm.any():
-            im = np.nonzero(ivm)[0]
-            ineq.add([ix[im], ix[im + 1], iu[im], iu[im + 1]],
-                     [0.5 * np.ones(im.size), 0.5 * np.ones(im.size), 0.25 * D[im], -0.25 * D[im]],
-                     xv_mid[im])
-        # the path's speed cap also in the middle of every interval (the speed
-        # between nodes, not only at them): x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4
-        capm = np.minimum(p.x_cap[:-1], p.x_cap[1:])
-        if p.x_cap_mid is not None:
-            capm = np.minimum(capm, p.x_cap_mid)
-        cm = np.nonzero(np.isfinite(capm))[0]
-        if cm.size:
-            ineq.add([ix[cm], ix[cm + 1], iu[cm], iu[cm + 1]],
-                     [0.5 * np.ones(cm.size), 0.5 * np.ones(cm.size), 0.25 * D[cm], -0.25 * D[cm]],
-                     capm[cm])
-        # joint accelerations at the free nodes, both legs
-        nn: np.ndarray
-        kk: np.ndarray
-        nn, kk = np.meshgrid(inner, np.arange(m), indexing="ij")
-        nn, kk = nn.ravel(), kk.ravel()
-        sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
-        # when the leg is known from the previous round, use its own limit on both sides
-        ineq.add([ix[nn], iu[nn]], [sg * d2[nn, kk], sg * d1[nn, kk]], a_hi[nn, kk])
-        ineq.add([ix[nn], iu[nn]], [-sg * d2[nn, kk], -sg * d1[nn, kk]], a_lo[nn, kk])
-        if math.isfinite(p.a_path):
-            ineq.add([iu[inner]], [np.ones(inner.size)], np.full(inner.size, p.a_path))
-            ineq.add([iu[inner]], [-np.ones(inner.size)], np.full(inner.size, p.a_path))
         if x_bar is not None:
-            sq = np.sqrt(np.maximum(x_bar, TINY_X * max(float(x_bar.max()), TINY_X)))
-            ii = g  # intervals with a free jerk (not the rest intervals)
-            S = sq[ii] + sq[ii + 1] + 2.0 * ecorr[ii]
-            S = np.maximum(S, 0.5 * (sq[ii] + sq[ii + 1]))
-            # jerk leg from the previous round: accel leg where the joint speeds up
-            qdd_bar = d2 * x_bar[:, None] + d1 * u_bar[:, None]
-            it: np.ndarray
-            for node_of in (ii, ii + 1):
-                nn, kk = np.meshgrid(node_of, np.arange(m), indexing="ij")
-                it, _ = np.meshgrid(ii, np.arange(m), indexing="ij")
-                nn, kk, it = nn.ravel(), kk.ravel(), it.ravel()
-                speeding = sig[nn, kk] * qdd_bar[nn, kk]
-                jl = np.where(speeding > 0, j_acc[nn, kk],
-                              np.where(speeding < 0, j_dec[nn, kk], j_both[nn, kk]))
-                Sv = np.repeat(S, m)
-                f = 2.0 * jl / Sv
-                gi = -jl / (Sv * Sv * sq[it])
-                gj = -jl / (Sv * Sv * sq[it + 1])
-                rhs = f - gi * x_bar[it] - gj * x_bar[it + 1]
-                for sgn in (1.0, -1.0):
-                    w = sgn * d1[nn, kk] / D[it]
-                    ineq.add([ix[nn], iu[nn], iu[it + 1], iu[it], ix[it], ix[it + 1]],
-                             [sgn * d3[nn, kk], sgn * 3.0 * d2[nn, kk], w, -w, -gi, -gj], rhs)
-            if math.isfinite(p.j_path):
-                f = 2.0 * p.j_path / S
-                gi = -p.j_path / (S * S * sq[ii])
-                gj = -p.j_path / (S * S * sq[ii + 1])
-                rhs = f - gi * x_bar[ii] - gj * x_bar[ii + 1]
-                for sgn in (1.0, -1.0):
-                    w = sgn / D[ii]
-                    ineq.add([iu[ii + 1], iu[ii], ix[ii], ix[ii + 1]], [w, -w, -gi, -gj], rhs)
-            # the rest intervals: one jerk phase, |q'| J <= j with J = sqrt(u^3 / (6 D))
-            for flag, node, dd, sgn in ((rest0, 1, D[0], 1.0), (restN, N - 1, D[N - 1], -1.0)):
-                if not flag:
-                    continue
-                qa = np.maximum(np.abs(d1[node]), np.abs(d1[0 if node == 1 else N]))
-                # from rest the joints speed up (accel leg), to rest they slow down
-                jl = np.where(qa > 0, (j_acc if node == 1 else j_dec)[node], np.inf)
-                with np.errstate(divide="ignore"):
-                    ub = float(np.min((6.0 * dd) ** (1.0 / 3.0) * (jl / qa) ** (2.0 / 3.0)))
-                if math.isfinite(p.j_path):
-                    ub = min(ub, (6.0 * dd) ** (1.0 / 3.0) * p.j_path ** (2.0 / 3.0))
-                if math.isfinite(ub):
-                    ineq.add([iu[node:node + 1]], [np.array([sgn])], np.array([ub]))
-        nonneg = _Rows(nv)
-        both = np.concatenate([ic[free], idd])
-        nonneg.add([both], [-np.ones(both.size)], np.zeros(both.size))
+            A_jerk, b_jerk = _jerk_rows(p, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
+                                        j_acc, j_dec, j_both, D, n, rest_rows)
+            A_in_all = sp.vstack([A_static, A_jerk], format="csr")
+            b_in_all = np.concatenate([b_static, b_jerk])
+        else:
+            A_in_all, b_in_all = A_static, b_static
 
         A_eq, b_eq = eq.matrix()
-        A_in_all, b_in_all = ineq.matrix(normalise=True)
-        A_nn, b_nn = nonneg.matrix()
         A_cn = cone_matrix(sigma, rho)
-        # screening: rows with a wide margin at the previous round's solution are
-        # left out; rows the new solution violates are put back and it is solved again
-        if z_prev is not None:
-            keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK
+        # screening: the rows with a wide margin at the previous round's solution are
+        # left out (a narrower one once the rounds have settled); if the new solution violates one of
+        # them, the round is solved again with every row (the result is the same either
+        # way: the solution of fewer rows that keeps all of them is the optimum)
+        t_prev = times[-2] if jerk_rounds >= 2 else (t_init if jerk_rounds == 1 else math.nan)
+        if z_prev is not None and ((settled and not times)
+                                   or (times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1])):
+            keep = _near(A_in_all, b_in_all, z_prev)
+            # the velocity and speed-cap rows only loosely (a cruise at the cap stays exact)
+            keep[:n_vel] |= (b_static[:n_vel] - A_static[:n_vel] @ z_prev) < SCREEN_SLACK_LOOSE
+        elif z_prev is not None:
+            keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK_LOOSE
         else:
             keep = np.ones(b_in_all.size, dtype=bool)
-        for _screen in range(SCREEN_ROUNDS + 1):
+        for _screen in range(2):
             A_in, b_in = A_in_all[keep], b_in_all[keep]
-            A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc]).tocsc()
+            A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc], format="csc")
             b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
             cones = [clarabel.ZeroConeT(A_eq.shape[0]),
                      clarabel.NonnegativeConeT(A_in.shape[0] + A_nn.shape[0])]
             cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
-            settings = clarabel.DefaultSettings()
-            settings.verbose = False
-            settings.tol_gap_abs = SOLVER_TOL
-            settings.tol_gap_rel = SOLVER_TOL
-            settings.tol_feas = SOLVER_TOL
-            sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
+            sol = _clarabel_solve(clarabel, P, q, A, b, cones)
             if keep.all():
                 break
-            viol = (A_in_all @ np.asarray(sol.x) - b_in_all) > SCREEN_TOL
+            # a row left out must not be violated, nor come close to its bound
+            viol = (b_in_all - A_in_all @ np.asarray(sol.x)) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
             if not (viol & ~keep).any():
                 break
-            keep |= viol
+            keep[:] = True
         status = str(sol.status).split(".")[-1]
         times_status.append(status)
         usable = status in ("Solved", "AlmostSolved") or (
