@@ -40,7 +40,7 @@ def test_chord_error_is_the_circle_sagitta():
     assert np.allclose([arc_step_for_tolerance(k, e) for k, e in zip(K[mask], E[mask])], (K * phi)[mask], rtol=1e-7)
 
 
-def test_seed_003_worked_example_corrected():
+def test_chen2013_worked_example_corrected():
     """Chen et al. (2013): r = 100, 100 points per turn (3.6 deg) and 200 (1.8 deg).
 
     The chord of a 3.6 deg step is L = 2 r sin(1.8 deg); eq. 11 gives

@@ -40,6 +40,12 @@ EXPECTED = {
     "08_runtime_stream": ["override 40 %   at cycle  100: rate 0.40 from cycle",
                           "rate 0.00 from cycle", "resume          at cycle",
                           "largest |v|/v_max = 1.0000"],
+    # a blend too tight to pay off: it stops at every waypoint instead, never slower
+    "10_waypoints": ["stops at waypoints [0, 1, 2, 3, 4, 5, 6], passes each within 0.0000 rad",
+                     "final joints [deg]: [140.0, -30.0, 60.0, 0.0, 45.0, 120.0]"],
+    "11_online_targets": ["200 targets at 100 Hz, then one at rest",
+                          "final position [0.25, -0.5, 0.75], velocity [0.0, 0.0, 0.0]",
+                          "at rest on 1.500000 m"],
 }
 
 

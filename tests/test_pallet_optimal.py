@@ -71,7 +71,7 @@ def test_optimal_is_registered_and_verifies(plans):
 def test_seed_numbers_against_the_issue(plans):
     opt, mer = plans["optimal"], plans["merged"]
     floor, bound = opt.info["window_floor_s"], opt.info["lower_bound_s"]
-    # the issue: "no plan under this rule can go below about 88.1 s", merged ~89.4 s
+    # no plan under this rule can go below about 88.1 s; merged ~89.4 s
     assert floor == pytest.approx(88.1, abs=0.05)
     assert mer.total_s == pytest.approx(89.4, abs=0.05)
     assert floor <= bound <= opt.total_s < mer.total_s

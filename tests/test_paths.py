@@ -56,7 +56,7 @@ def test_arc_passes_exactly_through_its_three_points_random():
         assert np.linalg.norm(arc.point(s2) - pts[1]) <= 1e-9 * max(1, radius)
 
 
-def test_arc_centre_matches_seed_002_linear_system():
+def test_arc_centre_matches_jiang1987_linear_system():
     """Independent computation: the centre solves the seed's 3x3 system
     (plane through the points; equal distances to p1, p2 and p3) by Cramer's rule."""
     for _ in range(100):

@@ -98,7 +98,7 @@ def _fmt(case):
     return f"start {tuple(round(x, 6) for x in s)} goal {tuple(round(x, 6) for x in g)} V,A,J {tuple(round(x, 6) for x in L[:3])}"
 
 
-def test_issue_example_brake_start_is_not_slower_than_ruckig():
+def test_brake_start_example_is_not_slower_than_ruckig():
     # start accelerating so hard that the velocity must pass v_max: a brake
     s, g = (-0.540891, -0.233915, -1.433179), (-0.628622, 0.004028, 0.0)
     V, A, J = 0.292644, 1.433179, 11.252147

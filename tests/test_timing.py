@@ -19,6 +19,7 @@ from conftest import sweep_size
 
 from trajkit import AxisLimits, InvalidInputError, plan_move, plan_ptp
 from trajkit.timing import LinearJointPath, plan_path_timing, plan_waypoints
+from trajkit.timing.waypoints import STOP_ALL_MARGIN
 
 LIMIT_RTOL = 1e-9
 
@@ -162,6 +163,28 @@ def test_waypoints_are_faster_than_stopping_at_each(shape, blend, share):
     tr = plan_waypoints(W, lims, blend=blend, shape=shape)
     stop = sum(plan_ptp(W[i], W[i + 1], lims).duration for i in range(len(W) - 1))
     assert tr.duration < share * stop
+
+
+@pytest.mark.parametrize("shape, blend", [("lines", 0.02), ("lines", 0.05), ("spline", 0.0)])
+def test_waypoints_are_never_slower_than_stopping_at_each(shape, blend):
+    """Tight blends or sharp corners: where passing a waypoint costs more than stopping
+    there, the motion stops at every waypoint of the stretch (straight lines)."""
+    rng = np.random.default_rng(11)
+    lims = [AxisLimits(2.0, 10.0, 100.0)] * 3
+    worse = 0
+    for _ in range(4):
+        W = np.cumsum(rng.uniform(-1.0, 1.0, (5, 3)), axis=0)
+        tr = plan_waypoints(W, lims, blend=blend, shape=shape)
+        stop = sum(plan_ptp(W[i], W[i + 1], lims, sync="phase").duration for i in range(len(W) - 1))
+        assert tr.duration <= (1 + STOP_ALL_MARGIN) * stop
+        if tr.stops == list(range(len(W))):
+            worse += 1
+            np.testing.assert_array_equal(tr.deviation, 0.0)
+            smp = tr.sample(tr.offsets)
+            np.testing.assert_allclose(smp.position, W, rtol=0, atol=1e-12)
+            assert np.abs(smp.velocity).max() <= 1e-9
+    if shape == "lines" and blend == 0.02:
+        assert worse > 0  # the rule was exercised
 
 
 def test_spline_waypoints_pass_every_waypoint_exactly_without_blend():

@@ -25,13 +25,20 @@ from scipy.interpolate import CubicSpline
 from .._validate import check_array, check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
-from .engine import plan_path_timing
+from ..sync import plan_ptp
+from .engine import PathTiming, plan_path_timing
+from .paths import JointPath
 
 __all__ = ["BlendedJointPath", "SplineJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
            "MAX_WAYPOINTS", "REVERSAL_ANGLE"]
 
 #: Most waypoints of one call.
 MAX_WAYPOINTS = 10_000
+
+#: The engine times a straight joint line from rest to rest within this
+#: fraction of the phase-synchronised PTP optimum (tested): a stretch is run
+#: with a stop at every waypoint when that is faster by more than this.
+STOP_ALL_MARGIN = 0.005
 
 #: Path shapes of :func:`plan_waypoints`.
 SHAPES = ("spline", "lines")
@@ -350,7 +357,11 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     (:func:`plan_path_timing`) then times the path in minimum time under every
     joint's velocity, acceleration and jerk limits. The motion stops at the
     ends and where the waypoints reverse (a corner within 1e-3 rad of 180
-    degrees), and nowhere else.
+    degrees), and nowhere else, except that it is never slower than stopping
+    at every waypoint: a stretch between stops that would take longer on its
+    smooth path (tight blends, sharp corners) than on straight lines with a
+    stop at each waypoint is run that way (then listed in ``stops``, passed
+    exactly).
 
     ``"spline"`` (default)
         A natural cubic spline (continuous velocity and acceleration) through
@@ -423,13 +434,33 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     turn = np.arccos(np.clip(np.sum(dirs[:-1] * dirs[1:], axis=1), -1.0, 1.0))
     stops = [0] + [i + 1 for i, a in enumerate(turn) if a > REVERSAL_ANGLE] + [pts.shape[0] - 1]
     deviation = np.zeros(pts.shape[0])
-    paths: Sequence[SplineJointPath | BlendedJointPath]
+    paths: list[JointPath] = []
     if shape == "spline":
-        paths, stops = _spline_paths(pts, stops, tol, lims, deviation)
+        splines, stops = _spline_paths(pts, stops, tol, lims, deviation)
+        paths.extend(splines)
     else:
-        paths = _line_paths(pts, stops, tol, turn, dirs, seglen, deviation)
-    segments = [plan_path_timing(path, lims) for path in paths]
-    return WaypointTrajectory(pts, tol, deviation, stops, segments, lims)
+        paths.extend(_line_paths(pts, stops, tol, turn, dirs, seglen, deviation))
+    segments: list[PathTiming] = []
+    out_stops = [stops[0]]
+    for k, path in enumerate(paths):
+        a, b = stops[k], stops[k + 1]
+        timing = plan_path_timing(path, lims)
+        if b - a >= 2:
+            # never slower than stopping at every waypoint of the stretch: a straight
+            # joint line from rest to rest is the phase-synchronised PTP optimum, which
+            # the engine meets to STOP_ALL_MARGIN
+            stop_all = sum(plan_ptp(pts[i], pts[i + 1], lims, sync="phase").duration for i in range(a, b))
+            if (1.0 + STOP_ALL_MARGIN) * stop_all < timing.duration:
+                every = list(range(a, b + 1))
+                flat = np.zeros(pts.shape[0])
+                lines = _line_paths(pts, every, 0.0, turn, dirs, seglen, flat)
+                segments.extend(plan_path_timing(line, lims) for line in lines)
+                deviation[a:b + 1] = 0.0
+                out_stops.extend(every[1:])
+                continue
+        segments.append(timing)
+        out_stops.append(b)
+    return WaypointTrajectory(pts, tol, deviation, out_stops, segments, lims)
 
 
 def _line_paths(pts, stops, tol, turn, dirs, seglen, deviation) -> list[BlendedJointPath]:
