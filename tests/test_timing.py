@@ -264,3 +264,20 @@ def test_engine_input_errors():
         plan_path_timing(object(), [AxisLimits(1, 2, 10)] * 2)
     with pytest.raises(InvalidInputError, match="start_speed must be finite and >= 0"):
         plan_path_timing(p, [AxisLimits(1, 2, 10)] * 2, start_speed=-1.0)
+
+
+@pytest.mark.parametrize("field, power", [("velocity", 1), ("acceleration", 2), ("jerk", 3)])
+def test_any_ratio_over_the_check_tolerance_is_scaled_away(field, power):
+    """The uniform slow-down acts on every ratio above 1 + CHECK_RTOL, also where the time
+    factor it needs (the ratio's square or cube root) is within the tolerance."""
+    from trajkit.timing.engine import CHECK_RTOL, LimitUse, _uniform_scale
+
+    ones = {"velocity": np.array([0.5]), "acceleration": np.array([0.5]), "jerk": np.array([0.5])}
+    for over in (0.5, 1.5, 3.0, 100.0):
+        use = LimitUse(**{**ones, field: np.array([1.0 + over * CHECK_RTOL])},
+                       path_acceleration=0.0, path_jerk=0.0, path_speed=0.0)
+        k = _uniform_scale(use)
+        if over <= 1.0:
+            assert k == 1.0
+        else:
+            assert k > 1.0 and (1.0 + over * CHECK_RTOL) / k**power <= 1.0

@@ -520,11 +520,16 @@ def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndar
 
 
 def _uniform_scale(use: LimitUse) -> float:
-    """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3)."""
+    """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3).
+
+    1 when no ratio exceeds 1 + CHECK_RTOL (the test is on the ratios, not on k:
+    an acceleration 1.5e-9 over its limit needs k = 1 + 0.75e-9 only)."""
+    if use.worst <= 1.0 + CHECK_RTOL:
+        return 1.0
     k = max(1.0, float(use.velocity.max(initial=0.0)), use.path_speed,
             math.sqrt(max(float(use.acceleration.max(initial=0.0)), use.path_acceleration)),
             max(float(use.jerk.max(initial=0.0)), use.path_jerk) ** (1.0 / 3.0))
-    return k * (1.0 + 4.0 * CHECK_RTOL) if k > 1.0 + CHECK_RTOL else 1.0
+    return k * (1.0 + 4.0 * CHECK_RTOL)
 
 
 @dataclass
