@@ -20,6 +20,7 @@ described in ``docs/state-profiles.md``.
 from __future__ import annotations
 
 import math
+import struct
 import sys
 import threading
 from collections.abc import Sequence
@@ -221,6 +222,7 @@ def _from_table(start, goal, flat, n, nb, tmin, family, limits) -> StateProfile:
     """A StateProfile from the kernel's flat phase table (no per-phase Python work)."""
     prof = StateProfile.__new__(StateProfile)
     prof.start_state = start
+    # (a tuple ``flat`` is sliced into tuples at once; tuple() of a tuple is itself)
     prof.phase_durations = d = tuple(flat[0:3 * n:3])
     prof.jerks = tuple(flat[1:3 * n:3])
     prof.phase_accelerations = tuple(flat[2:3 * n:3])
@@ -445,6 +447,18 @@ def _load(mv, s, g, limits, task, T):
 
 
 _solve = K.solve
+_OUT_PH_BYTES = 8 * K.OUT_PH
+_TABLE_STRUCTS: dict[int, struct.Struct] = {}
+
+
+def _table_struct(n: int) -> struct.Struct:
+    """The :class:`struct.Struct` reading a phase table of ``n`` rows as one tuple."""
+    st = _TABLE_STRUCTS.get(n)
+    if st is None:
+        st = _TABLE_STRUCTS[n] = struct.Struct(f"={3 * n}d")
+    return st
+
+
 _IN_TASK = K.IN_TASK
 _IN_T = K.IN_T
 _OUT_STATUS = K.OUT_STATUS
@@ -616,8 +630,8 @@ def plan_state_to_state(
                     K.solve(ws)
             if mv[_OUT_STATUS] == 0.0:  # K.ST_OK
                 n = int(mv[_OUT_N])
-                prof = _from_table(start, goal, mv[_OUT_PH:_OUT_PH + 3 * n].tolist(), n,
-                                   int(mv[_OUT_NB]), mv[_OUT_TMIN], _family(mv[_OUT_SHAPE]),
+                prof = _from_table(start, goal, _table_struct(n).unpack_from(ws, _OUT_PH_BYTES),
+                                   n, int(mv[_OUT_NB]), mv[_OUT_TMIN], _family(mv[_OUT_SHAPE]),
                                    limits)
                 return prof if sf[6] else _check_range(prof, limits)
     limits, s, g = _prepare(start, goal, limits)
