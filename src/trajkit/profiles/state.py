@@ -45,7 +45,7 @@ from ._range import (
     check_position_range,
     check_state_range,
 )
-from ._shapes import SHAPE_NAMES
+from ._shapes import NPH, SHAPE_NAMES
 from .motion import JerkMotion
 
 __all__ = [
@@ -284,14 +284,15 @@ def _cache_fast(limits: AxisLimits) -> None:
     the position bounds (axis range within the supported one), the velocity and
     acceleration bounds of a state (capped at the largest float: a bound passed
     implies a finite value), ``1/(2 min j)``, the uncapped velocity bound of the
-    forced speed, whether the position range is unbounded, and the kernel's five
-    limits."""
+    forced speed, whether the position range is unbounded, the kernel's five
+    limits and ``v_max``."""
     vb = _SMAX * limits.v_max
     object.__setattr__(limits, "_sfast", (
         max(-_PMAX, limits.position_min), min(_PMAX, limits.position_max),
         min(vb, _FMAX), min(_SMAX * limits._amax, _FMAX), limits._kmin2, vb,
         limits.position_min == -math.inf and limits.position_max == math.inf,
-        (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel)))
+        (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel),
+        limits.v_max))
 
 
 def _num(x, field, name):
@@ -448,15 +449,11 @@ def _load(mv, s, g, limits, task, T):
 
 _solve = K.solve
 _OUT_PH_BYTES = 8 * K.OUT_PH
-_TABLE_STRUCTS: dict[int, struct.Struct] = {}
 
+#: ``_TABLES[n]`` reads a phase table of ``n`` rows from the workspace as one tuple.
+_TABLES = tuple(struct.Struct(f"={3 * n}d") for n in range(NPH + 1))
 
-def _table_struct(n: int) -> struct.Struct:
-    """The :class:`struct.Struct` reading a phase table of ``n`` rows as one tuple."""
-    st = _TABLE_STRUCTS.get(n)
-    if st is None:
-        st = _TABLE_STRUCTS[n] = struct.Struct(f"={3 * n}d")
-    return st
+_new_profile = object.__new__
 
 
 _IN_TASK = K.IN_TASK
@@ -612,28 +609,56 @@ def plan_state_to_state(
     >>> round(p.duration, 6)
     1.7
     """
-    if duration is None:
-        sf = _fast_pair(start, goal, limits)
-        if sf is not None and start != goal:
-            # the common call: validated at once, planned, the profile built from the
-            # workspace without numpy scalars
-            ws = _ws()
-            mv = _local.mv
-            mv[0], mv[1], mv[2] = start
-            mv[3], mv[4], mv[5] = goal
-            mv[6], mv[7], mv[8], mv[9], mv[10] = sf[7]
-            mv[_IN_TASK] = 0.0  # K.TASK_MIN
-            if _COMPILED:
-                _solve(ws)
-            else:
-                with np.errstate(all="ignore"):
-                    K.solve(ws)
-            if mv[_OUT_STATUS] == 0.0:  # K.ST_OK
-                n = int(mv[_OUT_N])
-                prof = _from_table(start, goal, _table_struct(n).unpack_from(ws, _OUT_PH_BYTES),
-                                   n, int(mv[_OUT_NB]), mv[_OUT_TMIN], _family(mv[_OUT_SHAPE]),
-                                   limits)
-                return prof if sf[6] else _check_range(prof, limits)
+    if (duration is None and type(limits) is AxisLimits and type(start) is tuple
+            and type(goal) is tuple and len(start) == 3 and len(goal) == 3 and start != goal):
+        # the common call: every check of _prepare at once on the bounds cached on
+        # the validated limits (anything else goes the long way, with its messages),
+        # then planned and built from the workspace without numpy scalars
+        sf = limits.__dict__.get("_sfast")
+        if sf is not None:
+            p0, v0, a0 = start
+            pf, vf, af = goal
+            plo, phi, vb, ab, k2, vb2, free, lim5, vmax = sf
+            if (float is type(p0) is type(v0) is type(a0) is type(pf) is type(vf) is type(af)
+                    and plo <= p0 <= phi and plo <= pf <= phi
+                    and abs(v0) <= vb and abs(a0) <= ab and abs(vf) <= vb and abs(af) <= ab
+                    and abs(v0) + a0 * a0 * k2 <= vb2 and abs(vf) + af * af * k2 <= vb2
+                    and (af == 0.0 and abs(vf) <= vmax or _goal_violation(vf, af, limits) is None)
+                    and (abs(pf - p0) >= DISTANCE_ABS_MIN or pf == p0)):
+                try:
+                    mv = _local.mv
+                except AttributeError:
+                    _ws()
+                    mv = _local.mv
+                mv[0] = p0
+                mv[1] = v0
+                mv[2] = a0
+                mv[3] = pf
+                mv[4] = vf
+                mv[5] = af
+                mv[6], mv[7], mv[8], mv[9], mv[10] = lim5
+                mv[_IN_TASK] = 0.0  # K.TASK_MIN
+                if _COMPILED:
+                    _solve(_local.ws)
+                else:
+                    with np.errstate(all="ignore"):
+                        K.solve(_local.ws)
+                if mv[_OUT_STATUS] == 0.0:  # K.ST_OK
+                    flat = _TABLES[int(mv[_OUT_N])].unpack_from(mv, _OUT_PH_BYTES)
+                    prof = _new_profile(StateProfile)
+                    prof.start_state = start
+                    prof.phase_durations = d = flat[0::3]
+                    prof.jerks = flat[1::3]
+                    prof.phase_accelerations = flat[2::3]
+                    prof.duration = _fsum(d)
+                    prof._end = goal
+                    prof._tab = None
+                    prof.min_duration = mv[_OUT_TMIN]
+                    prof.n_brake_phases = int(mv[_OUT_NB])
+                    code = int(mv[_OUT_SHAPE])
+                    prof.family = _FAMILIES.get(code) or _family(code)
+                    prof.limits = limits
+                    return prof if free else _check_range(prof, limits)
     limits, s, g = _prepare(start, goal, limits)
     T = _duration_arg(duration, limits.name)
     if s == g and (T is None or T == 0.0):
