@@ -236,6 +236,25 @@ def _from_table(start, goal, flat, n, nb, tmin, family, limits) -> StateProfile:
     return prof
 
 
+def _profile(start, goal, flat: tuple, tmin: float, nb: int, code: int,
+             limits: AxisLimits) -> StateProfile:
+    """A StateProfile from a phase table read as one tuple ``flat`` (rows of
+    ``(duration, jerk, start acceleration)``, see :data:`_TABLES`)."""
+    prof = _new_profile(StateProfile)
+    prof.start_state = start
+    prof.phase_durations = d = flat[0::3]
+    prof.jerks = flat[1::3]
+    prof.phase_accelerations = flat[2::3]
+    prof.duration = _fsum(d)
+    prof._end = goal
+    prof._tab = None
+    prof.min_duration = tmin
+    prof.n_brake_phases = nb
+    prof.family = _FAMILIES.get(code) or _family(code)
+    prof.limits = limits
+    return prof
+
+
 # ------------------------------------------------------------ validation
 _local = threading.local()
 
@@ -287,6 +306,11 @@ def _cache_fast(limits: AxisLimits) -> None:
     forced speed, whether the position range is unbounded, the kernel's five
     limits and ``v_max``."""
     vb = _SMAX * limits.v_max
+    tol = 1.0 + 1e-12  # (as in _goal_violation)
+    object.__setattr__(limits, "_sgoal", (
+        limits.v_max * tol, limits.a_max * tol, limits.a_max_decel * tol, limits.v_max,
+        limits.a_max_decel, 0.0 if limits.j_max_decel == math.inf else 1.0 / limits.j_max_decel,
+        limits.a_max, 0.0 if limits.j_max == math.inf else 1.0 / limits.j_max))
     object.__setattr__(limits, "_sfast", (
         max(-_PMAX, limits.position_min), min(_PMAX, limits.position_max),
         min(vb, _FMAX), min(_SMAX * limits._amax, _FMAX), limits._kmin2, vb,
@@ -336,8 +360,7 @@ def _fast_pair(start: Any, goal: Any, limits: Any) -> tuple | None:
             and abs(v0) + a0 * a0 * k2 <= vb2
             and plo <= pf <= phi and abs(vf) <= vb and abs(af) <= ab
             and abs(vf) + af * af * k2 <= vb2
-            and (af == 0.0 and abs(vf) <= limits.v_max
-                 or _goal_violation(vf, af, limits) is None)):
+            and (af == 0.0 and abs(vf) <= limits.v_max or _goal_ok(vf, af, limits))):
         d = abs(pf - p0)
         if d == 0.0 or d >= DISTANCE_ABS_MIN:
             return sf
@@ -365,6 +388,21 @@ def _check_state_slow(state: Any, field: str, limits: AxisLimits) -> tuple:
     limits.check_position(p, f"{field} position")
     check_state_range(v, a, field, limits)
     return (p, v, a)
+
+
+def _goal_ok(v: float, a: float, limits: AxisLimits) -> bool:
+    """``_goal_violation(v, a, limits) is None`` on validated limits, without the
+    messages (the same comparisons on the bounds cached in ``_sgoal``)."""
+    if a == 0.0 and abs(v) <= limits.v_max:
+        return True
+    vt, a1t, a2t, V, A2, k2, A1, k1 = limits.__dict__["_sgoal"]
+    if abs(v) > vt or abs(a) > (a1t if v * a > 0.0 else a2t):
+        return False
+    return _inside(v, -a, V, A2, k2, A1, k1)
+
+
+#: :func:`._brake.inside` as plain Python (the same comparisons; no dispatch).
+_inside = getattr(inside, "py_func", inside)
 
 
 def _goal_violation(v: float, a: float, limits: AxisLimits) -> str | None:
@@ -623,7 +661,7 @@ def plan_state_to_state(
                     and plo <= p0 <= phi and plo <= pf <= phi
                     and abs(v0) <= vb and abs(a0) <= ab and abs(vf) <= vb and abs(af) <= ab
                     and abs(v0) + a0 * a0 * k2 <= vb2 and abs(vf) + af * af * k2 <= vb2
-                    and (af == 0.0 and abs(vf) <= vmax or _goal_violation(vf, af, limits) is None)
+                    and (af == 0.0 and abs(vf) <= vmax or _goal_ok(vf, af, limits))
                     and (abs(pf - p0) >= DISTANCE_ABS_MIN or pf == p0)):
                 try:
                     mv = _local.mv

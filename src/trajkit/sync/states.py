@@ -12,7 +12,6 @@ from __future__ import annotations
 import logging
 import math
 import threading
-from array import array
 from collections.abc import Sequence
 from typing import Any
 
@@ -23,14 +22,14 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import _batch_states as B
 from ..profiles.state import (
+    _TABLES,
     BlockedDurationError,
     StateProfile,
     _check_limits,
     _check_range,
-    _family,
     _fast_pair,
-    _from_table,
     _prepare,
+    _profile,
     feasible_durations,
     plan_state_to_state,
 )
@@ -206,26 +205,23 @@ def _sync_time_compiled(S, G, lims, duration):
             row += S[k]
             row += G[k]
             row += sf[7]
-    inp = np.frombuffer(array("d", row), dtype=np.float64).reshape(n, B.NIN)
+    inp = np.fromiter(row, np.float64, n * B.NIN).reshape(n, B.NIN)
     out = _sync_outputs(n)
     status, dur, tmin, nph, nbr, shape, ph, blk, nblk = out
     code, T = B.sync_time(inp, math.nan if duration is None else float(duration), *out)
     if code != 0:
         return None
     axes = []
-    stride = 3 * B.NPH
-    phv = memoryview(ph).cast("B").cast("d")
+    stride = 24 * B.NPH  # bytes per axis of ph
     tmins = tmin.tolist()
     nphs = nph.tolist()
     nbrs = nbr.tolist()
     shapes = shape.tolist()
     for k in range(n):
-        m = nphs[k]
-        flat = phv[k * stride:k * stride + 3 * m].tolist()
-        prof = _from_table(S[k], G[k], flat, m, nbrs[k], tmins[k], _family(shapes[k]), lims[k])
-        if not lims[k].__dict__["_sfast"][6]:
-            prof = _check_range(prof, lims[k])
-        axes.append(prof)
+        lim = lims[k]
+        prof = _profile(S[k], G[k], _TABLES[nphs[k]].unpack_from(ph, k * stride), tmins[k],
+                        nbrs[k], int(shapes[k]), lim)
+        axes.append(prof if lim.__dict__["_sfast"][6] else _check_range(prof, lim))
     return Trajectory(axes, "time")
 
 
