@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import math
 
-from ._compile import jit
+from ._compile import jit_raw
 from ._phase import phase_end
 
 __all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump", "brake_natural", "brake_hold",
@@ -61,7 +61,7 @@ BRAKE_PHASES = 10
 INSIDE_RTOL = 1e-12
 
 
-@jit
+@jit_raw
 def inside(v, a, V, A1, K1, A2, K2):
     """True when ``(v, a)`` lies inside the limits (see the module text)."""
     if v < 0.0 or (v == 0.0 and a < 0.0):
@@ -90,7 +90,7 @@ def inside(v, a, V, A1, K1, A2, K2):
     return True
 
 
-@jit
+@jit_raw
 def _add(buf, t, x):
     """Append ``x`` to the candidate times if in (0, t_max = buf[0]]."""
     if 0.0 < x <= buf[0]:
@@ -100,7 +100,7 @@ def _add(buf, t, x):
             buf[1] = n + 1
 
 
-@jit
+@jit_raw
 def _quad(buf, qa, qb, qc):
     """Add the real roots of qa t^2 + qb t + qc."""
     if qa == 0.0:
@@ -119,7 +119,7 @@ def _quad(buf, qa, qb, qc):
         _add(buf, 0.0, 0.0)
 
 
-@jit
+@jit_raw
 def _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, buf):
     """First t in [0, tmax] where the state of the phase (v, a, j) is inside, or inf.
 
@@ -170,7 +170,7 @@ def _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, buf):
     return math.inf
 
 
-@jit
+@jit_raw
 def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``path(s)``: phases ``out[k] = (dt, j, a_start)``.
 
@@ -260,7 +260,7 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
     return -1
 
 
-@jit
+@jit_raw
 def _seq(buf, k, t, j, a):
     buf[80 + k] = t
     buf[84 + k] = j
@@ -268,7 +268,7 @@ def _seq(buf, k, t, j, a):
     return k + 1
 
 
-@jit
+@jit_raw
 def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``bump(vt)``: the fastest velocity change to ``(vt, 0)``
     (``vt = +-V``), held at ``-+a_max_decel`` when its peak would exceed it,
@@ -366,7 +366,7 @@ def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
     return n
 
 
-@jit
+@jit_raw
 def brake_natural(v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``natural``: the acceleration ramped to zero at the jerk
     limit of each leg (through a reversal), then, when the velocity is still
@@ -422,7 +422,7 @@ def brake_natural(v, a, V, A1, K1, A2, K2, out, buf):
     return n + m
 
 
-@jit
+@jit_raw
 def brake_hold(v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``hold``: slowing down (``v a < 0``), the acceleration
     held up to the first instant inside the limits, before ``v`` reaches zero.
@@ -440,7 +440,7 @@ def brake_hold(v, a, V, A1, K1, A2, K2, out, buf):
     return 1
 
 
-@jit
+@jit_raw
 def _rk_acc(v0, a0, vMax, vMin, aMax, J):
     """ruckig's acceleration brake (``a0`` beyond ``aMax`` in the direction of
     ``J``'s sign convention): returns (t0, t1, use_velocity_brake)."""
@@ -457,7 +457,7 @@ def _rk_acc(v0, a0, vMax, vMin, aMax, J):
     return t_to_a_max, 0.0, False
 
 
-@jit
+@jit_raw
 def _rk_vel(v0, a0, vMax, vMin, aMin, J):
     """ruckig's velocity brake: returns (t0, t1)."""
     t_to_a_min = (a0 - aMin) / J
@@ -476,7 +476,7 @@ def _rk_vel(v0, a0, vMax, vMin, aMin, J):
     return max(t_min_to_v_max, 0.0), 0.0
 
 
-@jit
+@jit_raw
 def brake_ruckig(v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``ruckig``: ruckig's brake rule at the smaller jerk and
     acceleration of both legs, then the acceleration ramped towards zero; cut
@@ -538,7 +538,7 @@ def brake_ruckig(v, a, V, A1, K1, A2, K2, out, buf):
     return -1
 
 
-@jit
+@jit_raw
 def forced_speed(v, a, V, A1, K1, A2, K2):
     """The largest |v| a brake from (v, a) may reach: the start's own velocity or
     the peak its acceleration forces (ramped to zero at the leg's jerk limit,
@@ -557,7 +557,7 @@ def forced_speed(v, a, V, A1, K1, A2, K2):
     return out
 
 
-@jit
+@jit_raw
 def peak_speed(ph, n, v, a):
     """Exact max |v| along phases ``ph[:n]`` from (v, a) (phase ends and a = 0)."""
     out = abs(v)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 
-from ._compile import jit
+from ._compile import jit_raw
 from ._phase import phase_end
 
 __all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "clean"]
@@ -44,7 +44,7 @@ SLIVER_RTOL = 1e-9
 ZERO_T = 1e-12
 
 
-@jit
+@jit_raw
 def clean(ph, n):
     """Zero round-off negative durations; False when a duration is really negative."""
     tot = 0.0
@@ -62,7 +62,7 @@ def clean(ph, n):
     return True
 
 
-@jit
+@jit_raw
 def _leg(v, a, A1, K1, A2, K2):
     """(a bound, 1/jerk bound) of the leg in force at (v, a); speeding up at v = 0."""
     if v * a < 0.0:
@@ -70,7 +70,7 @@ def _leg(v, a, A1, K1, A2, K2):
     return A1, K1
 
 
-@jit
+@jit_raw
 def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
     """True when the candidate keeps every limit and ends at the goal state."""
     # scales (for slivers and the end-state tolerances)

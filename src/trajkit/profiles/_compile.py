@@ -25,7 +25,7 @@ try:  # pragma: no cover - depends on the install
 except ImportError:  # pragma: no cover
     numba = None
 
-__all__ = ["ENABLED", "KERNEL_MODULES", "compiled_twins", "jit", "jit_parallel", "prange"]
+__all__ = ["ENABLED", "KERNEL_MODULES", "compiled_twins", "jit", "jit_parallel", "jit_raw", "prange"]
 
 #: True when the decorated kernels are compiled by numba.
 ENABLED = numba is not None and os.environ.get("TRAJKIT_NO_JIT", "") in ("", "0")
@@ -86,6 +86,19 @@ def jit(fn):
     if not ENABLED:
         return fn
     return _numba().njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def jit_raw(fn):
+    """:func:`jit` without numba's reference-counted memory (``_nrt=False``).
+
+    For kernels that never allocate an array or return one they did not get
+    as an argument: they work on views of the caller's workspace, which numba
+    would otherwise count in and out (an atomic operation) at every view and
+    every call taking arrays -- the larger part of the time of the
+    state-to-state kernel. The arithmetic is the same (no fast-math)."""
+    if not ENABLED:
+        return fn
+    return _numba().njit(cache=True, nogil=True, error_model="numpy", _nrt=False)(fn)
 
 
 def jit_parallel(fn):

@@ -37,7 +37,7 @@ from ._brake import (
     inside,
     peak_speed,
 )
-from ._compile import jit
+from ._compile import jit_raw
 from ._phase import phase_end
 from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
 
@@ -88,7 +88,7 @@ _W = OUT_PH + 3 * NPH           # W: 5 x NPH x 3
 _VEC = _W + 5 * NPH * 3         # vec: 19 x 16 (values, coefficients, roots, 16 x 16 scratch)
 _IVL = _VEC + 19 * 16           # ivl: 8 x 2
 _CFG = _IVL + 16
-_ST = _CFG + NCFG
+_ST = _CFG + 2 * NCFG
 _BEST = _ST + 7
 _RES = _BEST + 3 * NPH
 _LIM = _RES + R_V0 + NVALID
@@ -107,7 +107,7 @@ def workspace() -> np.ndarray:
     return np.zeros(NWS)
 
 
-@jit
+@jit_raw
 def _pow2(x):
     """The power of two nearest to ``x > 0`` (in log scale)."""
     if not (x > 0.0) or not (x < math.inf):
@@ -117,7 +117,7 @@ def _pow2(x):
     return 2.0 ** e
 
 
-@jit
+@jit_raw
 def _scales(ws):
     """(time, length) scales, powers of two, so that the reference jerk and
     acceleration (or velocity) are about one."""
@@ -146,7 +146,7 @@ def _scales(ws):
     return ts, ls
 
 
-@jit
+@jit_raw
 def solve(ws):
     """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
     task = int(ws[IN_TASK])
@@ -184,7 +184,7 @@ def solve(ws):
     W = ws[_W:_W + 5 * NPH * 3].reshape((5, NPH, 3))
     vec = ws[_VEC:_VEC + 19 * 16].reshape((19, 16))
     ivl = ws[_IVL:_IVL + 16].reshape((8, 2))
-    cfg = ws[_CFG:_CFG + NCFG]
+    cfg = ws[_CFG:_CFG + 2 * NCFG]
     st = ws[_ST:_ST + 7]
     best = ws[_BEST:_BEST + 3 * NPH].reshape((NPH, 3))
     res = ws[_RES:_RES + R_V0 + NVALID]
@@ -269,7 +269,7 @@ def solve(ws):
            ivl, cfg, st, keep, out, ts, js, as_)
 
 
-@jit
+@jit_raw
 def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl,
            cfg, st, keep, out, ts, js, as_):
     """Step 2: a profile of exactly ``T`` (normalised; brake included)."""
@@ -296,7 +296,7 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
             ws[OUT_STATUS] = ST_BLOCKED
 
 
-@jit
+@jit_raw
 def _copy_rows(dst, n0, src, m):
     for k in range(m):
         dst[n0 + k, 0] = src[k, 0]
@@ -304,7 +304,7 @@ def _copy_rows(dst, n0, src, m):
         dst[n0 + k, 2] = src[k, 2]
 
 
-@jit
+@jit_raw
 def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
     for k in range(n):
         out[k, 0] = keep[k, 0] * ts
@@ -316,7 +316,7 @@ def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
     ws[OUT_TMIN] = tmin * ts
 
 
-@jit
+@jit_raw
 def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     """Brake candidate ``cand`` (0, 1: paths; 2, 3: bumps to +-v_max; 4: natural;
     5: hold; 6: ruckig's rule; only 0 = none when the start is inside): (phase count or -1,
@@ -376,7 +376,7 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     return nb, tb
 
 
-@jit
+@jit_raw
 def _blocks(valid, nvalid, tmin, ws):
     """Blocked intervals from the durations of the valid step-1 profiles.
 

@@ -11,12 +11,12 @@ functions (scalar :func:`phase_end`, vectorised :func:`phase_eval`).
 
 from __future__ import annotations
 
-from ._compile import jit
+from ._compile import jit_raw
 
 __all__ = ["phase_end", "phase_eval"]
 
 
-@jit
+@jit_raw
 def phase_end(p, v, a, j, t):
     """State ``(p, v, a)`` after ``t`` [s] of constant jerk ``j`` from ``(p, v, a)``."""
     return (p + t * (v + t * (0.5 * a + t * j / 6.0)),

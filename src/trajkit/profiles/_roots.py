@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ._compile import jit
+from ._compile import jit_raw
 
 __all__ = ["MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner", "no_root_certain"]
 
@@ -60,6 +60,10 @@ def _tables():
 
 _NODES, _MATS = _tables()
 
+#: ``NODES[n, :n]``: the ``n`` Chebyshev nodes of :func:`cheb_nodes` (indexed in
+#: place by kernels that take no array views).
+NODES = _NODES
+
 
 def _bernstein_tables():
     """``B[n] @ c``: the Bernstein coefficients on ``[-1, 1]`` of the degree-``n``
@@ -86,7 +90,7 @@ def _bernstein_tables():
 _BERN = _bernstein_tables()
 
 
-@jit
+@jit_raw
 def no_root_certain(c, deg):
     """True when ``sum_k c[k] x^k`` certainly has no root (nor a touching one, see
     :data:`TOUCH_RTOL`) in ``[-1, 1]``: its Bernstein coefficients there all
@@ -111,13 +115,13 @@ def no_root_certain(c, deg):
     return True
 
 
-@jit
+@jit_raw
 def cheb_nodes(n_nodes):
     """Chebyshev nodes on ``[-1, 1]`` (descending), ``n_nodes <= MAX_DEGREE + 1``."""
     return _NODES[n_nodes, :n_nodes]
 
 
-@jit
+@jit_raw
 def interp_unit(vals, n_nodes, coef):
     """Monomial coefficients (on ``[-1, 1]``) of the polynomial through ``vals``
     at :func:`cheb_nodes` ``(n_nodes)``; written to ``coef[:n_nodes]``."""
@@ -129,7 +133,7 @@ def interp_unit(vals, n_nodes, coef):
         coef[i] = s
 
 
-@jit
+@jit_raw
 def horner(c, deg, x):
     """``sum_k c[k] x^k`` for ``k <= deg``."""
     r = c[deg]
@@ -138,7 +142,7 @@ def horner(c, deg, x):
     return r
 
 
-@jit
+@jit_raw
 def _refine(D, m, deg, a, b, fa, fb):
     """Root of the monotone level-``m`` derivative in ``[a, b]`` (``fa fb < 0``):
     Newton steps kept inside the shrinking bracket; a step that leaves it is
@@ -176,7 +180,7 @@ def _refine(D, m, deg, a, b, fa, fb):
     return x
 
 
-@jit
+@jit_raw
 def _quadratic_in(c0, c1, c2, out):
     """Real roots of ``c0 + c1 x + c2 x^2`` in ``[-1, 1]`` (ascending), count."""
     n = 0
@@ -208,7 +212,7 @@ def _quadratic_in(c0, c1, c2, out):
     return n
 
 
-@jit
+@jit_raw
 def real_roots_unit(c, deg, out, D):
     """Every real root of ``sum_k c[k] x^k`` in ``[-1, 1]``, ascending, into ``out``.
 

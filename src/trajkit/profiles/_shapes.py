@@ -56,12 +56,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ._check import check, clean
-from ._compile import jit
+from ._compile import jit_raw
 from ._phase import phase_end
-from ._roots import cheb_nodes, interp_unit, real_roots_unit
+from ._roots import NODES, interp_unit, real_roots_unit
 
 __all__ = ["NPH", "NVALID", "step1"]
 
@@ -95,6 +93,8 @@ PLAUSIBLE_RTOL = 1e-6
 (PS, VS, AS, PE, VE, AE, K1, K2P, K2N, K2Q, K4, MODE, L1, L3, VM, C1LO, C1HI, C3LO, C3HI, S3,
  SZ, K2R, TT, SG2) = range(24)
 NCFG = 24
+#: (the configuration array holds ``2 * NCFG`` entries: the second half saves the
+#: first while a stage of step 2 changes it)
 
 # ramp-2 modes: where the ramp c1 -> c3 is split (at a = 0 and/or at a reversal z)
 M_SINGLE = 0  # c1 -> c3 (K2P)
@@ -134,7 +134,7 @@ SHAPE_NAMES = ("none", "acc0", "acc1", "acc0_acc1", "vel", "acc0_vel", "acc1_vel
 
 
 # ------------------------------------------------------------------ building
-@jit
+@jit_raw
 def _ramp(ph, n, x, y, kap, sgn):
     """Ramp the acceleration from ``x`` to ``y`` at jerk ``sgn / kap``."""
     if kap == 0.0:  # infinite jerk: the acceleration jumps (next phase starts at y)
@@ -145,7 +145,7 @@ def _ramp(ph, n, x, y, kap, sgn):
     return n + 1
 
 
-@jit
+@jit_raw
 def _hold(ph, n, a, t):
     ph[n, 0] = t
     ph[n, 1] = 0.0
@@ -153,7 +153,7 @@ def _hold(ph, n, a, t):
     return n + 1
 
 
-@jit
+@jit_raw
 def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
     """Append the UDDU template of ``cfg`` with its unknowns to ``ph[n:]``.
 
@@ -212,7 +212,7 @@ def template(ph, n, cfg, c1, t1, z, c3, t3, tc, final):
     return n
 
 
-@jit
+@jit_raw
 def _rp(p, v, T, x, y, K, sgn):
     """(p, v, T) after a ramp x -> y at jerk sgn/K (what :func:`_ramp` appends)."""
     if K == 0.0:
@@ -222,14 +222,14 @@ def _rp(p, v, T, x, y, K, sgn):
     return p, v, T + dt
 
 
-@jit
+@jit_raw
 def _hp(p, v, T, a, t):
     """(p, v, T) after a hold at ``a`` for ``t``."""
     p, v, _ = phase_end(p, v, a, 0.0, t)
     return p, v, T + t
 
 
-@jit
+@jit_raw
 def walk(cfg, c1, t1, z, c3, t3, tc):
     """End position and duration of :func:`template` (``final=False``), without
     building the phase table (the same phases, integrated by the same formula)."""
@@ -281,7 +281,7 @@ def walk(cfg, c1, t1, z, c3, t3, tc):
     return p, T
 
 
-@jit
+@jit_raw
 def integrate(ph, n0, n, p, v, a):
     """End state of phases ``n0..n-1`` from ``(p, v, a)``."""
     for k in range(n0, n):
@@ -296,13 +296,13 @@ def integrate(ph, n0, n, p, v, a):
 # E(c3, t3): velocity change from a = 0 on ramp 2 (or from z) to the end:
 #   E = - c3^2 kc3 + c3 t3 + ae^2 K4/2,   kc3 = (K_c3 + K4)/2
 # no reversal:  ve = F + E;   reversal at z:  F = z^2 kz,  ve = z^2 K2Q/2 + E.
-@jit
+@jit_raw
 def _F(cfg, c1, t1):
     return (cfg[VS] + 0.5 * (c1 * c1 - cfg[AS] * cfg[AS]) * cfg[K1] + c1 * t1
             + 0.5 * c1 * c1 * cfg[K2P])
 
 
-@jit
+@jit_raw
 def _kc3(cfg):
     mode = int(cfg[MODE])
     if mode == M_SINGLE:
@@ -316,7 +316,7 @@ def _kc3(cfg):
     return 0.5 * (k + cfg[K4])
 
 
-@jit
+@jit_raw
 def _kze(cfg):
     """End side of a reversal: ve = z^2 _kze + E(c3, t3)."""
     if int(cfg[MODE]) == M_ZBOTH:
@@ -324,24 +324,24 @@ def _kze(cfg):
     return 0.5 * cfg[K2Q]
 
 
-@jit
+@jit_raw
 def _E(cfg, c3, t3):
     return cfg[SG2] * (0.5 * cfg[AE] * cfg[AE] * cfg[K4] - c3 * c3 * _kc3(cfg)) + c3 * t3
 
 
-@jit
+@jit_raw
 def _kz(cfg):
     if int(cfg[MODE]) == M_ZSECOND:
         return 0.5 * cfg[K2N]
     return 0.5 * cfg[K2P]
 
 
-@jit
+@jit_raw
 def _sqrt_s(x, s):
     return s * math.sqrt(x) if x > 0.0 else 0.0
 
 
-@jit
+@jit_raw
 def _rho1(cfg):
     """vc = rho1 F: the cruise velocity from the first half's top velocity."""
     mode = int(cfg[MODE])
@@ -350,7 +350,7 @@ def _rho1(cfg):
     return 1.0
 
 
-@jit
+@jit_raw
 def _g(cfg):
     """ve = g vc + E(c3, t3)."""
     mode = int(cfg[MODE])
@@ -361,13 +361,13 @@ def _g(cfg):
     return 1.0
 
 
-@jit
+@jit_raw
 def _durations(cfg, work, c1, t1, z, c3, t3):
     """Sum of the template's phase durations without a cruise."""
     return walk(cfg, c1, t1, z, c3, t3, 0.0)[1]
 
 
-@jit
+@jit_raw
 def _unknowns(cfg, work, shape, u, sz, s3):
     """(c1, t1, z, c3, t3, tc, rad_z, rad_3) of ``shape`` at parameter ``u``.
 
@@ -524,13 +524,13 @@ def _unknowns(cfg, work, shape, u, sz, s3):
     return c1, t1, z, c3, t3, tc, rz, r3
 
 
-@jit
+@jit_raw
 def _gamma(cfg):
     """c1^2 - c3^2 of NONE with equal jerks (from the end velocity)."""
     return (cfg[VE] - _F(cfg, 0.0, 0.0) - _E(cfg, 0.0, 0.0)) / cfg[K1]
 
 
-@jit
+@jit_raw
 def _none_w_domain(cfg):
     """Interval of w = c1 - c3 > 0 with c1 <= C1HI and c3 >= C3LO."""
     g = _gamma(cfg)
@@ -553,14 +553,14 @@ def _none_w_domain(cfg):
     return lo, hi
 
 
-@jit
+@jit_raw
 def _resid(cfg, work, shape, u, sz, s3):
     c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
     return walk(cfg, c1, t1, z, c3, t3, tc)[0] - cfg[PE]
 
 
 # ------------------------------------------------------------------ recording
-@jit
+@jit_raw
 def offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, best, res,
           scratch, code):
     """Build the full candidate, check it and record it (in the un-mirrored frame).
@@ -617,7 +617,7 @@ def offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, 
 
 
 # ------------------------------------------------------------------ shapes
-@jit
+@jit_raw
 def _nrad(cfg, shape):
     """Number of square roots in the shape's parameterisation."""
     cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
@@ -628,7 +628,7 @@ def _nrad(cfg, shape):
     return n
 
 
-@jit
+@jit_raw
 def _den(cfg, work, shape, u, s3):
     """Denominator of a rational shape (its residual times den^p is a polynomial)."""
     if shape == S2_MH2:
@@ -641,7 +641,7 @@ def _den(cfg, work, shape, u, s3):
     return 1.0
 
 
-@jit
+@jit_raw
 def _norm(cfg, work, shape, u, nrad):
     """Product of the residual over every sign of the square roots (a polynomial in u)."""
     if shape == S_NONEW:
@@ -666,7 +666,7 @@ def _norm(cfg, work, shape, u, nrad):
             * _resid(cfg, work, shape, u, -1.0, 1.0) * _resid(cfg, work, shape, u, -1.0, -1.0))
 
 
-@jit
+@jit_raw
 def _domain(cfg, shape):
     """Interval of the shape parameter (before the radicands are considered)."""
     lo, hi = _domain0(cfg, shape)
@@ -688,7 +688,7 @@ def _domain(cfg, shape):
     return lo, hi
 
 
-@jit
+@jit_raw
 def _domain0(cfg, shape):
     if shape == S_NONEW:
         return _none_w_domain(cfg)
@@ -721,7 +721,7 @@ def _domain0(cfg, shape):
     return 0.0, math.inf
 
 
-@jit
+@jit_raw
 def _quad_fit_roots(f0, f1, f2, lo, hi, out):
     """Roots in (lo, hi) of the quadratic through (lo, f0), (mid, f1), (hi, f2)."""
     h = 0.5 * (hi - lo)
@@ -750,10 +750,10 @@ def _quad_fit_roots(f0, f1, f2, lo, hi, out):
     return n
 
 
-@jit
-def _intervals(cfg, work, shape, lo, hi, ivl):
-    """Sub-intervals of [lo, hi] where every radicand is >= 0 (written to ``ivl``)."""
-    bp = np.empty(6)
+@jit_raw
+def _intervals(cfg, work, shape, lo, hi, ivl, bp):
+    """Sub-intervals of [lo, hi] where every radicand is >= 0 (written to ``ivl``;
+    ``bp``: scratch of at least 6 break points)."""
     nb = 0
     mid = 0.5 * (lo + hi)
     for which in range(2):
@@ -789,7 +789,7 @@ def _intervals(cfg, work, shape, lo, hi, ivl):
     return ni
 
 
-@jit
+@jit_raw
 def _degree(cfg, shape):
     if shape == S_NONEW:
         return 4
@@ -807,7 +807,7 @@ def _degree(cfg, shape):
     return 8 if cross else 4
 
 
-@jit
+@jit_raw
 def _polish(cfg, work, shape, u, sz, s3, lo, hi):
     """Secant steps on the exact residual from a polynomial root; returns (u, |R|).
 
@@ -841,7 +841,7 @@ def _polish(cfg, work, shape, u, sz, s3, lo, hi):
     return u, abs(R)
 
 
-@jit
+@jit_raw
 def _plausible(cfg, c1, t1, c3, t3, tc):
     """Cheap necessary conditions of a candidate (the exact check decides)."""
     eps = -PLAUSIBLE_RTOL * (1.0 + abs(cfg[TT]) if cfg[TT] == cfg[TT] else 1.0)
@@ -852,7 +852,7 @@ def _plausible(cfg, c1, t1, c3, t3, tc):
     return True
 
 
-@jit
+@jit_raw
 def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
                 vals, coef, roots, ivl, dscr):
     """Every root of one shape of one template, each offered as a candidate."""
@@ -887,7 +887,7 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
         ivl[0, 1] = hi
         ni = 1
     else:
-        ni = _intervals(cfg, work, shape, lo, hi, ivl)
+        ni = _intervals(cfg, work, shape, lo, hi, ivl, dscr[0])
     for iv in range(ni):
         a = ivl[iv, 0]
         b = ivl[iv, 1]
@@ -919,9 +919,8 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                 mid = 0.5 * (za + zb)
                 half = 0.5 * (zb - za)
                 nn = deg + 1
-                xs = cheb_nodes(nn)
                 for k in range(nn):
-                    vals[k] = _norm(cfg, work, shape, mid + half * xs[k], nrad)
+                    vals[k] = _norm(cfg, work, shape, mid + half * NODES[nn, k], nrad)
                 interp_unit(vals, nn, coef)
                 nr = real_roots_unit(coef, deg, roots, dscr)
                 _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
@@ -956,7 +955,7 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                         break
 
 
-@jit
+@jit_raw
 def _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
                  roots, nr, mid, half, a, b):
     """Offer the candidate of every root ``mid + half * roots[i]`` (all sign branches)."""
@@ -993,7 +992,7 @@ def _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res
                     return
 
 
-@jit
+@jit_raw
 def solve_vel(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
     """Shapes with a cruise at v_max (VEL, ACC0_VEL, ACC1_VEL, ACC0_ACC1_VEL)."""
     V = cfg[VM]
@@ -1063,7 +1062,7 @@ def solve_vel(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
                   scratch, 4 + h1 + 2 * h2)
 
 
-@jit
+@jit_raw
 def solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
     """Velocity interface (position free): ramp 4 and hold 3 absent (c3 = a_e), the
     peak c1 (or the hold at it) from the velocity equation, in closed form."""
@@ -1110,7 +1109,7 @@ def solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scr
               scratch, 8 if h < 2 else 9)
 
 
-@jit
+@jit_raw
 def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     """Every shape of one template instance."""
     work = W[0]
@@ -1133,7 +1132,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
         if stage == STAGE_INFLECTION and int(cfg[MODE]) == M_ZERO:
             # the cruise at an inflection (UDUD): the second half a bump up again,
             # at the tighter of both legs' limits
-            save = cfg.copy()
+            save = cfg[NCFG:]
+            for k in range(NCFG):
+                save[k] = cfg[k]
             cfg[SG2] = -1.0
             Km = max(lim[2], lim[4])
             Am = min(lim[1], lim[3])
@@ -1155,7 +1156,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
         if stage == STAGE_EQUAL and mode == M_ZERO and (
                 cfg[S3] == 0.0 or (cfg[K1] == max(lim[2], lim[4]) and cfg[K4] == cfg[K1])):
             # equal jerk on every ramp, at the tighter of both legs' limits
-            save = cfg.copy()
+            save = cfg[NCFG:]
+            for k in range(NCFG):
+                save[k] = cfg[k]
             Km = max(lim[2], lim[4])
             Am = min(lim[1], lim[3])
             cfg[K1] = Km
@@ -1190,7 +1193,7 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
 
 
 # ------------------------------------------------------------------ legs
-@jit
+@jit_raw
 def _push(buf, n, x, y, K):
     """Append an up-ramp x -> y at jerk 1/K (nothing for an infinite jerk)."""
     if K == 0.0:
@@ -1201,7 +1204,7 @@ def _push(buf, n, x, y, K):
     return n + 1
 
 
-@jit
+@jit_raw
 def _az_from_start(x, v, K, sign):
     """Acceleration where an up-ramp from (v, x) at 1/K reaches v = 0 (or nan)."""
     if K == 0.0:
@@ -1212,7 +1215,7 @@ def _az_from_start(x, v, K, sign):
     return sign * math.sqrt(r)
 
 
-@jit
+@jit_raw
 def _az_from_end(y, ve, K, sign):
     """Acceleration where an up-ramp ending at (ve, y) at 1/K had v = 0 (or nan)."""
     if K == 0.0:
@@ -1223,7 +1226,7 @@ def _az_from_end(y, ve, K, sign):
     return sign * math.sqrt(r)
 
 
-@jit
+@jit_raw
 def _prefix_a(pre, p0, v0, a0, K1_, K2_):
     """The a < 0 part of ramp 1 (a0 -> 0, jerk +), exact through a reversal.
 
@@ -1243,7 +1246,7 @@ def _prefix_a(pre, p0, v0, a0, K1_, K2_):
     return n, p, v
 
 
-@jit
+@jit_raw
 def _suffix_d(suf, pf, vf, af, K1_, K2_):
     """The a > 0 part of ramp 4 (0 -> af, jerk +), exact through a reversal.
 
@@ -1262,7 +1265,7 @@ def _suffix_d(suf, pf, vf, af, K1_, K2_):
     return _before(suf, 0, n, pf, vf)
 
 
-@jit
+@jit_raw
 def _before(buf, n0, n, pe, ve):
     """State (p, v) from which phases n0..n-1 end at (pe, ve)."""
     dv = 0.0
@@ -1274,7 +1277,7 @@ def _before(buf, n0, n, pe, ve):
     return n, pe - p, vb
 
 
-@jit
+@jit_raw
 def _copy(dst, n0, src, m):
     for k in range(m):
         dst[n0 + k, 0] = src[k, 0]
@@ -1283,7 +1286,7 @@ def _copy(dst, n0, src, m):
     return n0 + m
 
 
-@jit
+@jit_raw
 def _setcfg(cfg, ps, vs, as_, pe, ve, ae, k1, k2p, k2n, k2q, k4, mode, l1, l3, vm, c1lo, c1hi,
             c3lo, c3hi, s3, sz, k2r):
     cfg[PS] = ps
@@ -1311,7 +1314,7 @@ def _setcfg(cfg, ps, vs, as_, pe, ve, ae, k1, k2p, k2n, k2q, k4, mode, l1, l3, v
     cfg[SG2] = 1.0
 
 
-@jit
+@jit_raw
 def _c1_bound(V, vs, as_, k1):
     """Largest c1 >= 0 whose ramp from ``as_`` keeps v <= V (inf when unbounded)."""
     if not (V < math.inf) or k1 == 0.0:
@@ -1320,7 +1323,7 @@ def _c1_bound(V, vs, as_, k1):
     return math.sqrt(x) if x > 0.0 else 0.0
 
 
-@jit
+@jit_raw
 def _c3_bound(V, ve, ae, k4):
     """Largest |c3| whose ramp to ``ae`` keeps |v| <= V before it."""
     if not (V < math.inf) or k4 == 0.0:
@@ -1329,7 +1332,7 @@ def _c3_bound(V, ve, ae, k4):
     return math.sqrt(x) if x > 0.0 else 0.0
 
 
-@jit
+@jit_raw
 def _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     T = st[6]
     if T == T:
@@ -1347,7 +1350,7 @@ def _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
 
 
 
-@jit
+@jit_raw
 def _hold_push(buf, n, a, t):
     buf[n, 0] = t
     buf[n, 1] = 0.0
@@ -1355,7 +1358,7 @@ def _hold_push(buf, n, a, t):
     return n + 1
 
 
-@jit
+@jit_raw
 def _down(buf, n, x, y, K):
     """Append a down-ramp x -> y at jerk -1/K (nothing for an infinite jerk)."""
     if K == 0.0:
@@ -1366,7 +1369,7 @@ def _down(buf, n, x, y, K):
     return n + 1
 
 
-@jit
+@jit_raw
 def _hold_prefix(pre, npre, ps, vs, as_, A1, K1_, A2, K2_):
     """A reversal at the top of a rising run (a > 0, v < 0 -> v > 0) where the
     acceleration limit changes from ``A2`` (slowing) to ``A1`` (speeding).
@@ -1411,7 +1414,7 @@ def _hold_prefix(pre, npre, ps, vs, as_, A1, K1_, A2, K2_):
     return True, npre, p, aend
 
 
-@jit
+@jit_raw
 def _hold_suffix(suf, pe, ve, ae, A1, K1_, A2, K2_):
     """A reversal in a falling run (a < 0, v > 0 -> v < 0) where the
     acceleration limit changes from ``A2`` to ``A1``: the part after it (from
@@ -1451,7 +1454,7 @@ def _hold_suffix(suf, pe, ve, ae, A1, K1_, A2, K2_):
     return True, n, pb, a_start
 
 
-@jit
+@jit_raw
 def _front(pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km):
     """Run B (a > 0, v rising from vA): hypothesis ``hb`` -> (ok, npre, ps, vs, as, AB, KB,
     KB2, mode_b, vc_pos). ``mode_b``: 1 when the reversal lies in ramp 2's first half
@@ -1477,7 +1480,7 @@ def _front(pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km):
     return True, npre, ps, vs, as_, Am, Km, Km, 0, True
 
 
-@jit
+@jit_raw
 def _back(suf, sufd, nsD, pD, vD, aD, hc, vc_pos, A1, K1_, A2, K2_, Am, Km):
     """Run C (a < 0, v falling to vD): hypothesis ``hc`` -> (ok, nsuf, pe, ve, ae, AC, KC,
     KC2, mode_c). ``mode_c``: 1 when the reversal lies in ramp 2's second half (KC before
@@ -1513,7 +1516,7 @@ def _back(suf, sufd, nsD, pD, vD, aD, hc, vc_pos, A1, K1_, A2, K2_, Am, Km):
     return ok, nsuf, pe, ve, ae, AC, KC, KC2, mode_c
 
 
-@jit
+@jit_raw
 def _one_run(pre, suf, sufd, npA, nsD, ps, vs, as_, pe, ve, ae, h, sign, A1, K1_, A2, K2_, Am,
              Km):
     """A single run (the acceleration keeps the sign ``sign`` between the forced
@@ -1572,7 +1575,7 @@ def _one_run(pre, suf, sufd, npA, nsD, ps, vs, as_, pe, ve, ae, h, sign, A1, K1_
     return True, npre, nsuf, ps, vs, as_, pe, ve, ae, Am, Km, Am, Km, False
 
 
-@jit
+@jit_raw
 def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
     """Every template of one direction (``sgn``: +1 as given, -1 mirrored).
 
@@ -1684,7 +1687,7 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
     _solve(cfg, W, vec, ivl, 0, 0, sgn, st, lim, best, res)
 
 
-@jit
+@jit_raw
 def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     """Minimum time (``st0[6]`` NaN) or exactly ``st0[6]`` (step 2) from
     ``st0[:3]`` (inside the limits) to ``st0[3:6]``.

@@ -20,6 +20,8 @@ described in ``docs/state-profiles.md``.
 from __future__ import annotations
 
 import math
+import struct
+import sys
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -34,6 +36,7 @@ from . import _kernel as K
 from ._brake import inside
 from ._compile import ENABLED as _COMPILED
 from ._range import (
+    DISTANCE_ABS_MIN,
     POSITION_MAX,
     STATE_RATIO_MAX,
     check_distance_range,
@@ -42,7 +45,7 @@ from ._range import (
     check_position_range,
     check_state_range,
 )
-from ._shapes import SHAPE_NAMES
+from ._shapes import NPH, SHAPE_NAMES
 from .motion import JerkMotion
 
 __all__ = [
@@ -62,6 +65,8 @@ STEP2_NAMES = ("cruise", "acc0_cruise", "cruise_acc1", "acc0_cruise_acc1", "hold
 
 #: A requested duration within this fraction of the minimum is the minimum.
 DURATION_RTOL = K.DURATION_RTOL
+
+_fsum = math.fsum
 
 
 class BlockedDurationError(InfeasibleError):
@@ -217,15 +222,35 @@ def _from_table(start, goal, flat, n, nb, tmin, family, limits) -> StateProfile:
     """A StateProfile from the kernel's flat phase table (no per-phase Python work)."""
     prof = StateProfile.__new__(StateProfile)
     prof.start_state = start
-    prof.phase_durations = tuple(flat[0:3 * n:3])
+    # (a tuple ``flat`` is sliced into tuples at once; tuple() of a tuple is itself)
+    prof.phase_durations = d = tuple(flat[0:3 * n:3])
     prof.jerks = tuple(flat[1:3 * n:3])
     prof.phase_accelerations = tuple(flat[2:3 * n:3])
-    prof.duration = math.fsum(prof.phase_durations)
+    prof.duration = _fsum(d)
     prof._end = goal
     prof._tab = None
     prof.min_duration = tmin
     prof.n_brake_phases = nb
     prof.family = family
+    prof.limits = limits
+    return prof
+
+
+def _profile(start, goal, flat: tuple, tmin: float, nb: int, code: int,
+             limits: AxisLimits) -> StateProfile:
+    """A StateProfile from a phase table read as one tuple ``flat`` (rows of
+    ``(duration, jerk, start acceleration)``, see :data:`_TABLES`)."""
+    prof = _new_profile(StateProfile)
+    prof.start_state = start
+    prof.phase_durations = d = flat[0::3]
+    prof.jerks = flat[1::3]
+    prof.phase_accelerations = flat[2::3]
+    prof.duration = _fsum(d)
+    prof._end = goal
+    prof._tab = None
+    prof.min_duration = tmin
+    prof.n_brake_phases = nb
+    prof.family = _FAMILIES.get(code) or _family(code)
     prof.limits = limits
     return prof
 
@@ -238,11 +263,29 @@ def _ws():
     ws = getattr(_local, "ws", None)
     if ws is None:
         ws = _local.ws = K.workspace()
+        _local.mv = memoryview(ws)
     return ws
 
 
+def _wsmv():
+    """The thread's workspace as a memoryview (item access on Python floats is
+    several times cheaper than on the numpy array)."""
+    mv = getattr(_local, "mv", None)
+    if mv is None:
+        _ws()
+        mv = _local.mv
+    return mv
+
+
+_NAMES3 = ("position", "velocity", "acceleration")
+_PMAX = POSITION_MAX
+_SMAX = STATE_RATIO_MAX
+_FMAX = sys.float_info.max
+_INF = math.inf
+
+
 def _check_limits(limits: Any) -> AxisLimits:
-    if type(limits) is AxisLimits and limits.__dict__.get("_states_ok", False):
+    if type(limits) is AxisLimits and "_sfast" in limits.__dict__:
         return limits
     if not isinstance(limits, AxisLimits):
         raise InvalidInputError(f"limits must be an AxisLimits, got {type(limits).__name__}")
@@ -251,13 +294,29 @@ def _check_limits(limits: Any) -> AxisLimits:
             f"limits{axis_label(limits.name)}: v_max and a_max cannot both be infinite for a "
             "profile between moving states")
     check_limits_range(limits, states=True)
-    object.__setattr__(limits, "_states_ok", True)
+    _cache_fast(limits)
     return limits
 
 
-_NAMES3 = ("position", "velocity", "acceleration")
-_PMAX = POSITION_MAX
-_SMAX = STATE_RATIO_MAX
+def _cache_fast(limits: AxisLimits) -> None:
+    """Cache on validated limits what the fast checks of a state need (``_sfast``):
+    the position bounds (axis range within the supported one), the velocity and
+    acceleration bounds of a state (capped at the largest float: a bound passed
+    implies a finite value), ``1/(2 min j)``, the uncapped velocity bound of the
+    forced speed, whether the position range is unbounded, the kernel's five
+    limits and ``v_max``."""
+    vb = _SMAX * limits.v_max
+    tol = 1.0 + 1e-12  # (as in _goal_violation)
+    object.__setattr__(limits, "_sgoal", (
+        limits.v_max * tol, limits.a_max * tol, limits.a_max_decel * tol, limits.v_max,
+        limits.a_max_decel, 0.0 if limits.j_max_decel == math.inf else 1.0 / limits.j_max_decel,
+        limits.a_max, 0.0 if limits.j_max == math.inf else 1.0 / limits.j_max))
+    object.__setattr__(limits, "_sfast", (
+        max(-_PMAX, limits.position_min), min(_PMAX, limits.position_max),
+        min(vb, _FMAX), min(_SMAX * limits._amax, _FMAX), limits._kmin2, vb,
+        limits.position_min == -math.inf and limits.position_max == math.inf,
+        (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel),
+        limits.v_max))
 
 
 def _num(x, field, name):
@@ -274,13 +333,38 @@ def _check_state(state: Any, field: str, limits: AxisLimits) -> tuple:
     # fast path: three finite floats inside the ranges (the common call)
     if type(state) is tuple and len(state) == 3:
         p, v, a = state
+        plo, phi, vb, ab, k2, vb2 = limits.__dict__["_sfast"][:6]
         if (type(p) is float and type(v) is float and type(a) is float
-                and -_PMAX <= p <= _PMAX and limits.position_min <= p <= limits.position_max
-                and abs(v) <= _SMAX * limits.v_max and abs(a) <= _SMAX * limits._amax
-                and abs(v) + a * a * limits._kmin2 <= _SMAX * limits.v_max
-                and math.isfinite(v) and math.isfinite(a)):
+                and plo <= p <= phi and abs(v) <= vb and abs(a) <= ab
+                and abs(v) + a * a * k2 <= vb2):
             return state
     return _check_state_slow(state, field, limits)
+
+
+def _fast_pair(start: Any, goal: Any, limits: Any) -> tuple | None:
+    """The validated ``_sfast`` of ``limits`` when the common call passes every check
+    of :func:`_prepare` at once (two tuples of finite floats inside the ranges, a
+    resolvable distance, a goal reached within the limits), else None (then
+    :func:`_prepare` decides, with its messages)."""
+    if type(limits) is not AxisLimits or type(start) is not tuple or type(goal) is not tuple:
+        return None
+    sf = limits.__dict__.get("_sfast")
+    if sf is None or len(start) != 3 or len(goal) != 3:
+        return None
+    p0, v0, a0 = start
+    pf, vf, af = goal
+    plo, phi, vb, ab, k2, vb2 = sf[:6]
+    if (type(p0) is float and type(v0) is float and type(a0) is float
+            and type(pf) is float and type(vf) is float and type(af) is float
+            and plo <= p0 <= phi and abs(v0) <= vb and abs(a0) <= ab
+            and abs(v0) + a0 * a0 * k2 <= vb2
+            and plo <= pf <= phi and abs(vf) <= vb and abs(af) <= ab
+            and abs(vf) + af * af * k2 <= vb2
+            and (af == 0.0 and abs(vf) <= limits.v_max or _goal_ok(vf, af, limits))):
+        d = abs(pf - p0)
+        if d == 0.0 or d >= DISTANCE_ABS_MIN:
+            return sf
+    return None
 
 
 def _check_state_slow(state: Any, field: str, limits: AxisLimits) -> tuple:
@@ -304,6 +388,21 @@ def _check_state_slow(state: Any, field: str, limits: AxisLimits) -> tuple:
     limits.check_position(p, f"{field} position")
     check_state_range(v, a, field, limits)
     return (p, v, a)
+
+
+def _goal_ok(v: float, a: float, limits: AxisLimits) -> bool:
+    """``_goal_violation(v, a, limits) is None`` on validated limits, without the
+    messages (the same comparisons on the bounds cached in ``_sgoal``)."""
+    if a == 0.0 and abs(v) <= limits.v_max:
+        return True
+    vt, a1t, a2t, V, A2, k2, A1, k1 = limits.__dict__["_sgoal"]
+    if abs(v) > vt or abs(a) > (a1t if v * a > 0.0 else a2t):
+        return False
+    return _inside(v, -a, V, A2, k2, A1, k1)
+
+
+#: :func:`._brake.inside` as plain Python (the same comparisons; no dispatch).
+_inside = getattr(inside, "py_func", inside)
 
 
 def _goal_violation(v: float, a: float, limits: AxisLimits) -> str | None:
@@ -363,30 +462,61 @@ def _prepare(start, goal, limits, velocity_only=False):
 
 def _run(s, g, limits, task, T=0.0):
     ws = _ws()
-    ws[0] = s[0]
-    ws[1] = s[1]
-    ws[2] = s[2]
-    ws[3] = g[0]
-    ws[4] = g[1]
-    ws[5] = g[2]
-    ws[6] = limits.v_max
-    ws[7] = limits.a_max
-    ws[8] = limits.j_max
-    ws[9] = limits.a_max_decel
-    ws[10] = limits.j_max_decel
-    ws[K.IN_TASK] = task
-    ws[K.IN_T] = T
+    _load(_local.mv, s, g, limits, task, T)
     if _COMPILED:
-        K.solve(ws)
+        _solve(ws)
     else:
         with np.errstate(all="ignore"):
             K.solve(ws)
     return ws
 
 
+def _load(mv, s, g, limits, task, T):
+    """Write the problem into the workspace (through its memoryview)."""
+    mv[0], mv[1], mv[2] = s
+    mv[3], mv[4], mv[5] = g
+    sf = limits.__dict__.get("_sfast")
+    if sf is None:
+        lim = (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel)
+    else:
+        lim = sf[7]
+    mv[6], mv[7], mv[8], mv[9], mv[10] = lim
+    mv[_IN_TASK] = task
+    mv[_IN_T] = T
+
+
+_solve = K.solve
+_OUT_PH_BYTES = 8 * K.OUT_PH
+
+#: ``_TABLES[n]`` reads a phase table of ``n`` rows from the workspace as one tuple.
+_TABLES = tuple(struct.Struct(f"={3 * n}d") for n in range(NPH + 1))
+
+_new_profile = object.__new__
+
+
+_IN_TASK = K.IN_TASK
+_IN_T = K.IN_T
+_OUT_STATUS = K.OUT_STATUS
+_OUT_TMIN = K.OUT_TMIN
+_OUT_N = K.OUT_N
+_OUT_NB = K.OUT_NB
+_OUT_SHAPE = K.OUT_SHAPE
+_OUT_PH = K.OUT_PH
+
+
+_FAMILIES: dict[int, str] = {}
+
+
 def _family(code: float) -> str:
     """The shape name of a kernel shape code (see :attr:`StateProfile.family`)."""
     c = int(code)
+    name = _FAMILIES.get(c)
+    if name is None:
+        name = _FAMILIES[c] = _family_name(c)
+    return name
+
+
+def _family_name(c: int) -> str:
     fixed = c >= 32
     direction = "DUUD" if c & 16 else "UDDU"
     c &= 15
@@ -517,6 +647,56 @@ def plan_state_to_state(
     >>> round(p.duration, 6)
     1.7
     """
+    if (duration is None and type(limits) is AxisLimits and type(start) is tuple
+            and type(goal) is tuple and len(start) == 3 and len(goal) == 3 and start != goal):
+        # the common call: every check of _prepare at once on the bounds cached on
+        # the validated limits (anything else goes the long way, with its messages),
+        # then planned and built from the workspace without numpy scalars
+        sf = limits.__dict__.get("_sfast")
+        if sf is not None:
+            p0, v0, a0 = start
+            pf, vf, af = goal
+            plo, phi, vb, ab, k2, vb2, free, lim5, vmax = sf
+            if (float is type(p0) is type(v0) is type(a0) is type(pf) is type(vf) is type(af)
+                    and plo <= p0 <= phi and plo <= pf <= phi
+                    and abs(v0) <= vb and abs(a0) <= ab and abs(vf) <= vb and abs(af) <= ab
+                    and abs(v0) + a0 * a0 * k2 <= vb2 and abs(vf) + af * af * k2 <= vb2
+                    and (af == 0.0 and abs(vf) <= vmax or _goal_ok(vf, af, limits))
+                    and (abs(pf - p0) >= DISTANCE_ABS_MIN or pf == p0)):
+                try:
+                    mv = _local.mv
+                except AttributeError:
+                    _ws()
+                    mv = _local.mv
+                mv[0] = p0
+                mv[1] = v0
+                mv[2] = a0
+                mv[3] = pf
+                mv[4] = vf
+                mv[5] = af
+                mv[6], mv[7], mv[8], mv[9], mv[10] = lim5
+                mv[_IN_TASK] = 0.0  # K.TASK_MIN
+                if _COMPILED:
+                    _solve(_local.ws)
+                else:
+                    with np.errstate(all="ignore"):
+                        K.solve(_local.ws)
+                if mv[_OUT_STATUS] == 0.0:  # K.ST_OK
+                    flat = _TABLES[int(mv[_OUT_N])].unpack_from(mv, _OUT_PH_BYTES)
+                    prof = _new_profile(StateProfile)
+                    prof.start_state = start
+                    prof.phase_durations = d = flat[0::3]
+                    prof.jerks = flat[1::3]
+                    prof.phase_accelerations = flat[2::3]
+                    prof.duration = _fsum(d)
+                    prof._end = goal
+                    prof._tab = None
+                    prof.min_duration = mv[_OUT_TMIN]
+                    prof.n_brake_phases = int(mv[_OUT_NB])
+                    code = int(mv[_OUT_SHAPE])
+                    prof.family = _FAMILIES.get(code) or _family(code)
+                    prof.limits = limits
+                    return prof if free else _check_range(prof, limits)
     limits, s, g = _prepare(start, goal, limits)
     T = _duration_arg(duration, limits.name)
     if s == g and (T is None or T == 0.0):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from typing import Any
 
@@ -29,7 +30,7 @@ def coerce_limits(
     the unnamed ones carrying their axis index (for messages)."""
     if isinstance(limits, AxisLimits):
         if named and limits.name is None:
-            return [limits.with_name(i) for i in range(n)]
+            return [_named(limits, i) for i in range(n)]
         return [limits] * n
     try:
         lims = list(limits)
@@ -47,8 +48,46 @@ def coerce_limits(
                 f"limits[{i}] must be an AxisLimits, got {type(lim).__name__}"
             )
         if named and lim.name is None:
-            lims[i] = lim.with_name(i)
+            lims[i] = _named(lim, i)
     return lims
+
+
+def _named(lim: AxisLimits, i: int) -> AxisLimits:
+    """``lim.with_name(i)``, the same object on every call (cached on ``lim``, which
+    is frozen): the copy keeps what the planners cached on it after validating it."""
+    cache = lim.__dict__.get("_named")
+    if cache is None:
+        cache = {}
+        object.__setattr__(lim, "_named", cache)
+    out = cache.get(i)
+    if out is None:
+        out = cache[i] = lim.with_name(i)
+    return out
+
+
+def state_tuples(x: Any) -> list[tuple[float, float, float]] | None:
+    """Fast path of :func:`coerce_states`: states given as a list/tuple (or a
+    float64 array) of ``n_axes`` rows of 3 finite floats, as a list of tuples of
+    floats; None for anything else (then :func:`coerce_states` decides)."""
+    if isinstance(x, np.ndarray):
+        if x.dtype != np.float64 or x.ndim != 2 or x.shape[1] != 3:
+            return None
+        x = x.tolist()
+    elif type(x) is not list and type(x) is not tuple:
+        return None
+    out = []
+    for r in x:
+        if (type(r) is not tuple and type(r) is not list) or len(r) != 3:
+            return None
+        p, v, a = r
+        if (type(p) is not float or type(v) is not float or type(a) is not float
+                or not (abs(p) <= _FMAX and abs(v) <= _FMAX and abs(a) <= _FMAX)):
+            return None
+        out.append(r if type(r) is tuple else (p, v, a))
+    return out
+
+
+_FMAX = sys.float_info.max
 
 
 def float_list(value: Any, field: str) -> list[float]:

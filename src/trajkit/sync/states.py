@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -21,17 +22,19 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import _batch_states as B
 from ..profiles.state import (
+    _TABLES,
     BlockedDurationError,
     StateProfile,
+    _check_limits,
     _check_range,
-    _family,
-    _from_table,
+    _fast_pair,
     _prepare,
+    _profile,
     feasible_durations,
     plan_state_to_state,
 )
 from ..trajectory import SYNC_MODES, Trajectory
-from ._inputs import check_duration, coerce_limits, coerce_states
+from ._inputs import check_duration, coerce_limits, coerce_states, state_tuples
 
 __all__ = ["plan_ptp_states", "STATE_SYNC_MODES", "COLLINEAR_RTOL"]
 
@@ -95,22 +98,25 @@ def plan_ptp_states(
     """
     if sync not in STATE_SYNC_MODES:
         raise InvalidInputError(f"sync must be one of {STATE_SYNC_MODES}, got {sync!r}")
-    s = coerce_states(start, "start")
-    g = coerce_states(goal, "goal")
-    if s.shape != g.shape:
-        raise InvalidInputError(f"start has {s.shape[0]} axes but goal has {g.shape[0]}")
-    n = s.shape[0]
-    if n == 0:
-        raise InvalidInputError("start and goal must have at least one axis")
+    S = state_tuples(start)
+    G = state_tuples(goal)
+    if S is None or G is None or len(S) != len(G) or not S:
+        s = coerce_states(start, "start")
+        g = coerce_states(goal, "goal")
+        if s.shape != g.shape:
+            raise InvalidInputError(f"start has {s.shape[0]} axes but goal has {g.shape[0]}")
+        if s.shape[0] == 0:
+            raise InvalidInputError("start and goal must have at least one axis")
+        S = [tuple(x) for x in s.tolist()]
+        G = [tuple(x) for x in g.tolist()]
+    n = len(S)
     lims = coerce_limits(limits, n, named=True)
     duration = check_duration(duration, sync, states=True)
-    S = [tuple(x) for x in s.tolist()]
-    G = [tuple(x) for x in g.tolist()]
 
     if sync == "none":
         return Trajectory([plan_state_to_state(S[k], G[k], lims[k]) for k in range(n)], "none")
     if sync == "phase":
-        traj = _phase_sync(s, g, lims, duration)
+        traj = _phase_sync(np.array(S, dtype=float), np.array(G, dtype=float), lims, duration)
         if traj is not None:
             return traj
 
@@ -186,31 +192,56 @@ def _sync_time_compiled(S, G, lims, duration):
     """Time synchronisation in one compiled call (:func:`._batch_states.sync_time`),
     or None: then the Python path plans again and gives the precise error."""
     n = len(S)
-    inp = np.empty((n, B.NIN))
+    row = []
     for k in range(n):
-        lim, s, g = _prepare(S[k], G[k], lims[k])
-        inp[k, 0:3] = s
-        inp[k, 3:6] = g
-        inp[k, 6:11] = (lim.v_max, lim.a_max, lim.j_max, lim.a_max_decel, lim.j_max_decel)
+        lim = _check_limits(lims[k])
+        sf = _fast_pair(S[k], G[k], lim)
+        if sf is None:
+            lim, s, g = _prepare(S[k], G[k], lim)
+            row += s
+            row += g
+            row += lim.__dict__["_sfast"][7]
+        else:
+            row += S[k]
+            row += G[k]
+            row += sf[7]
+    inp = np.fromiter(row, np.float64, n * B.NIN).reshape(n, B.NIN)
     out = _sync_outputs(n)
     status, dur, tmin, nph, nbr, shape, ph, blk, nblk = out
     code, T = B.sync_time(inp, math.nan if duration is None else float(duration), *out)
     if code != 0:
         return None
     axes = []
+    stride = 24 * B.NPH  # bytes per axis of ph
+    tmins = tmin.tolist()
+    nphs = nph.tolist()
+    nbrs = nbr.tolist()
+    shapes = shape.tolist()
     for k in range(n):
-        m = int(nph[k])
-        flat = ph[k, :m].ravel().tolist()
-        prof = _from_table(S[k], G[k], flat, m, int(nbr[k]), float(tmin[k]), _family(shape[k]),
-                           lims[k])
-        axes.append(_check_range(prof, lims[k]))
+        lim = lims[k]
+        prof = _profile(S[k], G[k], _TABLES[nphs[k]].unpack_from(ph, k * stride), tmins[k],
+                        nbrs[k], int(shapes[k]), lim)
+        axes.append(prof if lim.__dict__["_sfast"][6] else _check_range(prof, lim))
     return Trajectory(axes, "time")
 
 
+_tls = threading.local()
+
+
 def _sync_outputs(n):
-    return (np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.int64),
-            np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros((n, B.NPH, 3)),
-            np.zeros((n, B.NBLK, 2)), np.zeros(n, dtype=np.int64))
+    """The output arrays of :func:`._batch_states.sync_time` for ``n`` axes (one set
+    per thread and axis count, reused: the kernel writes every entry read back)."""
+    cache = getattr(_tls, "out", None)
+    if cache is None:
+        cache = _tls.out = {}
+    out = cache.get(n)
+    if out is None:
+        out = (np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.int64),
+               np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros((n, B.NPH, 3)),
+               np.zeros((n, B.NBLK, 2)), np.zeros(n, dtype=np.int64))
+        if n <= 64:
+            cache[n] = out
+    return out
 
 
 def _phase_sync(s, g, lims, duration):
