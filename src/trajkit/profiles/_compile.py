@@ -98,7 +98,21 @@ def jit_raw(fn):
     state-to-state kernel. The arithmetic is the same (no fast-math)."""
     if not ENABLED:
         return fn
+    if not _RAW:  # a numba without the option: the counted build, same results
+        return jit(fn)
     return _numba().njit(cache=True, nogil=True, error_model="numpy", _nrt=False)(fn)
+
+
+def _raw_supported() -> bool:
+    """True when this numba's CPU target has the (private) ``_nrt`` option."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:  # pragma: no cover - numba's layout changed
+        return False
+    return hasattr(CPUTargetOptions, "_nrt")
+
+
+_RAW = ENABLED and _raw_supported()
 
 
 def jit_parallel(fn):
