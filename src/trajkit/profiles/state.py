@@ -683,19 +683,8 @@ def plan_state_to_state(
                         K.solve(_local.ws)
                 if mv[_OUT_STATUS] == 0.0:  # K.ST_OK
                     flat = _TABLES[int(mv[_OUT_N])].unpack_from(mv, _OUT_PH_BYTES)
-                    prof = _new_profile(StateProfile)
-                    prof.start_state = start
-                    prof.phase_durations = d = flat[0::3]
-                    prof.jerks = flat[1::3]
-                    prof.phase_accelerations = flat[2::3]
-                    prof.duration = _fsum(d)
-                    prof._end = goal
-                    prof._tab = None
-                    prof.min_duration = mv[_OUT_TMIN]
-                    prof.n_brake_phases = int(mv[_OUT_NB])
-                    code = int(mv[_OUT_SHAPE])
-                    prof.family = _FAMILIES.get(code) or _family(code)
-                    prof.limits = limits
+                    prof = _profile(start, goal, flat, mv[_OUT_TMIN], int(mv[_OUT_NB]),
+                                    int(mv[_OUT_SHAPE]), limits)
                     return prof if free else _check_range(prof, limits)
     limits, s, g = _prepare(start, goal, limits)
     T = _duration_arg(duration, limits.name)
