@@ -48,6 +48,13 @@ IK_MAX_ITER = 200
 #: Damping of the least-squares step (squared, relative to 1).
 IK_DAMPING = 1e-10
 
+#: :meth:`UrdfRobot.ik_near_many` steps the poses whose seed's pose error is below
+#: this together (the error to first order is then exact to its square) ...
+IK_BATCH_ENTRY = 1e-6
+
+#: ... for at most this many steps (the rest one by one).
+IK_BATCH_ITER = 6
+
 #: Largest joint step per IK iteration [rad or m] (keeps Newton local).
 IK_MAX_STEP = 0.5
 
@@ -312,13 +319,16 @@ class UrdfRobot(RobotModel):
 
     def ik_near_many(self, positions: np.ndarray, rotations: np.ndarray,
                      seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`ik_near` of many poses, vectorised where the seeds are already solutions.
+        """:meth:`ik_near` of many poses, vectorised where the seeds are close.
 
-        Every pose whose seed meets the IK tolerance gets the IK's one polishing
-        Newton step, all at once (the forward kinematics and Jacobians of the
-        chain vectorised over the poses); the others are solved one by one, as
-        by :meth:`ik_near`. The solutions are those of :meth:`ik_near` (to
-        round-off).
+        The poses whose seed is within :data:`IK_BATCH_ENTRY` of its pose take
+        the IK's Newton steps all at once (the forward kinematics and Jacobians of
+        the chain vectorised over the poses, the pose error to first order, which
+        is exact to its square): steps until the error is below the tolerance,
+        then the one polishing step, as :meth:`ik_near` does. The others, and any
+        not converged after :data:`IK_BATCH_ITER` steps, are solved one by one by
+        :meth:`ik_near`'s solver from their seeds. The solutions are those of
+        :meth:`ik_near` (to round-off).
 
         Parameters
         ----------
@@ -338,36 +348,43 @@ class UrdfRobot(RobotModel):
         """
         seeds = np.asarray(seeds, dtype=np.float64)
         n = seeds.shape[0]
-        q = np.full((n, self.n_joints), np.nan)
+        q = seeds.copy()
         ok = np.zeros(n, dtype=bool)
         lo, hi, scale, damping = self._ik_constants()
-        done = np.zeros(n, dtype=bool)
-        if n and self._chain() is not None:
-            pos, rot, jac = self._fk_jacobian_many(seeds)
+        active = np.arange(n) if self._chain() is not None else np.zeros(0, dtype=int)
+        for it in range(IK_BATCH_ITER):
+            if not active.size:
+                break
+            qa = q[active]
+            pos, rot, jac = self._fk_jacobian_many(qa)
             rt = np.swapaxes(rot, 1, 2)
-            rel = rt @ rotations  # current^-1 target (rotation part)
-            lin = np.einsum("nij,nj->ni", rt, positions - pos)
+            rel = rt @ rotations[active]  # current^-1 target (rotation part)
+            lin = np.einsum("nij,nj->ni", rt, positions[active] - pos)
             ang = 0.5 * np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0],
                                   rel[:, 1, 0] - rel[:, 0, 1]], axis=-1)
-            # the error to first order (exact to its square, far below the tolerance
-            # where it is used), on the principal branch of the rotation only
             es = np.concatenate([lin, ang], axis=1) * scale
-            done = (np.abs(es).max(axis=1) < IK_TOL) & (np.trace(rel, axis1=1, axis2=2) > 1.0)
-            if done.any():
-                js = jac[done] * scale[None, :, None]
-                jt = np.swapaxes(js, 1, 2)
-                y = np.linalg.solve(js @ jt + damping, es[done][:, :, None])
-                dq = (jt @ y)[:, :, 0]
-                step = np.abs(dq).max(axis=1)
-                big = step > IK_MAX_STEP
-                dq[big] *= (IK_MAX_STEP / step[big])[:, None]
-                q[done] = np.clip(seeds[done] + dq, lo, hi)
-                ok[done] = True
-        for i in np.nonzero(~done)[0]:
+            err = np.abs(es).max(axis=1)
+            if it == 0:  # only seeds close to their pose (principal rotation branch)
+                near = (err < IK_BATCH_ENTRY) & (np.trace(rel, axis1=1, axis2=2) > 1.0)
+                active, qa, jac, es, err = active[near], qa[near], jac[near], es[near], err[near]
+            js = jac * scale[None, :, None]
+            jt = np.swapaxes(js, 1, 2)
+            y = np.linalg.solve(js @ jt + damping, es[:, :, None])
+            dq = (jt @ y)[:, :, 0]
+            step = np.abs(dq).max(axis=1)
+            big = step > IK_MAX_STEP
+            dq[big] *= (IK_MAX_STEP / step[big])[:, None]
+            q[active] = np.clip(qa + dq, lo, hi)
+            conv = err < IK_TOL  # this step was the polishing one
+            ok[active[conv]] = True
+            active = active[~conv]
+        for i in np.nonzero(~ok)[0]:
             sol = self._solve_from(Pose.trusted(positions[i], rotations[i]), seeds[i])
             if sol is not None:
                 q[i] = sol
                 ok[i] = True
+            else:
+                q[i] = np.nan
         return q, ok
 
     def ik_near(self, pose: Pose, seed: Any) -> np.ndarray:
