@@ -80,6 +80,11 @@ SCREEN_TOL = 1e-9
 #: again with it, so that the solver keeps it as accurately as the others).
 SCREEN_MARGIN = 1e-6
 
+#: Solves of a screened round: where a left-out row is violated (or reached), the
+#: rows violated or near their bound at that solution are added and the round
+#: solved again, and the last time with every row.
+SCREEN_PASSES = 3
+
 #: Screening starts once a round changed the time by less than this fraction (the
 #: rounds' solutions are then close, and so are their active limits); with a
 #: starting point, the first round is compared with the starting point's time.
@@ -384,7 +389,7 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
 
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
                init: tuple[np.ndarray, np.ndarray] | None = None,
-               settled: bool = False) -> GridSolution:
+               settled: bool = False, near: bool = False) -> GridSolution:
     """Solve the grid problem (see the module notes); raises RuntimeError if the solver fails.
 
     The problem is solved in scaled units (``s / L``, ``t / T0`` with ``T0``
@@ -394,7 +399,12 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
     (``jerk_free_time`` is then NaN). ``settled``: ``init`` is a solution of
     this grid with about the same limits, so its active limits are those of the
     first round (which then leaves out the rows far from them, see SCREEN_SLACK;
-    the result is the same, only sooner).
+    the result is the same, only sooner), and a first round whose time is
+    within ROUND_RTOL of ``init``'s is the converged one (``init`` is then the
+    round before it, on the same grid). ``near``: ``init`` is a converged
+    solution of this grid less a few nodes (cells split in two), interpolated:
+    its active limits are taken for the first round's screening too (without
+    the convergence from it).
     """
     L = float(p.s[-1] - p.s[0])
     T0 = _time_scale(p)
@@ -409,7 +419,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
         x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
-    sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None)
+    sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None,
+                        near and init is not None)
     sol.x = sol.x * (L / T0) ** 2
     sol.u = sol.u * L / as_
     sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
@@ -422,7 +433,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
 
 def _solve_scaled(p: GridProblem, max_rounds: int,
                   init: tuple[np.ndarray, np.ndarray] | None = None,
-                  settled: bool = False) -> GridSolution:
+                  settled: bool = False, near: bool = False) -> GridSolution:
     import clarabel
 
     s = p.s
@@ -617,7 +628,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         # them, the round is solved again with every row (the result is the same either
         # way: the solution of fewer rows that keeps all of them is the optimum)
         t_prev = times[-2] if jerk_rounds >= 2 else (t_init if jerk_rounds == 1 else math.nan)
-        if z_prev is not None and ((settled and not times)
+        if z_prev is not None and (((settled or near) and not times)
                                    or (times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1])):
             keep = _near(A_in_all, b_in_all, z_prev)
             # the velocity and speed-cap rows only loosely (a cruise at the cap stays exact)
@@ -626,7 +637,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK_LOOSE
         else:
             keep = np.ones(b_in_all.size, dtype=bool)
-        for _screen in range(2):
+        for screen in range(SCREEN_PASSES):
             A_in, b_in = A_in_all[keep], b_in_all[keep]
             A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc], format="csc")
             b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
@@ -640,7 +651,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             viol = (b_in_all - A_in_all @ np.asarray(sol.x)) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
             if not (viol & ~keep).any():
                 break
-            keep[:] = True
+            if screen < SCREEN_PASSES - 2:  # those rows and the ones near them added
+                keep |= viol | _near(A_in_all, b_in_all, np.asarray(sol.x))
+            else:
+                keep[:] = True
         status = str(sol.status).split(".")[-1]
         times_status.append(status)
         usable = status in ("Solved", "AlmostSolved") or (
@@ -669,6 +683,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             if best is None or t < best[0]:
                 best = (t, x.copy(), u.copy())
             if jerk_rounds >= 2 and abs(times[-2] - t) <= ROUND_RTOL * t:
+                converged = True
+                break
+            # a same-grid start with about the same limits is the round before the first
+            if jerk_rounds == 1 and settled and abs(t_init - t) <= ROUND_RTOL * t:
                 converged = True
                 break
             if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
