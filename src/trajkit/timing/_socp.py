@@ -80,11 +80,6 @@ SCREEN_TOL = 1e-9
 #: again with it, so that the solver keeps it as accurately as the others).
 SCREEN_MARGIN = 1e-6
 
-#: Solves of a screened round: where a left-out row is violated (or reached), the
-#: rows violated or near their bound at that solution are added and the round
-#: solved again, and the last time with every row.
-SCREEN_PASSES = 3
-
 #: Screening starts once a round changed the time by less than this fraction (the
 #: rounds' solutions are then close, and so are their active limits); with a
 #: starting point, the first round is compared with the starting point's time.
@@ -399,12 +394,9 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
     (``jerk_free_time`` is then NaN). ``settled``: ``init`` is a solution of
     this grid with about the same limits, so its active limits are those of the
     first round (which then leaves out the rows far from them, see SCREEN_SLACK;
-    the result is the same, only sooner), and a first round whose time is
-    within ROUND_RTOL of ``init``'s is the converged one (``init`` is then the
-    round before it, on the same grid). ``near``: ``init`` is a converged
+    the result is the same, only sooner). ``near``: ``init`` is a converged
     solution of this grid less a few nodes (cells split in two), interpolated:
-    its active limits are taken for the first round's screening too (without
-    the convergence from it).
+    its active limits are taken for the first round's screening too.
     """
     L = float(p.s[-1] - p.s[0])
     T0 = _time_scale(p)
@@ -637,7 +629,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK_LOOSE
         else:
             keep = np.ones(b_in_all.size, dtype=bool)
-        for screen in range(SCREEN_PASSES):
+        for _screen in range(2):
             A_in, b_in = A_in_all[keep], b_in_all[keep]
             A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc], format="csc")
             b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
@@ -651,10 +643,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             viol = (b_in_all - A_in_all @ np.asarray(sol.x)) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
             if not (viol & ~keep).any():
                 break
-            if screen < SCREEN_PASSES - 2:  # those rows and the ones near them added
-                keep |= viol | _near(A_in_all, b_in_all, np.asarray(sol.x))
-            else:
-                keep[:] = True
+            keep[:] = True
         status = str(sol.status).split(".")[-1]
         times_status.append(status)
         usable = status in ("Solved", "AlmostSolved") or (
@@ -683,10 +672,6 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             if best is None or t < best[0]:
                 best = (t, x.copy(), u.copy())
             if jerk_rounds >= 2 and abs(times[-2] - t) <= ROUND_RTOL * t:
-                converged = True
-                break
-            # a same-grid start with about the same limits is the round before the first
-            if jerk_rounds == 1 and settled and abs(t_init - t) <= ROUND_RTOL * t:
                 converged = True
                 break
             if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
