@@ -120,3 +120,32 @@ def test_ik_near_many_matches_ik_near(name):
         assert ok[i]
         assert np.abs(got[i] - ref).max() < 1e-9  # the same solution (branch, null space)
         assert np.abs(rob.fk(got[i]).position - pos[i]).max() < 1e-12
+
+
+def test_vectorised_fk_with_unaligned_and_prismatic_joints(tmp_path):
+    import pinocchio as pin
+
+    joints = [("revolute", "0.6 0.8 0", "0.1 0.2 0.3", "0.3 -0.2 0.5"),
+              ("prismatic", "0 0.6 0.8", "0.2 0 0.1", "0 0 0"),
+              ("revolute", "0 -1 0", "0 0.3 0", "0.1 0 0"),
+              ("prismatic", "1 0 0", "0.1 0.1 0", "0 0.4 0")]
+    links = "".join(f'<link name="l{i}"/>' for i in range(len(joints) + 1))
+    body = "".join(
+        f'<joint name="j{i}" type="{kind}"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
+        f'<limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+        for i, (kind, axis, xyz, rpy) in enumerate(joints))
+    path = tmp_path / "mixed.urdf"
+    path.write_text(f'<robot name="mixed">{links}{body}</robot>')
+    rob = UrdfRobot(path, f"l{len(joints)}")
+    assert rob._chain() is not None
+    rng = np.random.default_rng(2)
+    q = rng.uniform(-1.0, 1.0, size=(20, rob.n_joints))
+    pos, rot, jac = rob._fk_jacobian_many(q)
+    for i in range(q.shape[0]):
+        pose = rob.fk(q[i])
+        ref = pin.computeFrameJacobian(rob.model, rob.data, q[i], rob.frame_id,
+                                       pin.ReferenceFrame.LOCAL)
+        assert np.abs(pose.position - pos[i]).max() < 1e-12
+        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
+        assert np.abs(ref - jac[i]).max() < 1e-12
