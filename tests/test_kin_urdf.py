@@ -73,3 +73,79 @@ def test_errors(robots, tmp_path):
         UrdfRobot(URDF, "nope")
     with pytest.raises(InvalidInputError, match="does not exist"):
         UrdfRobot(tmp_path / "missing.urdf", "tool0")
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_vectorised_fk_and_jacobian_match_pinocchio(name):
+    import pinocchio as pin
+    from arms import load_arm
+
+    rob = load_arm(name)
+    rng = np.random.default_rng(11)
+    lo, hi = rob.joint_ranges[:, 0], rob.joint_ranges[:, 1]
+    q = lo + (hi - lo) * rng.uniform(size=(50, rob.n_joints))
+    pos, rot, jac = rob._fk_jacobian_many(q)
+    for i in range(q.shape[0]):
+        pose = rob.fk(q[i])
+        ref = pin.computeFrameJacobian(rob.model, rob.data, q[i], rob.frame_id,
+                                       pin.ReferenceFrame.LOCAL)
+        assert np.abs(pose.position - pos[i]).max() < 1e-12
+        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
+        assert np.abs(ref - jac[i]).max() < 1e-12
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_ik_near_many_matches_ik_near(name):
+    from arms import load_arm
+
+    rob = load_arm(name)
+    rng = np.random.default_rng(5)
+    lo, hi = rob.joint_ranges[:, 0], rob.joint_ranges[:, 1]
+    mid = 0.5 * (lo + hi)
+    q = mid + 0.2 * (hi - lo) * rng.uniform(-1.0, 1.0, size=(40, rob.n_joints))
+    poses = [rob.fk(qi) for qi in q]
+    # seeds at round-off, near (batched Newton steps), far (one by one) and hopeless
+    scale = np.repeat([0.0, 1e-9, 1e-4, 0.3], 10)[:, None]
+    seeds = np.clip(q + scale * rng.normal(size=q.shape), lo, hi)
+    seeds[-1] = lo  # far from the pose: may fail, as ik_near does
+    pos = np.array([p.position for p in poses])
+    rot = np.array([p.rotation for p in poses])
+    got, ok = rob.ik_near_many(pos, rot, seeds)
+    for i in range(q.shape[0]):
+        try:
+            ref = rob.ik_near(poses[i], seeds[i])
+        except UnreachableError:
+            assert not ok[i] and np.isnan(got[i]).all()
+            continue
+        assert ok[i]
+        assert np.abs(got[i] - ref).max() < 1e-9  # the same solution (branch, null space)
+        assert np.abs(rob.fk(got[i]).position - pos[i]).max() < 1e-12
+
+
+def test_vectorised_fk_with_unaligned_and_prismatic_joints(tmp_path):
+    import pinocchio as pin
+
+    joints = [("revolute", "0.6 0.8 0", "0.1 0.2 0.3", "0.3 -0.2 0.5"),
+              ("prismatic", "0 0.6 0.8", "0.2 0 0.1", "0 0 0"),
+              ("revolute", "0 -1 0", "0 0.3 0", "0.1 0 0"),
+              ("prismatic", "1 0 0", "0.1 0.1 0", "0 0.4 0")]
+    links = "".join(f'<link name="l{i}"/>' for i in range(len(joints) + 1))
+    body = "".join(
+        f'<joint name="j{i}" type="{kind}"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
+        f'<limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+        for i, (kind, axis, xyz, rpy) in enumerate(joints))
+    path = tmp_path / "mixed.urdf"
+    path.write_text(f'<robot name="mixed">{links}{body}</robot>')
+    rob = UrdfRobot(path, f"l{len(joints)}")
+    assert rob._chain() is not None
+    rng = np.random.default_rng(2)
+    q = rng.uniform(-1.0, 1.0, size=(20, rob.n_joints))
+    pos, rot, jac = rob._fk_jacobian_many(q)
+    for i in range(q.shape[0]):
+        pose = rob.fk(q[i])
+        ref = pin.computeFrameJacobian(rob.model, rob.data, q[i], rob.frame_id,
+                                       pin.ReferenceFrame.LOCAL)
+        assert np.abs(pose.position - pos[i]).max() < 1e-12
+        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
+        assert np.abs(ref - jac[i]).max() < 1e-12

@@ -18,9 +18,10 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+from scipy.linalg.lapack import dposv as _dposv
 
 from .._validate import check_array, check_positive
 from ..errors import InvalidInputError, UnreachableError
@@ -47,6 +48,13 @@ IK_MAX_ITER = 200
 #: Damping of the least-squares step (squared, relative to 1).
 IK_DAMPING = 1e-10
 
+#: :meth:`UrdfRobot.ik_near_many` steps the poses whose seed's pose error is below
+#: this together (the error to first order is then exact to its square) ...
+IK_BATCH_ENTRY = 1e-6
+
+#: ... for at most this many steps (the rest one by one).
+IK_BATCH_ITER = 6
+
 #: Largest joint step per IK iteration [rad or m] (keeps Newton local).
 IK_MAX_STEP = 0.5
 
@@ -58,6 +66,10 @@ IK_DISTINCT_TOL = 1e-6
 
 #: Smallest length scale [m] assumed for a URDF robot (relative tolerances).
 MIN_LENGTH_SCALE = 1e-3
+
+#: Per joint of the chain: parent joint, configuration index, placement in the
+#: parent (rotation, translation), unit axis, revolute (else prismatic).
+_Chain = list[tuple[int, int, np.ndarray, np.ndarray, np.ndarray, bool]]
 
 _KINDS = {
     "JointModelRX": REVOLUTE, "JointModelRY": REVOLUTE, "JointModelRZ": REVOLUTE,
@@ -172,35 +184,208 @@ class UrdfRobot(RobotModel):
         """Always :data:`URDF_CONFIG` (numeric IK follows its seed)."""
         return URDF_CONFIG
 
+    def _ik_constants(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Joint ranges (lower, upper), the pose error's row scale and the damping matrix
+        of the IK, computed once per set of limits and length scale."""
+        key = (self.limits, float(self.length_scale))
+        cached = getattr(self, "_ik_cache", None)
+        if cached is None or cached[0] is not key[0] or cached[1] != key[1]:
+            rng = self.joint_ranges
+            scale = np.array([1.0 / key[1]] * 3 + [1.0] * 3)
+            cached = (key[0], key[1], (np.ascontiguousarray(rng[:, 0]), np.ascontiguousarray(rng[:, 1]),
+                                       scale, IK_DAMPING * np.eye(6)))
+            self._ik_cache = cached
+        return cached[2]
+
     def _solve_from(self, pose: Pose, seed: np.ndarray) -> np.ndarray | None:
         target = _pin.SE3(pose.rotation, pose.position)
         q = np.array(seed, dtype=np.float64)
-        lo, hi = self.joint_ranges[:, 0], self.joint_ranges[:, 1]
-        scale = np.array([1.0 / self.length_scale] * 3 + [1.0] * 3)
+        lo, hi, scale, damping = self._ik_constants()
+        model, data, fid = self.model, self.data, self.frame_id
+        local = _pin.ReferenceFrame.LOCAL
+        col = scale[:, None]
         polish = False
         for _ in range(IK_MAX_ITER):
-            _pin.framesForwardKinematics(self.model, self.data, q)
-            cur = self.data.oMf[self.frame_id]
-            err = _pin.log6(cur.actInv(target)).vector  # in the tool frame
-            if float(np.abs(err * scale).max()) < IK_TOL:
+            # one pass: placements and joint Jacobians, then the tool frame's
+            _pin.computeJointJacobians(model, data, q)
+            cur = _pin.updateFramePlacement(model, data, fid)
+            es = _pin.log6(cur.actInv(target)).vector  # in the tool frame
+            es *= scale
+            if float(np.abs(es).max()) < IK_TOL:
                 if polish:
                     return q
                 # one more Newton step: the error is squared, far below IK_TOL, so
                 # neighbouring solutions along a path differ by round-off only (their
                 # differences are the joint path's derivatives)
                 polish = True
-            jac = _pin.computeFrameJacobian(self.model, self.data, q, self.frame_id,
-                                            _pin.ReferenceFrame.LOCAL)
-            js = jac * scale[:, None]
-            es = err * scale
-            dq = js.T @ np.linalg.solve(js @ js.T + IK_DAMPING * np.eye(6), es)
+            js = _pin.getFrameJacobian(model, data, fid, local)
+            js *= col
+            # damped least squares: dq = js^T (js js^T + damping)^-1 es (Cholesky)
+            _, y, info = _dposv(js @ js.T + damping, es)
+            if info != 0:
+                y = np.linalg.lstsq(js @ js.T + damping, es, rcond=None)[0]
+            dq = js.T @ y
             step = float(np.abs(dq).max())
             if step > IK_MAX_STEP:
                 dq *= IK_MAX_STEP / step
-            q = np.clip(q + dq, lo, hi)
+            q += dq
+            np.clip(q, lo, hi, out=q)
             if polish:
                 return q
         return None
+
+    def _chain(self) -> _Chain | None:
+        """The kinematic chain for the vectorised forward kinematics: per joint its
+        parent, configuration index, placement (rotation, translation) in the parent
+        and unit axis, and whether it is revolute; None when a joint is not one of
+        the axis-aligned or unaligned revolute/prismatic kinds."""
+        if "_chain_cache" in self.__dict__:
+            return cast("_Chain | None", self.__dict__["_chain_cache"])
+        axes = {"X": np.array([1.0, 0.0, 0.0]), "Y": np.array([0.0, 1.0, 0.0]),
+                "Z": np.array([0.0, 0.0, 1.0])}
+        chain: _Chain | None = []
+        model = self.model
+        for i in range(1, model.njoints):
+            short = model.joints[i].shortname()
+            if short[-2:] in ("RX", "RY", "RZ", "PX", "PY", "PZ"):
+                axis = axes[short[-1]]
+            else:
+                axis = np.asarray(getattr(model.joints[i].extract(), "axis", np.zeros(3)), dtype=float)
+                if not (axis.shape == (3,) and abs(float(np.linalg.norm(axis)) - 1.0) < 1e-12):
+                    chain = None
+                    break
+            place = model.jointPlacements[i]
+            assert chain is not None
+            chain.append((int(model.parents[i]), int(model.joints[i].idx_q), np.array(place.rotation),
+                          np.array(place.translation), axis, _KINDS[short] == REVOLUTE))
+        self._chain_cache = chain
+        return chain
+
+    def _fk_jacobian_many(self, q: np.ndarray):
+        """Tool poses and tool-frame (LOCAL) Jacobians of many joint vectors at once.
+
+        Parameters
+        ----------
+        q : ndarray, shape (n, n_joints)
+
+        Returns
+        -------
+        pos : ndarray, shape (n, 3)
+            Tool positions [m].
+        rot : ndarray, shape (n, 3, 3)
+        jac : ndarray, shape (n, 6, n_joints)
+            Linear (rows 0-2, [m per rad or m/m]) and angular (rows 3-5) velocity of
+            the tool frame per joint velocity, in the tool frame (pinocchio's LOCAL).
+        """
+        chain = self._chain()
+        assert chain is not None
+        n = q.shape[0]
+        rots = [np.broadcast_to(np.eye(3), (n, 3, 3))]
+        poss = [np.zeros((n, 3))]
+        world_axes = []
+        for parent, iq, r_pl, t_pl, axis, revolute in chain:
+            r_par, p_par = rots[parent], poss[parent]
+            r_j = r_par @ r_pl  # (n, 3, 3)
+            p_j = p_par + r_par @ t_pl
+            qi = q[:, iq]
+            if revolute:
+                c, s = np.cos(qi), np.sin(qi)
+                k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                              [-axis[1], axis[0], 0.0]])
+                motion = (np.eye(3) + s[:, None, None] * k
+                          + (1.0 - c)[:, None, None] * (k @ k))  # Rodrigues
+                r_i = r_j @ motion
+                p_i = p_j
+            else:
+                r_i = r_j
+                p_i = p_j + (r_j @ axis) * qi[:, None]
+            world_axes.append((r_j @ axis, p_i, revolute))
+            rots.append(r_i)
+            poss.append(p_i)
+        frame = self.model.frames[self.frame_id]
+        r_par, p_par = rots[int(frame.parentJoint)], poss[int(frame.parentJoint)]
+        rot = r_par @ np.array(frame.placement.rotation)
+        pos = p_par + r_par @ np.array(frame.placement.translation)
+        jw = np.zeros((n, 6, self.n_joints))
+        for (_parent, iq, *_rest), (w, p_i, revolute) in zip(chain, world_axes):
+            if revolute:
+                jw[:, :3, iq] = np.cross(w, pos - p_i)
+                jw[:, 3:, iq] = w
+            else:
+                jw[:, :3, iq] = w
+        rt = np.swapaxes(rot, 1, 2)
+        jac = np.concatenate([rt @ jw[:, :3], rt @ jw[:, 3:]], axis=1)
+        return pos, rot, jac
+
+    def ik_near_many(self, positions: np.ndarray, rotations: np.ndarray,
+                     seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`ik_near` of many poses, vectorised where the seeds are close.
+
+        The poses whose seed is within :data:`IK_BATCH_ENTRY` of its pose take
+        the IK's Newton steps all at once (the forward kinematics and Jacobians of
+        the chain vectorised over the poses, the pose error to first order, which
+        is exact to its square): steps until the error is below the tolerance,
+        then the one polishing step, as :meth:`ik_near` does. The others, and any
+        not converged after :data:`IK_BATCH_ITER` steps, are solved one by one by
+        :meth:`ik_near`'s solver from their seeds. The solutions are those of
+        :meth:`ik_near` (to round-off).
+
+        Parameters
+        ----------
+        positions : ndarray, shape (n, 3)
+            Tool positions [m].
+        rotations : ndarray, shape (n, 3, 3)
+            Tool rotation matrices (proper rotations, not checked).
+        seeds : ndarray, shape (n, n_joints)
+            Seeds [rad or m].
+
+        Returns
+        -------
+        q : ndarray, shape (n, n_joints)
+            Solutions (NaN rows where the solver did not converge).
+        ok : ndarray of bool, shape (n,)
+            Where it converged.
+        """
+        seeds = np.asarray(seeds, dtype=np.float64)
+        n = seeds.shape[0]
+        q = seeds.copy()
+        ok = np.zeros(n, dtype=bool)
+        lo, hi, scale, damping = self._ik_constants()
+        active = np.arange(n) if self._chain() is not None else np.zeros(0, dtype=int)
+        for it in range(IK_BATCH_ITER):
+            if not active.size:
+                break
+            qa = q[active]
+            pos, rot, jac = self._fk_jacobian_many(qa)
+            rt = np.swapaxes(rot, 1, 2)
+            rel = rt @ rotations[active]  # current^-1 target (rotation part)
+            lin = np.einsum("nij,nj->ni", rt, positions[active] - pos)
+            ang = 0.5 * np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0],
+                                  rel[:, 1, 0] - rel[:, 0, 1]], axis=-1)
+            es = np.concatenate([lin, ang], axis=1) * scale
+            err = np.abs(es).max(axis=1)
+            if it == 0:  # only seeds close to their pose (principal rotation branch)
+                near = (err < IK_BATCH_ENTRY) & (np.trace(rel, axis1=1, axis2=2) > 1.0)
+                active, qa, jac, es, err = active[near], qa[near], jac[near], es[near], err[near]
+            js = jac * scale[None, :, None]
+            jt = np.swapaxes(js, 1, 2)
+            y = np.linalg.solve(js @ jt + damping, es[:, :, None])
+            dq = (jt @ y)[:, :, 0]
+            step = np.abs(dq).max(axis=1)
+            big = step > IK_MAX_STEP
+            dq[big] *= (IK_MAX_STEP / step[big])[:, None]
+            q[active] = np.clip(qa + dq, lo, hi)
+            conv = err < IK_TOL  # this step was the polishing one
+            ok[active[conv]] = True
+            active = active[~conv]
+        for i in np.nonzero(~ok)[0]:
+            sol = self._solve_from(Pose.trusted(positions[i], rotations[i]), seeds[i])
+            if sol is not None:
+                q[i] = sol
+                ok[i] = True
+            else:
+                q[i] = np.nan
+        return q, ok
 
     def ik_near(self, pose: Pose, seed: Any) -> np.ndarray:
         """Numeric IK started at ``seed`` (n_joints,); the solution nearest the seed's branch.

@@ -98,10 +98,17 @@ class ChainJointPath:
 
     def ik(self, s: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
         pos, rot = self.poses(s, k)
-        out = np.empty((s.size, self.n_joints))
-        for i in range(s.size):
+        return self._solve(pos, rot, k, seeds)
+
+    def _solve(self, pos: np.ndarray, rot: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
+        """IK of the poses ``pos`` (n, 3), ``rot`` (n, 3, 3) on pieces ``k`` from ``seeds``
+        (n, m), one by one."""
+        out = np.empty((pos.shape[0], self.n_joints))
+        ik_near = self.robot.ik_near
+        trusted = Pose.trusted
+        for i in range(pos.shape[0]):
             try:
-                out[i] = self.robot.ik_near(Pose.trusted(pos[i], rot[i]), seeds[i])
+                out[i] = ik_near(trusted(pos[i], rot[i]), seeds[i])
             except UnreachableError as exc:
                 lab = self.labels[self.pieces[int(k[i])].motion]
                 p = pos[i]
@@ -109,6 +116,24 @@ class ChainJointPath:
                     f"{lab}: point ({1e3 * p[0]:.3f}, {1e3 * p[1]:.3f}, {1e3 * p[2]:.3f}) mm "
                     f"of the path is unreachable: {exc}") from None
         return out
+
+    def _stencil_ik(self, pts: np.ndarray, k: np.ndarray) -> np.ndarray:
+        """Joints (n, 7, m) at the stencil points ``pts`` (n, 7) on pieces ``k`` (n,), each
+        seeded from the walked branch (all at once where the robot offers it:
+        ``ik_near_many``)."""
+        n = pts.shape[0]
+        m = self.n_joints
+        kk = np.repeat(k, 7)
+        flat = pts.ravel()
+        pos, rot = self.poses(flat, kk)
+        seeds = self.seeds(np.clip(flat, 0.0, self.length))
+        many = getattr(self.robot, "ik_near_many", None)
+        if many is None:
+            return self._solve(pos, rot, kk, seeds).reshape(n, 7, m)
+        q, ok = many(pos, rot, seeds)
+        if not ok.all():  # raises at the first failure, with the robot's message
+            q[~ok] = self._solve(pos[~ok], rot[~ok], kk[~ok], seeds[~ok])
+        return q.reshape(n, 7, m)
 
     # ---- the JointPath protocol
     def derivatives(self, s: np.ndarray):
@@ -128,9 +153,7 @@ class ChainJointPath:
                        np.where(bwd[:, None], s[:, None] - hk[:, None] * (off + 3),
                                 s[:, None] + hk[:, None] * off))
         centre = np.where(fwd | bwd, 0, 3)
-        kk = np.repeat(k, 7)
-        flat = pts.ravel()
-        q_all = self.ik(flat, kk, self.seeds(np.clip(flat, 0.0, self.length))).reshape(n, 7, m)
+        q_all = self._stencil_ik(pts, k)
         q = np.empty((n, m))
         d = [np.empty((n, m)) for _ in range(3)]
         q[:] = q_all[np.arange(n), centre]

@@ -233,12 +233,21 @@ def blended_orientation(qa0, qa1, len_a: float, sa: float, qb0, qb1, len_b: floa
         ub = (sb - (length - s)) / len_b
         a = slerp_any(qa0, qa1, ua)
         b = slerp_any(qb0, qb1, ub)
-        w = smootherstep(s / length)
-        out = np.empty((s.size, 4))
-        for i in range(s.size):
-            out[i] = slerp(a[i], b[i], float(w[i]))
-        return out
+        return slerp_rows(a, b, smootherstep(s / length))
     return fn
+
+
+def slerp_rows(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Row by row :func:`slerp` of unit quaternions ``a`` and ``b`` (n, 4) at fractions ``w`` (n,)."""
+    dot = np.einsum("ij,ij->i", a, b)
+    b = np.where((dot < 0.0)[:, None], -b, b)
+    th = np.arccos(np.minimum(1.0, np.abs(dot)))
+    small = th < SLERP_SMALL_ANGLE
+    sn = np.where(small, 1.0, np.sin(th))
+    ca = np.where(small, 1.0 - w, np.sin((1.0 - w) * th) / sn)
+    cb = np.where(small, w, np.sin(w * th) / sn)
+    out = ca[:, None] * a + cb[:, None] * b
+    return out / np.linalg.norm(out, axis=1)[:, None]
 
 
 def slerp_any(q0: np.ndarray, q1: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -384,7 +384,7 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
 
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
                init: tuple[np.ndarray, np.ndarray] | None = None,
-               settled: bool = False) -> GridSolution:
+               settled: bool = False, near: bool = False) -> GridSolution:
     """Solve the grid problem (see the module notes); raises RuntimeError if the solver fails.
 
     The problem is solved in scaled units (``s / L``, ``t / T0`` with ``T0``
@@ -394,7 +394,9 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
     (``jerk_free_time`` is then NaN). ``settled``: ``init`` is a solution of
     this grid with about the same limits, so its active limits are those of the
     first round (which then leaves out the rows far from them, see SCREEN_SLACK;
-    the result is the same, only sooner).
+    the result is the same, only sooner). ``near``: ``init`` is a converged
+    solution of this grid less a few nodes (cells split in two), interpolated:
+    its active limits are taken for the first round's screening too.
     """
     L = float(p.s[-1] - p.s[0])
     T0 = _time_scale(p)
@@ -409,7 +411,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
         x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
-    sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None)
+    sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None,
+                        near and init is not None)
     sol.x = sol.x * (L / T0) ** 2
     sol.u = sol.u * L / as_
     sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
@@ -422,7 +425,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
 
 def _solve_scaled(p: GridProblem, max_rounds: int,
                   init: tuple[np.ndarray, np.ndarray] | None = None,
-                  settled: bool = False) -> GridSolution:
+                  settled: bool = False, near: bool = False) -> GridSolution:
     import clarabel
 
     s = p.s
@@ -617,7 +620,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         # them, the round is solved again with every row (the result is the same either
         # way: the solution of fewer rows that keeps all of them is the optimum)
         t_prev = times[-2] if jerk_rounds >= 2 else (t_init if jerk_rounds == 1 else math.nan)
-        if z_prev is not None and ((settled and not times)
+        if z_prev is not None and (((settled or near) and not times)
                                    or (times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1])):
             keep = _near(A_in_all, b_in_all, z_prev)
             # the velocity and speed-cap rows only loosely (a cruise at the cap stays exact)
