@@ -392,3 +392,11 @@ def test_random_cells_never_produce_a_colliding_plan(seed):
     assert rep.ok, rep.all_violations()[:3]
     assert rep.cell.min_clearance >= sc.cell.clearance - CLEARANCE_ATOL
     assert plan.info["lower_bound_s"] <= plan.total_s * (1 + 1e-12)
+
+
+def test_cell_check_of_a_job_without_a_cell_is_a_typed_error():
+    from trajkit.io import seed_job_path
+
+    plan = plan_cycle(load_job(seed_job_path()), "ptp")
+    with pytest.raises(InvalidInputError, match="has no cell to check against"):
+        check_cell(plan)

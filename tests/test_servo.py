@@ -115,3 +115,12 @@ def test_brake_and_drive_limit():
 def test_servo_params_errors(kw, pattern):
     with pytest.raises(InvalidInputError, match=pattern):
         ServoParams(**kw)
+
+
+def test_following_error_plot_needs_the_recorded_series():
+    pytest.importorskip("matplotlib")
+    from trajkit.plot.runtime import plot_following_error
+
+    rep = simulate(plan_move(0.0, 1.0, LIM), DT, ServoParams(), record=False)
+    with pytest.raises(InvalidInputError, match="record=True"):
+        plot_following_error(rep)

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import InvalidInputError
 from .cell import PRISM_FIELDS, Prisms, moving_prisms, prism_signed_distance, stack_prisms
 from .planners import HORIZONTAL_JOINTS, CyclePlan
 
@@ -348,13 +349,13 @@ def check_cell(plan: CyclePlan, samples_per_s: float = SAMPLES_PER_S) -> CellRep
 
     Raises
     ------
-    ValueError
+    InvalidInputError
         The scenario has no cell.
     """
     sc = plan.scenario
     cell = sc.cell
     if cell is None:
-        raise ValueError(f"scenario {sc.name!r} has no cell to check against")
+        raise InvalidInputError(f"scenario {sc.name!r} has no cell to check against")
     tl = plan.timeline
     rob = sc.robot
     dims = (sc.box.length, sc.box.width, sc.box.height)

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InvalidInputError
 from . import require_matplotlib, save_figure
 
 __all__ = ["plot_following_error", "plot_stream"]
@@ -24,7 +25,8 @@ def plot_following_error(report: Any, path: str | os.PathLike | None = None,
     Parameters
     ----------
     report : SimulationReport
-        From :func:`trajkit.runtime.simulate` with ``record=True``.
+        From :func:`trajkit.runtime.simulate` with ``record=True``
+        (``InvalidInputError`` otherwise).
     path : str or PathLike, optional
         Write the figure there (by extension), atomically.
     scale : sequence of float, optional
@@ -36,6 +38,9 @@ def plot_following_error(report: Any, path: str | os.PathLike | None = None,
     -------
     matplotlib.figure.Figure
     """
+    if report.t is None or report.following_error is None:
+        raise InvalidInputError("plot_following_error needs a report simulated with record=True "
+                                "(this one keeps no time series)")
     plt = require_matplotlib()
     n = len(report.names)
     sc = np.ones(n) if scale is None else np.asarray(scale, dtype=float)
