@@ -354,11 +354,13 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
         tb += brk[k, 0]
         vsc = max(vsc, abs(v))
         asc = max(asc, abs(a), abs(brk[k, 2]))
+    # the brake ends on the boundary of the inside set; its end state carries
+    # the round-off of the brake's own velocity scale: a velocity a few ulps
+    # beyond the limit is put on it (the shapes of step 1 start within it)
+    if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
+        v = lim[0] if v > 0.0 else -lim[0]
     if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
-        # the brake ends on the boundary of the inside set; its end state carries
-        # the round-off of the brake's own velocity and acceleration scale
-        if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
-            v = lim[0] if v > 0.0 else -lim[0]
+        # ... and of its acceleration scale
         am = max(lim[1], lim[3])
         if abs(a) > am and abs(a) - am <= BRAKE_SNAP_RTOL * asc:
             a = am if a > 0.0 else -am
