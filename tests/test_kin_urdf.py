@@ -22,6 +22,18 @@ def robots():
     return UrdfRobot(URDF, "tool0"), default_arm6()
 
 
+
+def _assert_batch_matches_pinocchio(rob, q, pin):
+    """The vectorised FK and tool-frame Jacobians equal pinocchio's, row by row."""
+    pos, rot, jac = rob._fk_jacobian_many(q)
+    for i in range(q.shape[0]):
+        pose = rob.fk(q[i])
+        ref = pin.computeFrameJacobian(rob.model, rob.data, q[i], rob.frame_id,
+                                       pin.ReferenceFrame.LOCAL)
+        assert np.abs(pose.position - pos[i]).max() < 1e-12
+        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
+        assert np.abs(ref - jac[i]).max() < 1e-12
+
 def test_structure_from_urdf(robots):
     urdf, arm = robots
     assert urdf.joint_names == arm.joint_names
@@ -84,14 +96,7 @@ def test_vectorised_fk_and_jacobian_match_pinocchio(name):
     rng = np.random.default_rng(11)
     lo, hi = rob.joint_ranges[:, 0], rob.joint_ranges[:, 1]
     q = lo + (hi - lo) * rng.uniform(size=(50, rob.n_joints))
-    pos, rot, jac = rob._fk_jacobian_many(q)
-    for i in range(q.shape[0]):
-        pose = rob.fk(q[i])
-        ref = pin.computeFrameJacobian(rob.model, rob.data, q[i], rob.frame_id,
-                                       pin.ReferenceFrame.LOCAL)
-        assert np.abs(pose.position - pos[i]).max() < 1e-12
-        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
-        assert np.abs(ref - jac[i]).max() < 1e-12
+    _assert_batch_matches_pinocchio(rob, q, pin)
 
 
 @pytest.mark.parametrize("name", ["ur5", "panda"])
@@ -141,11 +146,4 @@ def test_vectorised_fk_with_unaligned_and_prismatic_joints(tmp_path):
     assert rob._chain() is not None
     rng = np.random.default_rng(2)
     q = rng.uniform(-1.0, 1.0, size=(20, rob.n_joints))
-    pos, rot, jac = rob._fk_jacobian_many(q)
-    for i in range(q.shape[0]):
-        pose = rob.fk(q[i])
-        ref = pin.computeFrameJacobian(rob.model, rob.data, q[i], rob.frame_id,
-                                       pin.ReferenceFrame.LOCAL)
-        assert np.abs(pose.position - pos[i]).max() < 1e-12
-        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
-        assert np.abs(ref - jac[i]).max() < 1e-12
+    _assert_batch_matches_pinocchio(rob, q, pin)

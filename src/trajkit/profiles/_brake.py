@@ -269,6 +269,31 @@ def _seq(buf, k, t, j, a):
 
 
 @jit_raw
+def _walk_cut(buf, k, v, V, A1, K1, A2, K2, out, fb):
+    """Copy the ``k`` phases of :func:`_seq` in ``buf`` (from velocity ``v``) to ``out``,
+    cut at the first instant inside the limits: (phase count, whether it got inside)."""
+    n = 0
+    for i in range(k):
+        tt = buf[80 + i]
+        jj = buf[84 + i]
+        aa = buf[88 + i]
+        t = _first_inside(v, aa, jj, tt, V, A1, K1, A2, K2, fb)
+        if t < math.inf:
+            if t > 0.0:
+                out[n, 0] = t
+                out[n, 1] = jj
+                out[n, 2] = aa
+                n += 1
+            return n, True
+        out[n, 0] = tt
+        out[n, 1] = jj
+        out[n, 2] = aa
+        n += 1
+        _, v, _ = phase_end(0.0, v, aa, jj, tt)
+    return n, False
+
+
+@jit_raw
 def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
     """Brake candidate ``bump(vt)``: the fastest velocity change to ``(vt, 0)``
     (``vt = +-V``), held at ``-+a_max_decel`` when its peak would exceed it,
@@ -344,25 +369,7 @@ def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
             k = _seq(buf, k, (am - c) * Km, s / Km, -s * am)
             k = _seq(buf, k, th, 0.0, -s * c)
             k = _seq(buf, k, -c * Km, -s / Km, -s * c)
-    # walk it, cut at the first instant inside
-    n = 0
-    for i in range(k):
-        tt = buf[80 + i]
-        jj = buf[84 + i]
-        aa = buf[88 + i]
-        t = _first_inside(v, aa, jj, tt, V, A1, K1, A2, K2, fb)
-        if t < math.inf:
-            if t > 0.0:
-                out[n, 0] = t
-                out[n, 1] = jj
-                out[n, 2] = aa
-                n += 1
-            return n
-        out[n, 0] = tt
-        out[n, 1] = jj
-        out[n, 2] = aa
-        n += 1
-        _, v, a = phase_end(0.0, v, aa, jj, tt)
+    n, _inside = _walk_cut(buf, k, v, V, A1, K1, A2, K2, out, fb)
     return n
 
 
@@ -516,26 +523,8 @@ def brake_ruckig(v, a, V, A1, K1, A2, K2, out, buf):
         k = _seq(buf, k, t1, 0.0, a1)
     if a1 != 0.0:
         k = _seq(buf, k, abs(a1) / J, -J if a1 > 0.0 else J, a1)
-    fb = buf[:78]
-    n = 0
-    for i in range(k):
-        tt = buf[80 + i]
-        jk = buf[84 + i]
-        ak = buf[88 + i]
-        t = _first_inside(v, ak, jk, tt, V, A1, K1, A2, K2, fb)
-        if t < math.inf:
-            if t > 0.0:
-                out[n, 0] = t
-                out[n, 1] = jk
-                out[n, 2] = ak
-                n += 1
-            return n
-        out[n, 0] = tt
-        out[n, 1] = jk
-        out[n, 2] = ak
-        n += 1
-        _, v, _ = phase_end(0.0, v, ak, jk, tt)
-    return -1
+    n, inside_ = _walk_cut(buf, k, v, V, A1, K1, A2, K2, out, buf[:78])
+    return n if inside_ else -1
 
 
 @jit_raw
