@@ -22,8 +22,9 @@ checked while outside):
   the **first instant inside the limits** -- found exactly: the boundary of
   the inside set along a constant-jerk phase is where ``v``, ``a`` or the
   natural velocity reach a bound, all roots of quadratics;
-* ``bump(+-v_max)``: the fastest velocity change to ``(+-v_max, 0)``, cut
-  at the first instant inside;
+* ``bump(+-v_max)``: the fastest velocity change to ``(+-v_max, 0)`` (from a
+  deceleration beyond ``a_max_decel``: ramped back to it, held, ramped to
+  zero), cut at the first instant inside;
 * ``natural``: the acceleration ramped to zero at each leg's jerk limit
   (through a reversal), then the bump to ``(sign(v) v_max, 0)``;
 * ``hold``: slowing down, the acceleration held (jerk 0) up to the first
@@ -311,6 +312,18 @@ def brake_bump(vt, v, a, V, A1, K1, A2, K2, out, buf):
         # frame with v > V > 0: down to a valley c <= min(a, 0), back up to 0
         vm = sv * v
         am = sv * a
+        if am < -A2:
+            # slowing down beyond -a_max_decel: back up to it, hold, up to zero
+            c = -A2
+            th = (V - vm + 0.5 * am * am * K2) / c
+            if th < 0.0:
+                return -1  # ramping straight to zero already ends below V
+            k = _seq(buf, k, (c - am) * K2, sv / K2, sv * am)
+            if th > 0.0:
+                k = _seq(buf, k, th, 0.0, sv * c)
+            k = _seq(buf, k, -c * K2, sv / K2, sv * c)
+            n, _inside = _walk_cut(buf, k, v, V, A1, K1, A2, K2, out, fb)
+            return n
         if am > 0.0:
             c2 = (vm - V + 0.5 * am * am * K1) / K2
         else:

@@ -359,6 +359,10 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     # beyond the limit is put on it (the shapes of step 1 start within it)
     if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
         v = lim[0] if v > 0.0 else -lim[0]
+    # ... and an acceleration a few ulps beyond its leg's bound is put on it
+    al = lim[3] if v * a < 0.0 else lim[1]
+    if abs(a) > al and abs(a) - al <= BRAKE_SNAP_RTOL * asc:
+        a = al if a > 0.0 else -al
     if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
         # ... and of its acceleration scale
         am = max(lim[1], lim[3])
@@ -367,6 +371,11 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
         if abs(a) <= BRAKE_SNAP_RTOL * asc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
                                                             lim[4]):
             a = 0.0
+        # a brake cut at a velocity reversal ends at v = 0 up to round-off (the
+        # leg, hence the acceleration bound, changes there)
+        if abs(v) <= BRAKE_SNAP_RTOL * vsc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
+                                                           lim[4]):
+            v = 0.0
         if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
             return -1, 0.0
     s1[0] = p

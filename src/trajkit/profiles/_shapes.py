@@ -70,7 +70,7 @@ NPH = 40
 NVALID = 64
 
 #: Secant steps polishing a root on the exact residual.
-POLISH_STEPS = 6
+POLISH_STEPS = 16
 
 #: A residual below this fraction of the problem's scale is exact (no polishing).
 POLISH_RTOL = 1e-15
