@@ -56,15 +56,36 @@ def _check(prof, lim):
 
 
 def _overspeed(prof, lim):
-    """Whether |v| anywhere exceeds what the start forces: v_max, |v0|, or the speed an
-    acceleration that speeds the axis up carries it to at the speeding-up jerk."""
+    """Whether |v| anywhere exceeds what the start forces: in the start velocity's
+    direction v_max, |v0| or the speed an acceleration that speeds the axis up
+    carries it to at the speeding-up jerk; in the other direction v_max or the
+    speed reached when an acceleration that slows the axis down cannot be ramped
+    to zero (at the slowing-down jerk) before the velocity reverses."""
     v0, a0 = prof.start_state[1], prof.start_state[2]
     carry = a0 * a0 / (2.0 * lim.j_max) if v0 * a0 > 0.0 else 0.0
-    bound = max(lim.v_max, abs(v0) + carry)
+    ahead = max(lim.v_max, abs(v0) + carry)
+    back = lim.v_max
+    if v0 * a0 < 0.0:
+        az2 = a0 * a0 - 2.0 * abs(v0) * lim.j_max_decel
+        if az2 > 0.0:
+            back = max(back, az2 / (2.0 * lim.j_max))
+    if v0 == 0.0:
+        ahead = back = max(lim.v_max, a0 * a0 / (2.0 * lim.j_max))
     b = prof.boundary_states()
     t = np.linspace(0.0, prof.duration, 4001)
-    v = np.concatenate([np.abs(b[:, 1]), np.abs(np.asarray(prof.sample(t).velocity))])
-    return bool(v.max() > bound * (1 + 1e-9))
+    v = np.concatenate([b[:, 1], np.asarray(prof.sample(t).velocity)])
+    same = v * v0 >= 0.0
+    return bool(np.any(np.abs(v[same]) > ahead * (1 + 1e-9))
+                or np.any(np.abs(v[~same]) > back * (1 + 1e-9)))
+
+
+def _position_rtol(s, g):
+    """Relative duration resolution of a problem whose positions are known to one
+    ulp each: a distance of a few ulps of the positions (found by the sweep: a
+    rest-to-rest move of 7.6e-9 m at position -0.386, where one ulp is 7e-9 of
+    the distance) fixes the duration only to about a third of that."""
+    d = abs(g[0] - s[0])
+    return min(4.0 * 2.2e-16 * max(abs(s[0]), abs(g[0])) / max(d, 1e-300), 1e-6)
 
 
 def _brake_jerks_ok(prof, lim):
@@ -275,6 +296,8 @@ def test_asymmetric_never_slower_than_the_references(capsys):
         p = plan_state_to_state(s, g, lim)
         _check(p, lim)
         assert _brake_jerks_ok(p, lim)
+        assert not _brake_lingers(p, lim), (i, case)
+        assert not _overspeed(p, lim), (i, case)
         T = p.duration
         # the retired scan planner (it brakes to a fixed state first, then scans)
         try:
@@ -293,11 +316,12 @@ def test_asymmetric_never_slower_than_the_references(capsys):
                 continue
             if exact_check(q, lim) is not None or _overspeed(q, lim):
                 # its profile breaks a limit after the brake (found by the sweep: a
-                # brake start 342 m from the goal at 12 m/s where v_max is 1.9 m/s)
+                # brake start 342 m from the goal at 12 m/s where v_max is 1.9 m/s;
+                # a start at -2.32 m/s reversed to +2.13 m/s where v_max is 1.32)
                 n_scan_invalid += 1
                 continue
             n_scan += 1
-            assert T <= old * (1 + RTOL) + 1e-15, (i, case, T, old)
+            assert T <= old * (1 + RTOL + _position_rtol(s, g)) + 1e-15, (i, case, T, old)
             improved += T < old * (1 - RTOL)
         if s[:2] == g[:2] or brake:
             continue

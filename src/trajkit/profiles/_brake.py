@@ -37,7 +37,9 @@ checked while outside):
 
 A candidate whose velocity exceeds what the start state forces (the
 velocity reached by ramping its acceleration to zero, :func:`forced_speed`)
-is not used.
+is not used, nor one that keeps an acceleration beyond its leg's bound other
+than by ramping it back at that leg's jerk limit (:func:`lingers`): a brake
+leaves the limits no longer and no further than the start state forces.
 
 The planner (:mod:`._kernel`) plans from the end of each candidate that
 ends inside and keeps the fastest total: the brake is part of the
@@ -53,7 +55,7 @@ from ._compile import jit_raw
 from ._phase import phase_end
 
 __all__ = ["BRAKE_PHASES", "inside", "brake_path", "brake_bump", "brake_natural", "brake_hold",
-           "brake_ruckig", "forced_speed", "peak_speed"]
+           "brake_ruckig", "forced_speed", "lingers", "peak_speed"]
 
 #: Largest number of phases of one brake candidate.
 BRAKE_PHASES = 10
@@ -542,27 +544,34 @@ def brake_ruckig(v, a, V, A1, K1, A2, K2, out, buf):
 
 @jit_raw
 def forced_speed(v, a, V, A1, K1, A2, K2):
-    """The largest |v| a brake from (v, a) may reach: the start's own velocity or
-    the peak its acceleration forces (ramped to zero at the leg's jerk limit,
-    through a reversal when it comes), at least ``V``."""
+    """The largest speeds a brake from (v, a) may reach: ``(ahead, back)``, in the
+    direction of the start velocity (of its acceleration at ``v = 0``) and in the
+    other. Ahead: the start's own speed or the peak its acceleration forces
+    (ramped to zero at the speeding-up jerk limit); back: the peak reached when
+    an acceleration that slows the axis down cannot be ramped to zero (at the
+    slowing-down jerk limit) before the velocity reverses. At least ``V`` each."""
     if v < 0.0 or (v == 0.0 and a < 0.0):
         v = -v
         a = -a
-    out = max(V, v)
+    ahead = max(V, v)
+    back = V
     if a > 0.0:
-        out = max(out, v + 0.5 * a * a * K1)
+        ahead = max(ahead, v + 0.5 * a * a * K1)
     elif a < 0.0:
         rem = v - 0.5 * a * a * K2
         if rem < 0.0 and K2 > 0.0:
             az2 = a * a - 2.0 * v / K2
-            out = max(out, 0.5 * az2 * K1)
-    return out
+            back = max(back, 0.5 * az2 * K1)
+    return ahead, back
 
 
 @jit_raw
 def peak_speed(ph, n, v, a):
-    """Exact max |v| along phases ``ph[:n]`` from (v, a) (phase ends and a = 0)."""
-    out = abs(v)
+    """Exact largest speeds along phases ``ph[:n]`` from (v, a) (phase ends and
+    a = 0): ``(ahead, back)`` as in :func:`forced_speed`."""
+    sg = 1.0 if (v > 0.0 or (v == 0.0 and a >= 0.0)) else -1.0
+    ahead = max(sg * v, 0.0)
+    back = 0.0
     for k in range(n):
         dt = ph[k, 0]
         j = ph[k, 1]
@@ -571,7 +580,74 @@ def peak_speed(ph, n, v, a):
             ta = -a / j
             if 0.0 < ta < dt:
                 _, vv, _ = phase_end(0.0, v, a, j, ta)
-                out = max(out, abs(vv))
+                ahead = max(ahead, sg * vv)
+                back = max(back, -sg * vv)
         _, v, a = phase_end(0.0, v, a, j, dt)
-        out = max(out, abs(v))
-    return out
+        ahead = max(ahead, sg * v)
+        back = max(back, -sg * v)
+    return ahead, back
+
+
+@jit_raw
+def _lingers_piece(v, a, j, t0, t1, dt, A1, K1, A2, K2):
+    """:func:`lingers` on the piece ``[t0, t1]`` of one phase (no leg change inside)."""
+    tol = 1e-9
+    if not (t1 - t0 > tol * dt):
+        return False
+    tm = 0.5 * (t0 + t1)
+    vm = v + tm * (a + 0.5 * tm * j)
+    am = a + j * tm
+    amax = max(abs(a + j * t0), abs(a + j * t1))
+    speeding = vm * am > 0.0
+    Ab = A1 if speeding else A2
+    Kb = K1 if speeding else K2
+    if amax > Ab * (1.0 + tol):
+        return not (j * am < 0.0 and abs(j) * Kb >= 1.0 - tol)
+    return False
+
+
+@jit_raw
+def lingers(ph, n, v, a, A1, K1, A2, K2):
+    """True when the phases ``ph[:n]`` from ``(v, a)`` hold an acceleration beyond
+    the bound of its leg (``a_max`` while ``|v|`` grows, ``a_max_decel`` while it
+    shrinks) other than by ramping it back towards zero at that leg's jerk limit:
+    such a brake stays outside the limits longer than the start state forces."""
+    for k in range(n):
+        dt = ph[k, 0]
+        j = ph[k, 1]
+        a = ph[k, 2]
+        # the legs change where v = 0 or a = 0 inside the phase: up to three cuts
+        c1 = math.inf
+        c2 = math.inf
+        c3 = math.inf
+        if j != 0.0:
+            ta = -a / j
+            if 0.0 < ta < dt:
+                c1 = ta
+            disc = a * a - 2.0 * j * v
+            if disc >= 0.0:
+                sq = math.sqrt(disc)
+                r1 = (-a - sq) / j
+                r2 = (-a + sq) / j
+                if 0.0 < r1 < dt:
+                    c2 = r1
+                if 0.0 < r2 < dt:
+                    c3 = r2
+        elif a != 0.0 and 0.0 < -v / a < dt:
+            c1 = -v / a
+        # sort the three cuts
+        if c1 > c2:
+            c1, c2 = c2, c1
+        if c2 > c3:
+            c2, c3 = c3, c2
+        if c1 > c2:
+            c1, c2 = c2, c1
+        t0 = 0.0
+        for c in (c1, c2, c3, dt):
+            t1 = min(c, dt)
+            if t1 > t0:
+                if _lingers_piece(v, a, j, t0, t1, dt, A1, K1, A2, K2):
+                    return True
+                t0 = t1
+        _, v, _ = phase_end(0.0, v, a, j, dt)
+    return False

@@ -35,6 +35,7 @@ from ._brake import (
     brake_ruckig,
     forced_speed,
     inside,
+    lingers,
     peak_speed,
 )
 from ._compile import jit_raw
@@ -339,9 +340,15 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
         nb = brake_ruckig(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4], brk, bbuf)
     if nb < 0:
         return -1, 0.0
-    # a brake exceeds the velocity limit no more than the start state forces
-    if nb > 0 and peak_speed(brk, nb, st0[1], st0[2]) > forced_speed(
-            st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4]) * (1.0 + BRAKE_SNAP_RTOL):
+    # a brake exceeds the velocity limit no more than the start state forces (in
+    # each direction)
+    if nb > 0:
+        pa, pb = peak_speed(brk, nb, st0[1], st0[2])
+        fa, fb = forced_speed(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4])
+        if pa > fa * (1.0 + BRAKE_SNAP_RTOL) or pb > fb * (1.0 + BRAKE_SNAP_RTOL):
+            return -1, 0.0
+    # ... nor an acceleration beyond its leg's bound longer than it forces
+    if nb > 0 and lingers(brk, nb, st0[1], st0[2], lim[1], lim[2], lim[3], lim[4]):
         return -1, 0.0
     p = 0.0
     v = st0[1]
