@@ -124,22 +124,18 @@ def test_compiled_sync_requested_duration_and_errors():
 
 def test_sync_moves_on_when_step2_finds_no_profile(caplog):
     """Asymmetric limits with a reversal: step 2 of axis 1 finds no profile of
-    the minimum common duration (12.71 s, a gap of the step-2 families); the
-    common duration moves up to one every axis fills, with a warning."""
-    cs = [((-1.9931397937526203, 3.3691646428468474, -0.30036739222919967),
-           (-1.9931397937526203, -2.987883453134689, -0.4685450086222319),
-           (7.126955178120614, 0.6404324503828689, 1.152414829166557, 0.5285527758909313,
-            0.2824226894294262)),
-          ((0.6027210000646839, 2.6293109379055264, 0.41655084856356034),
-           (26.20601643993708, -1.1333807935320261, 0.19487237139788888),
-           (2.8011353116475397, 0.7896102423721866, 1.2070748106516003, 2.570995917319238,
-            4.988926877759679))]
-    S = [c[0] for c in cs]
-    G = [c[1] for c in cs]
-    lims = [AxisLimits(*c[2]) for c in cs]
+    the common duration 10 s set by axis 0 (its durations 6.91..13.87 s are a
+    gap of the step-2 families and of the cruise fallback); the common duration
+    moves up to one every axis fills, with a warning."""
+    S = [(0.0, 0.0, 0.0), (-0.37060783406439646, -0.540875349469885, 0.04914176271392083)]
+    G = [(8.0, 0.0, 0.0), (-3.220893541416452, -0.8468465473234723, -0.06935750650130823)]
+    lims = [AxisLimits(1.0, 1.0, 1.0),
+            AxisLimits(0.8468465473234723, 0.3302788257239121, 19.796658314532166,
+                       0.06935750650130823, 11.102447246912389)]
     with caplog.at_level("WARNING", logger="trajkit.sync"):
         t = plan_ptp_states(S, G, lims)
     assert verify_trajectory(t).ok
     mins = [feasible_durations(s, g, lim).minimum for s, g, lim in zip(S, G, lims)]
-    assert t.duration >= max(mins)
+    assert max(mins) == pytest.approx(10.0)
+    assert t.duration > 13.86
     assert "step 2 found no profile" in caplog.text

@@ -38,6 +38,7 @@ from ._brake import (
     lingers,
     peak_speed,
 )
+from ._check import check
 from ._compile import jit_raw
 from ._phase import phase_end
 from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
@@ -78,6 +79,12 @@ BLOCK_MERGE_RTOL = 1e-10
 #: A requested duration within this (relative) of the minimum is the minimum.
 DURATION_RTOL = 1e-12
 
+#: Shape code (step 2, before the fixed-duration offset) of the cruise fallback.
+SHAPE_CRUISE_FALLBACK = 15
+
+#: Cruise velocities sampled by the step-2 fallback (then bisection).
+FALLBACK_SAMPLES = 33
+
 # layout
 IN_P0, IN_V0, IN_A0, IN_PF, IN_VF, IN_AF = 0, 1, 2, 3, 4, 5
 IN_V, IN_A1, IN_J1, IN_A2, IN_J2 = 6, 7, 8, 9, 10
@@ -100,7 +107,9 @@ _BBUF = _S1 + 7
 _KEEP = _BBUF + 96
 _VALID = _KEEP + 3 * NPH
 _TS = _VALID + NVALID
-NWS = _TS + 1
+_FBA = _TS + 1                  # the cruise fallback of step 2: first velocity change
+_FBS = _FBA + 3 * NPH           # ... and its velocity problem
+NWS = _FBS + 7
 
 
 def workspace() -> np.ndarray:
@@ -291,10 +300,138 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
         _emit(ws, out, keep, nb + n, nb, tb + res[R_T], tmin, ts, js, as_)
         ws[OUT_SHAPE] = res[R_SHAPE] + 32
         return
+    # no family of step 2 fits: two minimum-time velocity changes around a cruise
+    fba = ws[_FBA:_FBA + 3 * NPH].reshape((NPH, 3))
+    sv = ws[_FBS:_FBS + 7]
+    for cand in range(NCAND):
+        nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
+        if nb < 0 or not (T - tb > 0.0):
+            continue
+        n = _cruise_fallback(T - tb, s1, lim, best, res, W, vec, ivl, cfg, st, fba, sv, keep, nb)
+        if n > 0:
+            _copy_rows(keep, 0, brk, nb)
+            total = tb
+            for k in range(nb, nb + n):
+                total += keep[k, 0]
+            _emit(ws, out, keep, nb + n, nb, total, tmin, ts, js, as_)
+            ws[OUT_SHAPE] = SHAPE_CRUISE_FALLBACK + 32
+            return
     ws[OUT_STATUS] = ST_NONE
     for b in range(nblk):
         if ws[OUT_BLK + 2 * b] / ts < T < ws[OUT_BLK + 2 * b + 1] / ts:
             ws[OUT_STATUS] = ST_BLOCKED
+
+
+@jit_raw
+def _vel_move(sv, v0, a0, vt, at, lim, best, res, W, vec, ivl, cfg, st):
+    """Minimum-time velocity change ``(v0, a0) -> (vt, at)``, position free (step 1,
+    phases in ``best``): (duration (inf if none), displacement, phase count)."""
+    sv[0] = 0.0
+    sv[1] = v0
+    sv[2] = a0
+    sv[3] = math.nan
+    sv[4] = vt
+    sv[5] = at
+    sv[6] = math.nan
+    res[R_ALL] = 0.0
+    step1(sv, lim, best, res, W, vec, ivl, cfg, st)
+    t = res[R_T]
+    if not (t < math.inf):
+        return math.inf, 0.0, 0
+    n = int(res[R_N])
+    p = 0.0
+    v = v0
+    a = a0
+    for k in range(n):
+        p, v, a = phase_end(p, v, best[k, 2], best[k, 1], best[k, 0])
+    return t, p, n
+
+
+@jit_raw
+def _cruise_resid(T, s1, vc, lim, best, res, W, vec, ivl, cfg, st, sv):
+    """Position residual of the cruise fallback at cruise velocity ``vc`` (NaN where
+    the two velocity changes take longer than ``T``)."""
+    ta, da, _ = _vel_move(sv, s1[1], s1[2], vc, 0.0, lim, best, res, W, vec, ivl, cfg, st)
+    if not (ta < math.inf):
+        return math.nan
+    tb, db, _ = _vel_move(sv, vc, 0.0, s1[4], s1[5], lim, best, res, W, vec, ivl, cfg, st)
+    if not (tb < math.inf):
+        return math.nan
+    tc = T - ta - tb
+    if not (tc >= 0.0):
+        return math.nan
+    return da + vc * tc + db - (s1[3] - s1[0])
+
+
+@jit_raw
+def _cruise_fallback(T, s1, lim, best, res, W, vec, ivl, cfg, st, fba, sv, keep, n0):
+    """Step 2 when no family fits: the fastest velocity change from ``s1[:3]`` to a
+    cruise ``(vc, 0)``, the cruise, the fastest velocity change to the goal's
+    ``(vf, af)``; ``vc`` in ``[-v_max, v_max]`` such that the duration is ``T``
+    and the position the goal's (sampled, then bisection). The phases go to
+    ``keep[n0:]``; returns their count (0 when none passes the exact check)."""
+    V = lim[0]
+    ns = FALLBACK_SAMPLES
+    x0 = -V
+    f0 = _cruise_resid(T, s1, x0, lim, best, res, W, vec, ivl, cfg, st, sv)
+    for i in range(1, ns):
+        x1 = -V + 2.0 * V * i / (ns - 1)
+        f1 = _cruise_resid(T, s1, x1, lim, best, res, W, vec, ivl, cfg, st, sv)
+        if f0 == f0 and f1 == f1 and (f0 == 0.0 or f0 * f1 < 0.0 or f1 == 0.0):
+            lo = x0
+            hi = x1
+            flo = f0
+            for _ in range(200):
+                if flo == 0.0:
+                    hi = lo
+                    break
+                mid = 0.5 * (lo + hi)
+                if not (lo < mid < hi):
+                    break
+                fm = _cruise_resid(T, s1, mid, lim, best, res, W, vec, ivl, cfg, st, sv)
+                if not (fm == fm):
+                    break
+                if fm * flo > 0.0:
+                    lo = mid
+                    flo = fm
+                else:
+                    hi = mid
+            for vc in (lo, hi):
+                n = _cruise_build(T, s1, vc, lim, best, res, W, vec, ivl, cfg, st, fba, sv,
+                                  keep, n0)
+                if n > 0:
+                    return n
+        x0 = x1
+        f0 = f1
+    return 0
+
+
+@jit_raw
+def _cruise_build(T, s1, vc, lim, best, res, W, vec, ivl, cfg, st, fba, sv, keep, n0):
+    """The cruise fallback's phases at ``vc`` into ``keep[n0:]``, exactly checked:
+    the phase count, 0 when it fails the check."""
+    ta, _, na = _vel_move(sv, s1[1], s1[2], vc, 0.0, lim, best, res, W, vec, ivl, cfg, st)
+    if not (ta < math.inf):
+        return 0
+    _copy_rows(fba, 0, best, na)
+    tb, _, nb = _vel_move(sv, vc, 0.0, s1[4], s1[5], lim, best, res, W, vec, ivl, cfg, st)
+    if not (tb < math.inf):
+        return 0
+    tc = T - ta - tb
+    if not (tc >= 0.0) or n0 + na + nb + 1 > NPH:
+        return 0
+    _copy_rows(keep, n0, fba, na)
+    n = n0 + na
+    keep[n, 0] = tc
+    keep[n, 1] = 0.0
+    keep[n, 2] = 0.0
+    n += 1
+    _copy_rows(keep, n, best, nb)
+    n += nb
+    if not check(keep[n0:], n - n0, s1[0], s1[1], s1[2], s1[3], s1[4], s1[5], lim[0], lim[1],
+                 lim[2], lim[3], lim[4]):
+        return 0
+    return n - n0
 
 
 @jit_raw

@@ -521,6 +521,8 @@ def _family_name(c: int) -> str:
     direction = "DUUD" if c & 16 else "UDDU"
     c &= 15
     if fixed:
+        if c == K.SHAPE_CRUISE_FALLBACK:
+            return f"fixed {direction} velocity_change_cruise_velocity_change"
         return f"fixed {direction} {STEP2_NAMES[c - 4] if 4 <= c < 15 else '?'}"
     if c == 15:  # NONE with equal jerks (solved in w = c1 - c3)
         return f"{direction} none"
