@@ -224,6 +224,28 @@ def test_a_root_far_from_its_polynomial_estimate_is_polished_to_the_goal():
     assert abs(p.duration - ref) <= RTOL * ref
 
 
+def test_a_brake_ending_on_two_bounds_at_once_is_used():
+    """Symmetric case 323,567 of the 1,000,000-case sweep: a huge start acceleration
+    (a natural peak of 437 m/s where v_max is 0.109 m/s); the bump brake onto
+    (+v_max, 0) is cut where |v| meets v_max, where the velocity it would reach
+    through the reversal is v_max too (two bounds at once): round-off put it a few
+    ulps outside, the brake was dropped and a slower one won (488,575.6 s)."""
+    s, g = (0.01997815143783344, -0.009884876103135244, -9.852347540266832), (-7.528933341859764, 0.03385197548006531, 0.0)
+    V, A, J = 0.10931941562068355, 7.463544575390994, 0.11092387337067942
+    lim = AxisLimits(V, A, J)
+    p = plan_state_to_state(s, g, lim)
+    _check(p, lim)
+    ref = ruckig_duration(s, g, V, A, J)
+    assert ref == pytest.approx(488510.05, abs=0.01)
+    assert p.duration <= ref * (1 + RTOL)
+    # the state where that brake ends, given as a start (3e-13 beyond v_max):
+    # planned, not "no profile found"
+    s2 = (-53387.72905701414, -0.10931941562071756, 0.2202374447297455)
+    p2 = plan_state_to_state(s2, g, lim)
+    _check(p2, lim)
+    assert p2.duration == pytest.approx(ruckig_duration(s2, g, V, A, J), rel=RTOL)
+
+
 def test_symmetric_equals_ruckig_including_brake_starts(capsys):
     rng = np.random.default_rng(20240914)
     stats = dict(inside=0, brake=0, equal=0, brake_equal=0, brake_faster=0, already_there=0)

@@ -520,6 +520,16 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
         if abs(v) <= BRAKE_SNAP_RTOL * vsc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
                                                            lim[4]):
             v = 0.0
+        # a slowing acceleration whose velocity, through the reversal, lands a
+        # few ulps beyond v_max (an end on two bounds at once, e.g. a bump onto
+        # (v_max, 0) on the far side cut where |v| meets v_max)
+        if v * a < 0.0 and lim[2] > 0.0 and lim[4] > 0.0:
+            az2 = a * a - 2.0 * abs(v) / lim[4]
+            over = 0.5 * az2 * lim[2] - lim[0]
+            if 0.0 < over <= BRAKE_SNAP_RTOL * vsc:
+                a2 = math.copysign(math.sqrt(2.0 * lim[0] / lim[2] + 2.0 * abs(v) / lim[4]), a)
+                if inside(v, a2, lim[0], lim[1], lim[2], lim[3], lim[4]):
+                    a = a2
         if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
             return -1, 0.0
     s1[0] = p
