@@ -26,10 +26,11 @@ from .._validate import check_array, check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..sync import plan_ptp
+from ._shaped import ShapedJointPath, shaped_path
 from .engine import PathTiming, plan_path_timing
 from .paths import JointPath
 
-__all__ = ["BlendedJointPath", "SplineJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
+__all__ = ["BlendedJointPath", "SplineJointPath", "ShapedJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
            "MAX_WAYPOINTS", "REVERSAL_ANGLE"]
 
 #: Most waypoints of one call.
@@ -445,6 +446,11 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     for k, path in enumerate(paths):
         a, b = stops[k], stops[k + 1]
         timing = plan_path_timing(path, lims)
+        if isinstance(path, ShapedJointPath) and timing.info.get("status") == "fallback":
+            # the engine found no regular timing of the shaped path: the natural spline
+            other = plan_path_timing(_natural_spline(pts[a:b + 1]), lims)
+            if other.duration < timing.duration:
+                timing = other
         if b - a >= 2:
             # never slower than stopping at every waypoint of the stretch: a straight
             # joint line from rest to rest is the phase-synchronised PTP optimum, which
@@ -479,19 +485,30 @@ def _line_paths(pts, stops, tol, turn, dirs, seglen, deviation) -> list[BlendedJ
     return paths
 
 
-def _spline_paths(pts, stops, tol, lims, deviation) -> tuple[list[SplineJointPath], list[int]]:
+def _natural_spline(sub: np.ndarray) -> SplineJointPath:
+    knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(sub, axis=0), axis=1))])
+    return SplineJointPath(sub, knots)
+
+
+def _spline_paths(pts, stops, tol, lims, deviation) -> tuple[list[JointPath], list[int]]:
     lo = np.array([lm.position_min for lm in lims])
     hi = np.array([lm.position_max for lm in lims])
     bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
     stops = list(stops)
     while True:
-        paths: list[SplineJointPath] = []
+        paths: list[JointPath] = []
         added: set[int] = set()
         for a, b in zip(stops[:-1], stops[1:]):
             sub = pts[a:b + 1]
             knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(sub, axis=0), axis=1))])
             moved = _least_bending(sub, knots, tol)
-            path = SplineJointPath(moved, knots)
+            path: ShapedJointPath | SplineJointPath | None = shaped_path(sub, lims) if tol == 0.0 else None
+            if path is not None and bounded and sub.shape[0] > 2:
+                pmin, pmax = path.joint_range()
+                if ((pmin < lo) | (pmax > hi)).any():
+                    path = None
+            if path is None:
+                path = SplineJointPath(moved, knots)
             if bounded and sub.shape[0] > 2:
                 pmin, pmax = path.joint_range()
                 out = np.nonzero(((pmin < lo) | (pmax > hi)).any(axis=1))[0]
