@@ -32,10 +32,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import clarabel
 import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import BSpline, PPoly, make_interp_spline
-from scipy.optimize import linprog
 
 from ..limits import AxisLimits
 from ..profiles.batch import plan_moves
@@ -46,7 +46,11 @@ __all__ = ["ShapedJointPath", "shaped_path", "PIECES", "ROUNDS", "MAX_SHAPED_WAY
 PIECES = 8
 
 #: Linear programs solved (each after rescaling the stretches by the last one's scales).
-ROUNDS = 4
+ROUNDS = 3
+
+#: The first parameter of every stretch: this fraction of its longest one-axis
+#: rest-to-rest time (passing a waypoint is faster than stopping there).
+FIRST_SCALE = 0.7
 
 #: Weight of every joint's own largest time scale, relative to the total time.
 JOINT_WEIGHT = 1e-3
@@ -54,6 +58,9 @@ JOINT_WEIGHT = 1e-3
 #: Most waypoints of one shaped stretch (the program grows with them); a longer
 #: stretch gets the natural cubic spline.
 MAX_SHAPED_WAYPOINTS = 64
+
+#: Derivatives (0: velocity, 1: acceleration, 2: jerk) bounded by every joint's own scale.
+JOINT_ORDERS = (1,)
 
 _DEG = 3
 
@@ -178,8 +185,11 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
             ll = float(lim[j])
             for sgn in (1.0, -1.0):
                 base = sp.coo_matrix((sgn * d.data, (d.row, d.col + j * n)), shape=(r, nv))
-                cols = [i_seg + s_lo, i_joint + j + np.zeros(r, dtype=int)]
-                sel = [rows, rows]
+                cols = [i_seg + s_lo]
+                sel = [rows]
+                if order in JOINT_ORDERS:
+                    cols.append(i_joint + j + np.zeros(r, dtype=int))
+                    sel.append(rows)
                 two = np.nonzero(s_hi != s_lo)[0]
                 if two.size:
                     cols.append(i_seg + s_hi[two])
@@ -190,13 +200,12 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
                     blocks.append(base.tocsr()[rr] + mc)
                     rhs.append(np.full(rr.size, -(w - 1.0) * ll))
     # position range: the control points inside it keep the whole path inside
-    bounds = [(None, None)] * nv
     for j in range(m):
-        for i in range(n):
-            bounds[j * n + i] = (None if not np.isfinite(lo[j]) else float(lo[j]),
-                                 None if not np.isfinite(hi[j]) else float(hi[j]))
-    a_ub = sp.vstack(blocks).tocsr()
-    b_ub = np.concatenate(rhs)
+        for bound, sgn in ((lo[j], -1.0), (hi[j], 1.0)):
+            if np.isfinite(bound):
+                blocks.append(sp.csr_matrix((np.full(n, sgn), (np.arange(n), j * n + np.arange(n))),
+                                            shape=(n, nv)))
+                rhs.append(np.full(n, sgn * float(bound)))
     interp = BSpline.design_matrix(knots, t, _DEG)
     ends = d2[[0, d2.shape[0] - 1]]
     e = sp.vstack([interp, ends]).tocsr()
@@ -207,12 +216,19 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
     c = np.zeros(nv)
     c[i_seg:i_joint] = h
     c[i_joint:] = JOINT_WEIGHT * h.sum()
-    res = linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=sp.vstack(eqs).tocsr(), b_eq=b_eq, bounds=bounds,
-                  method="highs")
-    if res.status != 0 or res.x is None:
+    a_eq = sp.vstack(eqs)
+    a_all = sp.vstack([a_eq] + blocks).tocsc()
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    sol = clarabel.DefaultSolver(sp.csc_matrix((nv, nv)), c, a_all, np.concatenate([b_eq] + rhs),
+                                 [clarabel.ZeroConeT(a_eq.shape[0]),
+                                  clarabel.NonnegativeConeT(a_all.shape[0] - a_eq.shape[0])],
+                                 settings).solve()
+    if str(sol.status).split(".")[-1] not in ("Solved", "AlmostSolved"):
         return None
-    ctrl = res.x[:n_p].reshape(m, n).T
-    scales = res.x[i_seg:i_joint]
+    xx = np.asarray(sol.x)
+    ctrl = xx[:n_p].reshape(m, n).T
+    scales = xx[i_seg:i_joint]
     if not (np.isfinite(ctrl).all() and np.isfinite(scales).all()):
         return None
     return ctrl, t, scales
@@ -229,7 +245,7 @@ def shaped_path(points: np.ndarray, lims: Sequence[AxisLimits]) -> ShapedJointPa
     jlim = np.array([min(lm.j_max, lm.j_max_decel) for lm in lims], dtype=float)
     lo = np.array([lm.position_min for lm in lims], dtype=float)
     hi = np.array([lm.position_max for lm in lims], dtype=float)
-    knots = _first_knots(points, lims)
+    knots = _first_knots(points, lims) * FIRST_SCALE
     if not (np.all(np.diff(knots) > 0.0) and np.isfinite(knots).all()):
         return None
     best = None
