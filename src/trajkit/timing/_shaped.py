@@ -97,6 +97,8 @@ class ShapedJointPath:
         self._pp = PPoly(coeffs, x, extrapolate=True)
         self._der = [self._pp] + [self._pp.derivative(k) for k in (1, 2, 3)]
         self.breakpoints = x[1:-1].copy()
+        #: Another path through the same waypoints, timed beside this one (set by the caller).
+        self.alternative: object | None = None
 
     def derivatives(self, s: np.ndarray):
         s = np.clip(np.atleast_1d(np.asarray(s, dtype=float)), 0.0, self.length)
