@@ -31,6 +31,7 @@ program only shapes the path.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import clarabel
 import numpy as np
@@ -98,7 +99,7 @@ class ShapedJointPath:
         self._der = [self._pp] + [self._pp.derivative(k) for k in (1, 2, 3)]
         self.breakpoints = x[1:-1].copy()
         #: Another path through the same waypoints, timed beside this one (set by the caller).
-        self.alternative: object | None = None
+        self.alternative: Any = None
 
     def derivatives(self, s: np.ndarray):
         s = np.clip(np.atleast_1d(np.asarray(s, dtype=float)), 0.0, self.length)

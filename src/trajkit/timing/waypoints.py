@@ -33,7 +33,8 @@ from ._shaped import ShapedJointPath, shaped_path
 from .engine import PathTiming, plan_path_timing
 from .paths import JointPath
 
-__all__ = ["BlendedJointPath", "SplineJointPath", "ShapedJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
+__all__ = ["BlendedJointPath", "SplineJointPath", "ShapedJointPath", "SHAPES", "WaypointTrajectory",
+           "WaypointSample", "plan_waypoints",
            "MAX_WAYPOINTS", "REVERSAL_ANGLE"]
 
 #: Most waypoints of one call.
