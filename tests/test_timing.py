@@ -19,7 +19,8 @@ from conftest import sweep_size
 
 from trajkit import AxisLimits, InvalidInputError, plan_move, plan_ptp
 from trajkit.timing import LinearJointPath, plan_path_timing, plan_waypoints
-from trajkit.timing.waypoints import STOP_ALL_MARGIN
+from trajkit.timing._shaped import MAX_SHAPED_WAYPOINTS, ShapedJointPath, shaped_path
+from trajkit.timing.waypoints import STOP_ALL_MARGIN, SplineJointPath
 
 LIMIT_RTOL = 1e-9
 
@@ -201,6 +202,50 @@ def test_spline_waypoints_pass_every_waypoint_exactly_without_blend():
         left = path.derivatives(path.knots[1:-1] - eps)[order]
         right = path.derivatives(path.knots[1:-1] + eps)[order]
         np.testing.assert_allclose(left, right, atol=1e-5 * (1 + np.abs(left).max()))
+
+
+def test_shaped_path_passes_every_waypoint_is_c2_and_is_faster_than_the_spline():
+    """The path shaped by the linear programs: exact passage, continuous q' and q'',
+    q'' = 0 at the ends, every limit kept, and faster than the natural spline here."""
+    rng = np.random.default_rng(2026)
+    W = np.cumsum(rng.uniform(-0.6, 0.6, (8, 6)), axis=0)
+    lims = [AxisLimits(2.0, 10.0, 100.0)] * 6
+    path = shaped_path(W, lims)
+    assert isinstance(path, ShapedJointPath)
+    np.testing.assert_allclose(path.derivatives(path.knots)[0], W, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(path.derivatives(np.array([0.0, path.length]))[0], W[[0, -1]])
+    ends = path.derivatives(np.array([0.0, path.length]))[2]
+    assert np.abs(ends).max() <= 1e-9 * (1 + np.abs(path.derivatives(path.knots)[2]).max())
+    eps = 1e-9
+    for order in (0, 1, 2):
+        left = path.derivatives(path.breakpoints - eps)[order]
+        right = path.derivatives(path.breakpoints + eps)[order]
+        np.testing.assert_allclose(left, right, atol=1e-5 * (1 + np.abs(left).max()))
+    shaped = plan_path_timing(path, lims)
+    spline = plan_path_timing(path.alternative if path.alternative is not None else
+                              SplineJointPath(W, np.concatenate(
+                                  [[0.0], np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))])), lims)
+    assert max(_dense_use(shaped, 64)) <= 1 + LIMIT_RTOL
+    assert shaped.duration < 0.97 * spline.duration, (shaped.duration, spline.duration)
+    tr = plan_waypoints(W, lims)
+    assert tr.stops == [0, 7] and isinstance(tr.segments[0].path, ShapedJointPath)
+    assert tr.duration == pytest.approx(shaped.duration, rel=1e-12)
+
+
+def test_shaped_path_keeps_the_joint_ranges_and_has_a_size_bound():
+    W = np.array([[0.0, 0.0], [0.9, 0.0], [0.95, 1.0], [0.0, 1.2], [0.5, 2.0]])
+    free = shaped_path(W, [AxisLimits(1.0, 4.0, 40.0)] * 2)
+    assert free.joint_range()[1][:, 0].max() > 1.0 + 1e-3  # it would leave [-1, 1]
+    lims = [AxisLimits(1.0, 4.0, 40.0, position_min=-1.0, position_max=1.0), AxisLimits(1.0, 4.0, 40.0)]
+    held = shaped_path(W, lims)
+    assert held.joint_range()[1][:, 0].max() <= 1.0 + 1e-12
+    tr = plan_waypoints(W, lims)
+    assert tr.stops == [0, 4]
+    smp = tr.sample(np.linspace(0.0, tr.duration, 20001))
+    assert smp.position[:, 0].max() <= 1.0 + 1e-12
+    # too many waypoints for one program: the natural spline takes them
+    many = np.cumsum(np.full((MAX_SHAPED_WAYPOINTS + 1, 2), 0.1), axis=0)
+    assert shaped_path(many, [AxisLimits(1.0, 4.0, 40.0)] * 2) is None
 
 
 def test_least_bending_spline_uses_the_tolerance_and_bends_less():

@@ -1,7 +1,10 @@
 """Moving through joint-space waypoints without stopping.
 
-:func:`plan_waypoints` joins N waypoints by straight lines in joint space and
-rounds every inner corner with a quintic blend that leaves and enters the
+:func:`plan_waypoints` joins N waypoints by a smooth path (``"spline"``: a
+path shaped for the joints' limits or a natural cubic spline through them,
+or the least-bending spline within the blend tolerance; see
+:mod:`trajkit.timing._shaped`), or (``"lines"``) by straight lines in joint
+space, rounding every inner corner with a quintic blend that leaves and enters the
 lines with the same direction and zero curvature, so the path ``q(s)`` has
 continuous first and second derivatives (the joint velocities and
 accelerations stay continuous) and passes each inner waypoint within the
@@ -26,10 +29,12 @@ from .._validate import check_array, check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..sync import plan_ptp
+from ._shaped import ShapedJointPath, shaped_path
 from .engine import PathTiming, plan_path_timing
 from .paths import JointPath
 
-__all__ = ["BlendedJointPath", "SplineJointPath", "SHAPES", "WaypointTrajectory", "WaypointSample", "plan_waypoints",
+__all__ = ["BlendedJointPath", "SplineJointPath", "ShapedJointPath", "SHAPES", "WaypointTrajectory",
+           "WaypointSample", "plan_waypoints",
            "MAX_WAYPOINTS", "REVERSAL_ANGLE"]
 
 #: Most waypoints of one call.
@@ -364,12 +369,18 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     exactly).
 
     ``"spline"`` (default)
-        A natural cubic spline (continuous velocity and acceleration) through
-        the waypoints, parameterised by their chord length. With ``blend > 0``
+        Through every waypoint (``blend = 0``): a C2 piecewise-cubic path
+        shaped for the joints' limits by linear programs (per joint a cubic
+        spline in a time-like parameter, bending where that joint has room;
+        see docs/timing.md), and the
+        natural cubic spline through the waypoints (parameterised by their
+        chord length) beside it: both are timed and the faster is kept (the
+        spline alone beyond 64 waypoints in a stretch, or where the shaped path would leave a
+        joint's range). Both have continuous velocity and acceleration. With ``blend > 0``
         every inner waypoint may be passed up to ``blend`` away: the spline is
         then the one of least bending (minimum integral of the squared second
         derivative) among all that pass within the tolerance, which lowers
-        the curvature the timing has to respect. Where the spline would leave a
+        the curvature the timing has to respect. Where the path would leave a
         joint's position range between two waypoints, the motion stops at
         both (and runs straight between them if needed).
     ``"lines"``
@@ -445,6 +456,11 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     for k, path in enumerate(paths):
         a, b = stops[k], stops[k + 1]
         timing = plan_path_timing(path, lims)
+        if isinstance(path, ShapedJointPath) and path.alternative is not None:
+            # the natural spline through the same waypoints is timed too, the faster kept
+            other = plan_path_timing(path.alternative, lims)
+            if other.duration < timing.duration:
+                timing = other
         if b - a >= 2:
             # never slower than stopping at every waypoint of the stretch: a straight
             # joint line from rest to rest is the phase-synchronised PTP optimum, which
@@ -479,23 +495,36 @@ def _line_paths(pts, stops, tol, turn, dirs, seglen, deviation) -> list[BlendedJ
     return paths
 
 
-def _spline_paths(pts, stops, tol, lims, deviation) -> tuple[list[SplineJointPath], list[int]]:
+def _leaves_range(path, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Whether the path leaves a joint's position range between each two waypoints, (k - 1,)."""
+    pmin, pmax = path.joint_range()
+    return ((pmin < lo) | (pmax > hi)).any(axis=1)
+
+
+def _spline_paths(pts, stops, tol, lims, deviation) -> tuple[list[JointPath], list[int]]:
     lo = np.array([lm.position_min for lm in lims])
     hi = np.array([lm.position_max for lm in lims])
     bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
     stops = list(stops)
     while True:
-        paths: list[SplineJointPath] = []
+        paths: list[JointPath] = []
         added: set[int] = set()
         for a, b in zip(stops[:-1], stops[1:]):
             sub = pts[a:b + 1]
             knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(sub, axis=0), axis=1))])
             moved = _least_bending(sub, knots, tol)
-            path = SplineJointPath(moved, knots)
+            spline = SplineJointPath(moved, knots)
+            path: ShapedJointPath | SplineJointPath = spline
+            if tol == 0.0:
+                # through every waypoint: the shaped path where it stays in the joints'
+                # ranges (the natural spline beside it where that one does)
+                shaped = shaped_path(sub, lims)
+                if shaped is not None and not (bounded and _leaves_range(shaped, lo, hi).any()):
+                    if not (bounded and _leaves_range(spline, lo, hi).any()):
+                        shaped.alternative = spline
+                    path = shaped
             if bounded and sub.shape[0] > 2:
-                pmin, pmax = path.joint_range()
-                out = np.nonzero(((pmin < lo) | (pmax > hi)).any(axis=1))[0]
-                for piece in out:
+                for piece in np.nonzero(_leaves_range(path, lo, hi))[0]:
                     added.update({a + int(piece), a + int(piece) + 1} - {a, b})
             deviation[a:b + 1] = np.linalg.norm(moved - sub, axis=1)
             paths.append(path)
