@@ -63,6 +63,35 @@ def _ruckig_run(start, V, A, J, goal=None, goal_va=None, minimum_duration=None,
     return traj.duration
 
 
+def ruckig_goal_miss(start, goal, V, A, J):
+    """How far ruckig's own profile ends from the goal position [m]: its phases
+    (brake included) integrated in exact rational arithmetic. ruckig accepts a
+    profile whose end lies within an absolute 1e-8 of the goal, which is coarse
+    for a motion of a few nanometres."""
+    from fractions import Fraction
+
+    from ruckig import InputParameter, Ruckig, Trajectory
+
+    inp = InputParameter(1)
+    inp.current_position = [start[0]]
+    inp.current_velocity = [start[1]]
+    inp.current_acceleration = [start[2]]
+    inp.target_position = [goal[0]]
+    inp.target_velocity = [goal[1]]
+    inp.target_acceleration = [goal[2]]
+    inp.max_velocity = [V]
+    inp.max_acceleration = [A]
+    inp.max_jerk = [J]
+    traj = Trajectory(1)
+    Ruckig(1).calculate(inp, traj)
+    prof = traj.profiles[0][0]
+    p, v, a = (Fraction(x) for x in start)
+    for t, j in zip(list(prof.brake.t) + list(prof.t), list(prof.brake.j) + list(prof.j)):
+        t, j = Fraction(t), Fraction(j)
+        p, v, a = p + v * t + a * t * t / 2 + j * t**3 / 6, v + a * t + j * t * t / 2, a + j * t
+    return abs(float(p - Fraction(goal[0])))
+
+
 def ruckig_duration(start, goal, V, A, J, catch_errors=False):
     """Minimum duration from ruckig's ``Ruckig(1).calculate`` (symmetric limits).
 

@@ -32,6 +32,7 @@ from state_reference import (
     random_brake_case,
     random_case,
     ruckig_duration,
+    ruckig_goal_miss,
 )
 
 from trajkit import AxisLimits
@@ -147,6 +148,18 @@ def _brake_lingers(prof, lim):
     return False
 
 
+def _ruckig_misses_goal(prof, case):
+    """Whether ruckig's profile ends farther from the goal position than 1e-9 of the
+    motion's extent (ours is checked to that by ``_check``): then its shorter-or-
+    longer duration is not a reference. Found by the 1,000,000-case sweep: a start
+    at rest with a = -0.00116 back to rest at the same position, where ruckig's
+    profile ends 1.2e-12 m off on a 6.7e-11 m motion and takes 8.7 % longer."""
+    s, g, L = case
+    b = prof.boundary_states()
+    extent = max(float(np.abs(b[:, 0] - s[0]).max()), abs(g[0] - s[0]))
+    return ruckig_goal_miss(s, g, L[0], L[1], L[2]) > 1e-9 * extent + 4 * 2.2e-16 * abs(g[0])
+
+
 def ruckig_segfaults(s, g, L):
     """ruckig 0.19.4 crashes the process (segmentation fault) on one corner,
     found by the 1,000,000-case sweep (5 cases, e.g. start (0.094056, 0.175367,
@@ -246,11 +259,28 @@ def test_a_brake_ending_on_two_bounds_at_once_is_used():
     assert p2.duration == pytest.approx(ruckig_duration(s2, g, V, A, J), rel=RTOL)
 
 
+def test_where_ruckig_misses_a_tiny_goal_ours_is_exact_and_shorter():
+    """Case 563,481 of the 1,000,000-case sweep: at rest with a = -0.00116, back to rest
+    at the same position (a 6.7e-11 m motion). ruckig's profile (0.000256 s) ends
+    1.2e-12 m from the goal; ours (0.000236 s) ends on it to round-off."""
+    s, g = (0.10345937009947047, 0.0, -0.0011573236693830696), (0.10345937009947047, 0.0, 0.0)
+    V, A, J = 2.0026580711842334, 0.22609963906137265, 21.573832814468442
+    lim = AxisLimits(V, A, J)
+    p = plan_state_to_state(s, g, lim)
+    _check(p, lim)
+    assert goal_error(p) < 1e-12
+    ref = ruckig_duration(s, g, V, A, J)
+    assert p.duration < ref * (1 - 0.05)
+    assert _ruckig_misses_goal(p, (s, g, (V, A, J)))
+    assert ruckig_goal_miss(s, g, V, A, J) > 1e-12
+
+
 def test_symmetric_equals_ruckig_including_brake_starts(capsys):
     rng = np.random.default_rng(20240914)
     stats = dict(inside=0, brake=0, equal=0, brake_equal=0, brake_faster=0, already_there=0)
     ruckig_failed = []
     ruckig_crash = []
+    ruckig_imprecise = []
     faster = []
     worst = 0.0
     for i in range(N_INSIDE + N_BRAKE):
@@ -278,6 +308,9 @@ def test_symmetric_equals_ruckig_including_brake_starts(capsys):
             ruckig_failed.append((case, p.duration))
             continue
         rel = (p.duration - ref) / ref
+        if rel < -RTOL and _ruckig_misses_goal(p, case):
+            ruckig_imprecise.append((case, p.duration, ref))
+            continue
         if not brake:
             assert abs(rel) <= RTOL, (i, case, p.duration, ref)
             stats["equal"] += 1
@@ -293,14 +326,18 @@ def test_symmetric_equals_ruckig_including_brake_starts(capsys):
     assert stats["brake"] >= 4_000
     with capsys.disabled():
         print(f"\nsymmetric vs ruckig: {stats}, worst |rel| inside {worst:.2e}, "
-              f"ruckig failed {len(ruckig_failed)}, not sent to ruckig (its crash corner) {len(ruckig_crash)} "
+              f"ruckig failed {len(ruckig_failed)}, ruckig's profile off the goal {len(ruckig_imprecise)}, "
+              f"not sent to ruckig (its crash corner) {len(ruckig_crash)} "
               "(trajkit planned and verified them all)")
+        for case, t, ref in ruckig_imprecise[:3]:
+            print(f"  ruckig's profile misses the goal (shorter ours is exact): {_fmt(case)} -> "
+                  f"trajkit {t:.9g} s, ruckig {ref:.9g} s")
         for case, t in ruckig_failed[:5]:
             print(f"  ruckig failed: {_fmt(case)} -> trajkit {t:.6f} s")
         for rel, case, t, ref in sorted(faster, key=lambda x: x[0])[:3]:
             print(f"  brake start, trajkit faster by {-rel:.1%}: {_fmt(case)}: {t:.6f} s vs ruckig {ref:.6f} s")
     # nearly every case has a ruckig result to compare against
-    assert len(ruckig_failed) <= 1e-3 * (N_INSIDE + N_BRAKE)
+    assert len(ruckig_failed) + len(ruckig_imprecise) <= 1e-3 * (N_INSIDE + N_BRAKE)
 
 
 def test_asymmetric_never_slower_than_the_references(capsys):
