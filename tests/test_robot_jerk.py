@@ -208,6 +208,64 @@ def test_blend_is_curvature_continuous_and_arc_length_exact():
             assert np.linalg.norm(pts - corner, axis=1).max() <= r * (1 + 1e-12)
 
 
+def test_blend_ends_are_g3_with_lines_and_arcs():
+    """At both ends the blend has the piece's tangent and curvature vector, and the
+    normal part of its third derivative by arc length is zero (that of a line or an
+    arc: no curvature rate, no torsion), from the Bezier's exact derivatives."""
+    rng = np.random.default_rng(11)
+    ev = BezierBlend._eval
+    n = 0
+    for _ in range(60):
+        ta = rng.normal(size=3)
+        ta /= np.linalg.norm(ta)
+        tb = rng.normal(size=3)
+        tb /= np.linalg.norm(tb)
+        if float(ta @ tb) < -0.95:
+            continue
+        r = float(rng.uniform(0.005, 0.05))
+        corner = rng.normal(size=3)
+        ka = np.cross(ta, rng.normal(size=3))
+        ka *= rng.choice([0.0, rng.uniform(0.0, 20.0)]) / np.linalg.norm(ka)
+        kb = np.cross(tb, rng.normal(size=3))
+        kb *= rng.choice([0.0, rng.uniform(0.0, 20.0)]) / np.linalg.norm(kb)
+        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, ka=ka, kb=kb, corner=corner)
+        for u, t, k in ((0.0, ta, ka), (1.0, tb, kb)):
+            uu = np.array([u])
+            b1, b2, b3 = ev(bz.ctrl, uu, 1)[0], ev(bz.ctrl, uu, 2)[0], ev(bz.ctrl, uu, 3)[0]
+            su = float(np.linalg.norm(b1))
+            tt = b1 / su
+            suu = float(b1 @ b2) / su
+            kv = (b2 - suu * tt) / su**2
+            p3 = (b3 - 3.0 * kv * su * suu) / su**3
+            normal3 = p3 - float(p3 @ tt) * tt
+            assert np.linalg.norm(tt - t) < 1e-9
+            assert np.linalg.norm(kv - k) < 1e-8 * max(1.0, float(np.linalg.norm(k))) + 1e-9 / r
+            assert np.linalg.norm(normal3) < 1e-7 / r**2, (np.linalg.norm(normal3), r)
+            n += 1
+    assert n >= 100
+
+
+def test_corner_blend_between_lines_stays_inside_its_zone_with_full_handles():
+    """Between two lines every control point lies within the zone (no shortening)."""
+    from trajkit.robot._pieces import BLEND_HANDLES
+
+    rng = np.random.default_rng(12)
+    for _ in range(30):
+        ta = rng.normal(size=3)
+        ta /= np.linalg.norm(ta)
+        tb = rng.normal(size=3)
+        tb /= np.linalg.norm(tb)
+        if float(ta @ tb) < -0.99:
+            continue
+        r = float(rng.uniform(0.002, 0.1))
+        corner = rng.normal(size=3)
+        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+        assert bz.handle == pytest.approx(BLEND_HANDLES[0] * r, rel=1e-9)
+        assert np.linalg.norm(bz.ctrl - corner, axis=1).max() <= r * (1 + 1e-12)
+        pts = bz.point(np.linspace(0.0, bz.length, 501))
+        assert np.linalg.norm(pts - corner, axis=1).max() <= r * (1 + 1e-12)
+
+
 def test_collinear_lins_with_another_orientation_rate_are_blended():
     """A straight line split in two that turns the tool at another rate: the join is blended.
 

@@ -370,12 +370,12 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         i3 = 0.5 * (d3[:-1] + d3[1:])
         # the speed the cell could run at: the velocity limits, the path's cap, and
         # the speeds at which the curvature of the joint path alone uses the joints'
-        # acceleration and jerk limits
+        # acceleration limits (not their jerk limits: the path's acceleration and
+        # jerk can cancel part of d3q/ds3 v^3, e.g. slowing down while the curvature
+        # grows, so a timing may run faster than cbrt(j_max / |d3q/ds3|) there)
         with np.errstate(divide="ignore", invalid="ignore"):
             vcap = np.min(np.where(np.abs(m1) > 0, vlim / np.abs(m1), np.inf), axis=1)
             vcap = np.minimum(vcap, np.min(np.where(np.abs(m2) > 0, np.sqrt(alim / np.abs(m2)),
-                                                    np.inf), axis=1))
-            vcap = np.minimum(vcap, np.min(np.where(np.abs(m3) > 0, np.cbrt(jlim / np.abs(m3)),
                                                     np.inf), axis=1))
         vcap = np.minimum(vcap, cap_fn(sm))
         vcap = np.where(np.isfinite(vcap), vcap, 0.0)
