@@ -57,6 +57,11 @@ BLEND_REACH_MIN = 0.25
 #: inside (the last one is kept otherwise).
 BLEND_SHRINK = (1.0, 0.85, 0.7, 0.55, 0.4, 0.3, 0.2)
 
+#: Least share of every control-polygon edge along the chord from the blend's
+#: start to its end (see ``_acceptable``); a handle set that breaks it is
+#: shortened, then replaced by the line handles.
+BLEND_MONOTONE = 0.0
+
 #: Curvature-vector factors of the degree-7 blend's third and fourth control
 #: points: with ``B'(0) = 7 h1 t`` and ``B''(0) = 42 (P2 - 2 P1 + P0)``,
 #: ``P2 = p + h2 t + (7/6) h1^2 k`` gives the curvature vector ``k`` at the end;
@@ -96,6 +101,22 @@ def _tangent_reach(pa: np.ndarray, ta: np.ndarray, pb: np.ndarray, tb: np.ndarra
     db = (wb - c * wa) / det
     lo = BLEND_REACH_MIN * radius
     return min(max(da, lo), radius), min(max(db, lo), radius)
+
+
+def _acceptable(ctrl: np.ndarray, corner: np.ndarray, radius: float, chord: np.ndarray) -> bool:
+    """Whether a blend's control points all lie within ``radius`` of ``corner`` and its
+    control polygon runs forward along ``chord`` (every edge's projection on it at
+    least :data:`BLEND_MONOTONE` of the edge): then ``B'(u) . chord > 0`` on the whole
+    curve, which cannot fold back on itself (a near-cusp, where the curvature would
+    grow without bound)."""
+    if np.linalg.norm(ctrl - corner, axis=1).max() > radius * (1.0 + 1e-12):
+        return False
+    cn = float(np.linalg.norm(chord))
+    if cn <= 1e-9 * radius:  # a reversal: no forward direction to keep
+        return True
+    edges = np.diff(ctrl, axis=0)
+    proj = edges @ (chord / cn)
+    return bool((proj >= BLEND_MONOTONE * np.linalg.norm(edges, axis=1)).all())
 
 
 class BezierBlend:
@@ -138,16 +159,28 @@ class BezierBlend:
         kb = np.zeros(3) if kb is None else np.asarray(kb, dtype=np.float64)
         corner = pa + radius * ta if corner is None else np.asarray(corner, dtype=np.float64)
         da, db = _tangent_reach(pa, ta, pb, tb, radius)
+        chord = pb - pa
         ctrl = np.empty((8, 3))
-        scale = BLEND_SHRINK[-1]
-        for scale in BLEND_SHRINK:
-            ha = [scale * f * da for f in (BLEND_HANDLES_CURVED if ka.any() else BLEND_HANDLES)]
-            hb = [scale * f * db for f in (BLEND_HANDLES_CURVED if kb.any() else BLEND_HANDLES)]
-            ctrl = np.array(_end_points(pa, ta, ka, *ha) + _end_points(pb, -tb, kb, *hb)[::-1])
-            if np.linalg.norm(ctrl - corner, axis=1).max() <= radius * (1.0 + 1e-12):
-                break
+        handle = 0.0
+        # the handle sets in order of preference: the end's own (curved or line
+        # handles), shortened step by step; then the line handles, shortened
+        sets = [(BLEND_HANDLES_CURVED if ka.any() else BLEND_HANDLES,
+                 BLEND_HANDLES_CURVED if kb.any() else BLEND_HANDLES)]
+        if ka.any() or kb.any():
+            sets.append((BLEND_HANDLES, BLEND_HANDLES))
+        for fa, fb in sets:
+            for scale in BLEND_SHRINK:
+                ha = [scale * f * da for f in fa]
+                hb = [scale * f * db for f in fb]
+                ctrl = np.array(_end_points(pa, ta, ka, *ha) + _end_points(pb, -tb, kb, *hb)[::-1])
+                handle = ha[0]
+                if _acceptable(ctrl, corner, radius, chord):
+                    break
+            else:
+                continue
+            break
         self.ctrl = ctrl
-        self.handle = scale * BLEND_HANDLES[0] * da
+        self.handle = handle
         edges = np.linspace(0.0, 1.0, BLEND_TABLE + 1)
         seg = self._integral(edges[:-1], edges[1:])
         self._u = edges
