@@ -62,6 +62,18 @@ BLEND_SHRINK = (1.0, 0.85, 0.7, 0.55, 0.4, 0.3, 0.2)
 #: shortened, then replaced by the line handles.
 BLEND_MONOTONE = 0.0
 
+#: Largest peak curvature of a blend, as a multiple of that of the circle
+#: tangent to both tangent lines ``r`` from the corner: the handles above keep
+#: within it up to corners of 135 deg (5.8 times there, 3.1 at 90 deg); past
+#: that the curvature of the full handles grows fast (8.6 times at 150 deg, 25
+#: at 170 deg, where the joints' third derivatives vary over a fraction of a
+#: millimetre), and the handles are shortened (BLEND_SHRINK) until it is
+#: within, or to the lowest peak.
+BLEND_KAPPA_RATIO = 6.0
+
+#: Points on which the peak curvature of a blend is measured.
+BLEND_PROBE = 257
+
 #: Curvature-vector factors of the degree-7 blend's third and fourth control
 #: points: with ``B'(0) = 7 h1 t`` and ``B''(0) = 42 (P2 - 2 P1 + P0)``,
 #: ``P2 = p + h2 t + (7/6) h1^2 k`` gives the curvature vector ``k`` at the end;
@@ -160,25 +172,42 @@ class BezierBlend:
         corner = pa + radius * ta if corner is None else np.asarray(corner, dtype=np.float64)
         da, db = _tangent_reach(pa, ta, pb, tb, radius)
         chord = pb - pa
-        ctrl = np.empty((8, 3))
-        handle = 0.0
+        # the curvature of the circle tangent to both tangent lines r from the
+        # corner (or the ends' own, if larger): what the blend's peak is measured by
+        c = float(np.clip(np.dot(ta, tb), -1.0, 1.0))
+        k_ref = max(math.sqrt(max(1.0 - c, 0.0) / (1.0 + c)) / radius if c > -1.0 else math.inf,
+                    float(np.linalg.norm(ka)), float(np.linalg.norm(kb)))
         # the handle sets in order of preference: the end's own (curved or line
-        # handles), shortened step by step; then the line handles, shortened
+        # handles), shortened step by step; then the line handles, shortened. The
+        # first whose control polygon is acceptable and whose peak curvature is
+        # within BLEND_KAPPA_RATIO of k_ref is taken, else the acceptable one with
+        # the lowest peak curvature (a sharp corner), else the last
         sets = [(BLEND_HANDLES_CURVED if ka.any() else BLEND_HANDLES,
                  BLEND_HANDLES_CURVED if kb.any() else BLEND_HANDLES)]
         if ka.any() or kb.any():
             sets.append((BLEND_HANDLES, BLEND_HANDLES))
+        chosen: tuple[float, np.ndarray, float] | None = None
+        ctrl = np.empty((8, 3))
+        handle = 0.0
         for fa, fb in sets:
             for scale in BLEND_SHRINK:
                 ha = [scale * f * da for f in fa]
                 hb = [scale * f * db for f in fb]
                 ctrl = np.array(_end_points(pa, ta, ka, *ha) + _end_points(pb, -tb, kb, *hb)[::-1])
                 handle = ha[0]
-                if _acceptable(ctrl, corner, radius, chord):
+                if not _acceptable(ctrl, corner, radius, chord):
+                    continue
+                peak = self._peak_curvature(ctrl)
+                if peak <= BLEND_KAPPA_RATIO * k_ref:
+                    chosen = (peak, ctrl, handle)
                     break
+                if chosen is None or peak < chosen[0]:
+                    chosen = (peak, ctrl, handle)
             else:
                 continue
             break
+        if chosen is not None:
+            _, ctrl, handle = chosen
         self.ctrl = ctrl
         self.handle = handle
         edges = np.linspace(0.0, 1.0, BLEND_TABLE + 1)
@@ -200,6 +229,17 @@ class BezierBlend:
         for i in range(n + 1):
             out += math.comb(n, i) * m ** (n - i) * u**i * c[i]
         return out
+
+    @classmethod
+    def _peak_curvature(cls, ctrl: np.ndarray) -> float:
+        """Largest curvature [1/m] of the curve on BLEND_PROBE points."""
+        u = np.linspace(0.0, 1.0, BLEND_PROBE)
+        d1 = cls._eval(ctrl, u, 1)
+        d2 = cls._eval(ctrl, u, 2)
+        sp = np.linalg.norm(d1, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            kap = np.linalg.norm(np.cross(d1, d2), axis=1) / sp**3
+        return float(np.nan_to_num(kap, nan=np.inf).max())
 
     def _speed(self, u: np.ndarray) -> np.ndarray:
         return np.linalg.norm(self._eval(self.ctrl, u.ravel(), 1), axis=1).reshape(u.shape)
