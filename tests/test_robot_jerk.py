@@ -199,13 +199,93 @@ def test_blend_is_curvature_continuous_and_arc_length_exact():
         k1 = (ends[5] - 2 * ends[4] + ends[3]) / h**2
         assert np.linalg.norm(k0 - ka) < 1e-2 * max(1.0, np.linalg.norm(ka)) + 0.05 / r
         assert np.linalg.norm(k1 - kb) < 1e-2 * max(1.0, np.linalg.norm(kb)) + 0.05 / r
-        s = np.linspace(0.0, L, 2001)
+        # chords of 1e-4 L: their shortfall against the arc, (kappa ds)^2 / 24, stays
+        # below 1e-6 up to a peak curvature of 4.9e-3 / ds (~24 / r for L ~ 2 r; the
+        # sharpest corner here, 144 deg, peaks near 16 / r)
+        s = np.linspace(0.0, L, 10001)
         pts = bz.point(s)
         step = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         assert np.abs(step / np.diff(s) - 1.0).max() < 1e-6
+        # the curve runs forward along its chord: no fold, no near-cusp
+        u = np.linspace(0.0, 1.0, 2001)
+        fwd = BezierBlend._eval(bz.ctrl, u, 1) @ (pb - pa) / np.linalg.norm(pb - pa)
+        assert fwd.min() > 0.0
         # inside the zone when the curvature offsets allow it
         if np.linalg.norm(bz.ctrl - corner, axis=1).max() <= r * (1 + 1e-12):
             assert np.linalg.norm(pts - corner, axis=1).max() <= r * (1 + 1e-12)
+
+
+def test_blend_ends_are_g3_with_lines_and_arcs():
+    """At both ends the blend has the piece's tangent and curvature vector, and the
+    normal part of its third derivative by arc length is zero (that of a line or an
+    arc: no curvature rate, no torsion), from the Bezier's exact derivatives."""
+    rng = np.random.default_rng(11)
+    ev = BezierBlend._eval
+    n = 0
+    for _ in range(60):
+        ta = rng.normal(size=3)
+        ta /= np.linalg.norm(ta)
+        tb = rng.normal(size=3)
+        tb /= np.linalg.norm(tb)
+        if float(ta @ tb) < -0.95:
+            continue
+        r = float(rng.uniform(0.005, 0.05))
+        corner = rng.normal(size=3)
+        ka = np.cross(ta, rng.normal(size=3))
+        ka *= rng.choice([0.0, rng.uniform(0.0, 20.0)]) / np.linalg.norm(ka)
+        kb = np.cross(tb, rng.normal(size=3))
+        kb *= rng.choice([0.0, rng.uniform(0.0, 20.0)]) / np.linalg.norm(kb)
+        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, ka=ka, kb=kb, corner=corner)
+        for u, t, k in ((0.0, ta, ka), (1.0, tb, kb)):
+            uu = np.array([u])
+            b1, b2, b3 = ev(bz.ctrl, uu, 1)[0], ev(bz.ctrl, uu, 2)[0], ev(bz.ctrl, uu, 3)[0]
+            su = float(np.linalg.norm(b1))
+            tt = b1 / su
+            suu = float(b1 @ b2) / su
+            kv = (b2 - suu * tt) / su**2
+            p3 = (b3 - 3.0 * kv * su * suu) / su**3
+            normal3 = p3 - float(p3 @ tt) * tt
+            assert np.linalg.norm(tt - t) < 1e-9
+            assert np.linalg.norm(kv - k) < 1e-8 * max(1.0, float(np.linalg.norm(k))) + 1e-9 / r
+            assert np.linalg.norm(normal3) < 1e-7 / r**2, (np.linalg.norm(normal3), r)
+            n += 1
+    assert n >= 100
+
+
+def test_corner_blend_between_lines_stays_inside_its_zone_with_full_handles():
+    """Between two lines every control point lies within the zone; up to 135 deg the
+    handles are the full ones, past that they are shortened to keep the peak curvature
+    within BLEND_KAPPA_RATIO times that of the circle tangent to both lines (up to
+    160 deg; sharper, the lowest of the shortened sets)."""
+    from trajkit.robot._pieces import BLEND_HANDLES, BLEND_KAPPA_RATIO
+
+    rng = np.random.default_rng(12)
+    n_full = n_short = 0
+    for _ in range(60):
+        ta = rng.normal(size=3)
+        ta /= np.linalg.norm(ta)
+        tb = rng.normal(size=3)
+        tb /= np.linalg.norm(tb)
+        if float(ta @ tb) < -0.99:
+            continue
+        r = float(rng.uniform(0.002, 0.1))
+        corner = rng.normal(size=3)
+        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+        angle = np.degrees(np.arccos(np.clip(ta @ tb, -1.0, 1.0)))
+        peak = BezierBlend._peak_curvature(bz.ctrl)
+        circle = np.tan(np.radians(angle) / 2.0) / r
+        if angle <= 135.0:
+            assert bz.handle == pytest.approx(BLEND_HANDLES[0] * r, rel=1e-9)
+            n_full += 1
+        elif angle >= 138.0:  # the full handles' peak passes 6 times at 136.8 deg
+            assert bz.handle < BLEND_HANDLES[0] * r
+            n_short += 1
+        if angle <= 160.0:
+            assert peak <= BLEND_KAPPA_RATIO * circle * (1 + 1e-12), (angle, peak * r)
+        assert np.linalg.norm(bz.ctrl - corner, axis=1).max() <= r * (1 + 1e-12)
+        pts = bz.point(np.linspace(0.0, bz.length, 501))
+        assert np.linalg.norm(pts - corner, axis=1).max() <= r * (1 + 1e-12)
+    assert n_full >= 20 and n_short >= 5, (n_full, n_short)
 
 
 def test_collinear_lins_with_another_orientation_rate_are_blended():
@@ -232,3 +312,24 @@ def test_collinear_lins_with_another_orientation_rate_are_blended():
                              Lin(CartesianTarget(c2), 0.2, label="L2")], q0)
     assert [pc.kind for pc in same.segments[0].chain.pieces] == ["path", "path"]
     assert "blend" in [pc.kind for pc in run.segments[0].chain.pieces]
+
+
+def test_joint_path_derivatives_on_a_short_piece_stay_inside_it():
+    """A line left 0.5 mm long between two blends: the derivative stencils fit inside
+    it at every point (q' against central differences of the exact IK joints)."""
+    arm = default_arm6()
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p = arm.fk(q0)
+    pos, rot = p.position, p.rotation
+    mots = [Lin(CartesianTarget(Pose(pos + [0.0, 0.06, 0.0], rot)), 0.2, zone=0.02),
+            Lin(CartesianTarget(Pose(pos + [0.0405, 0.06, 0.0], rot)), 0.2, zone=0.02),
+            Lin(CartesianTarget(Pose(pos + [0.0405, 0.12, 0.0], rot)), 0.2)]
+    run = run_motions(arm, mots, q0)
+    jp = next(sg.chain.path for sg in run.segments if sg.kind == "CP")
+    k = next(i for i, pc in enumerate(jp.pieces) if pc.kind == "path" and pc.length < 1e-3)
+    lo, hi = jp.offsets[k], jp.offsets[k + 1]
+    s = lo + (hi - lo) * np.linspace(0.02, 0.98, 25)
+    d1 = jp.derivatives(s)[1]
+    e = 1e-6 * (hi - lo)
+    fd = (jp.derivatives(s + e)[0] - jp.derivatives(s - e)[0]) / (2 * e)
+    assert np.abs(d1 - fd).max() <= 1e-5 * max(1.0, float(np.abs(d1).max()))

@@ -49,6 +49,10 @@ VEL_USE = 0.999
 #: speed is below this fraction of it.
 SLOWDOWN_FRACTION = 0.999
 
+#: A uniform slow-down of the chain's timing (time scale above 1 by more than this)
+#: is reported as a stretch over the whole chain.
+UNIFORM_REPORT_RTOL = 1e-12
+
 #: Slow-down stretches are split where their limiting speed changes by this factor.
 SLOWDOWN_BAND = 1.25
 
@@ -585,4 +589,16 @@ def _slowdowns(chain: CartesianChain, specs: list[dict]) -> list[Slowdown]:
                 out.append((i, j, Slowdown(mi, lab, pos[i].copy(), pos[j].copy(), speed, float(prog[i]),
                                            reason)))
         i = j + 1
-    return [z for _, _, z in out]
+    result = [z for _, _, z in out]
+    k_uniform = float(getattr(tm, "time_scale", 1.0))
+    if k_uniform > 1.0 + UNIFORM_REPORT_RTOL:
+        # the final check found a limit exceeded between the grid nodes and the whole
+        # motion was slowed down by this factor: every cruise runs 1/k slower too
+        top = int(np.argmax(prog))
+        mi = chain.motion_ids[chain.pieces[k[top]].motion]
+        lab = chain.labels[chain.pieces[k[top]].motion]
+        result.append(Slowdown(mi, lab, pos[0].copy(), pos[-1].copy(), float(prog[top]) / k_uniform,
+                               float(prog[top]),
+                               f"whole chain slowed down uniformly by {k_uniform - 1.0:.3g} "
+                               "(a limit exceeded between the grid nodes)"))
+    return result

@@ -144,7 +144,8 @@ class ChainJointPath:
         k = self.piece_of(s)
         lo = self.offsets[k]
         hi = self.offsets[k + 1]
-        hk = np.minimum(h, (hi - lo) / 8.0)
+        # a one-sided stencil (6 steps) starts within 3 steps of an end: 9 steps fit
+        hk = np.minimum(h, (hi - lo) / 9.0)
         # stencil direction: central where it fits inside the piece, one-sided otherwise
         fwd = s - 3 * hk < lo
         bwd = ~fwd & (s + 3 * hk > hi)

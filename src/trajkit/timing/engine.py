@@ -17,12 +17,18 @@ Steps:
 3. exact constant-jerk pieces through the node states
    (:mod:`trajkit.timing._hermite`);
 4. a dense check of every limit on the pieces (every piece boundary plus
-   :data:`CHECK_PER_PIECE` points inside, path derivatives by their cubic
-   interpolation on the grid); where a limit is exceeded the limit of that
-   joint is lowered at the nearby nodes and the problem solved again
-   (:data:`MAX_TIGHTEN` times), and any excess left is removed by slowing the
-   whole motion down uniformly (time scaled by ``k``: velocities / k,
-   accelerations / k^2, jerks / k^3), which always succeeds.
+   :data:`CHECK_PER_PIECE` points inside, path derivatives exact where the
+   path makes them cheap, otherwise by their cubic interpolation on the grid,
+   towards the values from below in a cell that ends at a breakpoint); where
+   a limit is exceeded the limit of that joint is lowered at the nearby nodes
+   and the problem solved again (:data:`MAX_TIGHTEN` times). The final check
+   is denser (:data:`FINAL_CHECK_PER_PIECE`, then a zoom on the pieces close
+   to a limit); on a path without cheap derivatives it evaluates the true
+   derivatives at :data:`VERIFY_POINTS` of every cell where it comes within
+   :data:`VERIFY_ABOVE` of a limit and corrects the interpolation there
+   (``_Corrected``). Any excess left is removed by slowing the whole motion
+   down uniformly (time scaled by ``k``: velocities / k, accelerations / k^2,
+   jerks / k^3), which always succeeds.
 
 Optimality: the result is a stationary point of the grid problem (the rounds
 stop when the time changes by less than :data:`ROUND_RTOL`); the
@@ -116,6 +122,17 @@ FINAL_CHECK_PER_PIECE = 64
 ZOOM_ABOVE = 1e-3
 ZOOM_POINTS = 17
 ZOOM_LEVELS = 4
+
+#: The final check of a path whose derivatives are not cheap (inverse
+#: kinematics) evaluates the true derivatives at the middle of every grid
+#: cell where a check point comes within VERIFY_ABOVE of a limit (the
+#: interpolation error of ``q'''`` is a fraction of a per cent where the grid is
+#: refined), and corrects the interpolation there (see ``_Corrected``).
+VERIFY_ABOVE = 1e-2
+
+#: Points (fractions of a cell) where the true derivatives are evaluated (each
+#: costs a derivative stencil: 7 inverse kinematics).
+VERIFY_POINTS = (0.5,)
 
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
@@ -370,7 +387,10 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         i3 = 0.5 * (d3[:-1] + d3[1:])
         # the speed the cell could run at: the velocity limits, the path's cap, and
         # the speeds at which the curvature of the joint path alone uses the joints'
-        # acceleration and jerk limits
+        # acceleration and jerk limits (a timing can run somewhat faster than
+        # cbrt(j_max / |d3q/ds3|) where the path's acceleration and jerk cancel part
+        # of d3q/ds3 v^3; the final check evaluates the true derivatives wherever
+        # the interpolation's error could matter)
         with np.errstate(divide="ignore", invalid="ignore"):
             vcap = np.min(np.where(np.abs(m1) > 0, vlim / np.abs(m1), np.inf), axis=1)
             vcap = np.minimum(vcap, np.min(np.where(np.abs(m2) > 0, np.sqrt(alim / np.abs(m2)),
@@ -467,6 +487,100 @@ def _interp_derivatives(s_grid: np.ndarray, der: tuple, S: np.ndarray):
     w = ((S - s0g) / (s1g - s0g))[:, None]
     f3 = (1 - w) * d3[cell] + w * d3[cell + 1]
     return f1, f2, f3
+
+
+class _Interp:
+    """Joint-path derivatives between the grid nodes for the checks of a path without
+    cheap derivatives: ``_interp_derivatives``, except that a cell ending at a
+    breakpoint of the path interpolates towards the derivatives there from below
+    (``left``: ``q'``, ``q''``, ``q'''`` (k, m) at the breakpoints ``breaks`` (k,),
+    evaluated just before them), the values of the piece the cell belongs to; the
+    node itself carries those from above (``q'''`` may step there)."""
+
+    def __init__(self, s_grid: np.ndarray, der: tuple, breaks: np.ndarray, left: tuple | None) -> None:
+        self.s = s_grid
+        self.der = der
+        self.right = [d[1:] for d in der[1:]]
+        if left is not None and breaks.size:
+            node = np.searchsorted(s_grid, breaks)
+            ok = (node > 0) & (node < s_grid.size)
+            ok[ok] &= s_grid[node[ok]] == breaks[ok]
+            if ok.any():
+                self.right = [r.copy() for r in self.right]
+                for r, lv in zip(self.right, left):
+                    r[node[ok] - 1] = lv[ok]
+
+    def _base(self, S: np.ndarray):
+        s = self.s
+        cell = np.clip(np.searchsorted(s, S, side="right") - 1, 0, s.size - 2)
+        _, d1, d2, d3 = self.der
+        r1, r2, r3 = self.right
+        s0g, s1g = s[cell], s[cell + 1]
+        f1 = _hermite_interp(s0g, s1g, d1[cell], r1[cell], d2[cell], r2[cell], S)
+        f2 = _hermite_interp(s0g, s1g, d2[cell], r2[cell], d3[cell], r3[cell], S)
+        w = ((S - s0g) / (s1g - s0g))[:, None]
+        f3 = (1 - w) * d3[cell] + w * r3[cell]
+        return cell, [f1, f2, f3]
+
+    def derivatives(self, S: np.ndarray):
+        _, f = self._base(np.atleast_1d(np.asarray(S, dtype=np.float64)))
+        return None, f[0], f[1], f[2]
+
+
+class _Corrected(_Interp):
+    """Joint-path derivatives for the final check of a path without cheap derivatives:
+    the grid interpolation (:class:`_Interp`), plus, in the cells where the true
+    derivatives were evaluated (``add``), the polynomial in the cell's fraction ``w``
+    that is 0 at both nodes (where the interpolation is exact) and equals the
+    interpolation's error at :data:`VERIFY_POINTS` (a parabola for the middle alone).
+    At those points the check sees the true derivatives; between them the
+    interpolation error left is of third order in the cell's length instead of
+    second (linear ``q'''``)."""
+
+    def __init__(self, path: JointPath, s_grid: np.ndarray, der: tuple, breaks: np.ndarray,
+                 left: tuple | None) -> None:
+        super().__init__(s_grid, der, breaks, left)
+        self.path = path
+        m = der[1].shape[1]
+        self.err = np.zeros((s_grid.size - 1, len(VERIFY_POINTS), 3, m))
+        self.done = np.zeros(s_grid.size - 1, dtype=bool)
+        self.evaluated = 0
+
+    def add(self, cells: np.ndarray) -> int:
+        """Evaluate the true derivatives in ``cells`` (those not done yet); how many cells."""
+        cells = np.unique(cells)
+        cells = cells[~self.done[cells]]
+        if not cells.size:
+            return 0
+        w = np.asarray(VERIFY_POINTS)
+        s0, s1 = self.s[cells], self.s[cells + 1]
+        S = (s0[:, None] + (s1 - s0)[:, None] * w[None, :]).ravel()
+        _, t1, t2, t3 = self.path.derivatives(S)
+        _, (i1, i2, i3) = self._base(S)
+        k, npt = cells.size, w.size
+        for order, (tv, iv) in enumerate(((t1, i1), (t2, i2), (t3, i3))):
+            self.err[cells, :, order, :] = (tv - iv).reshape(k, npt, -1)
+        self.done[cells] = True
+        self.evaluated += S.size
+        return int(cells.size)
+
+    def derivatives(self, S: np.ndarray):
+        S = np.atleast_1d(np.asarray(S, dtype=np.float64))
+        cell, f = self._base(S)
+        sel = self.done[cell]
+        if sel.any():
+            c = cell[sel]
+            w = (S[sel] - self.s[c]) / (self.s[c + 1] - self.s[c])
+            xs = np.concatenate([[0.0], VERIFY_POINTS, [1.0]])
+            basis = np.ones((w.size, xs.size - 2))  # Lagrange basis of the inner points
+            for k in range(1, xs.size - 1):
+                for j in range(xs.size):
+                    if j != k:
+                        basis[:, k - 1] *= (w - xs[j]) / (xs[k] - xs[j])
+            corr = np.einsum("nk,nkom->onm", basis, self.err[c])
+            for order in range(3):
+                f[order][sel] += corr[order]
+        return None, f[0], f[1], f[2]
 
 
 def _sample_pieces(t: np.ndarray, st: np.ndarray, jerk: np.ndarray, tt: np.ndarray) -> np.ndarray:
@@ -770,6 +884,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     # needs to resolve the motion, not to interpolate the derivatives exactly
     cheap = bool(getattr(path, "cheap_derivatives", False))
     exact = path if cheap else None
+    # the derivatives just before every breakpoint (the checks interpolate towards
+    # them in the cell that ends there)
+    left = None
+    if not cheap and breaks.size:
+        left = path.derivatives(np.nextafter(breaks, -np.inf))[1:]
     s, der = _refine(path, s, der, vlim, alim, jlim, cap_fn, breaks,
                      GRID_RTOL_CHEAP if cheap else GRID_RTOL)
     q, d1, d2, d3 = der
@@ -860,7 +979,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
             lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                           cap_fn if callable(speed) else None)
-            use, cell, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, exact)
+            use, cell, rv, ra, rj, rs = _check(s, der, t, st, jk, lim,
+                                               exact if cheap else _Interp(s, der, breaks, left))
             k = _uniform_scale(use)
             # a timing that needs no uniform slow-down keeps its exact cruise speeds:
             # preferred unless a slowed one is clearly faster
@@ -926,6 +1046,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         jerk_free_time = math.nan
     else:
         _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap) = best
+    corrected: _Corrected | None = None
     for _final in range(4):
         if k_scale > 1.0 and not (rest0 and restN):
             raise InfeasibleError(
@@ -941,11 +1062,19 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         # the final check, denser than the rounds' (any excess left: a uniform slow-down)
         lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                       cap_fn if callable(speed) else None)
-        use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, exact, FINAL_CHECK_PER_PIECE)
+        if exact is None and (corrected is None or corrected.s is not s):
+            corrected = _Corrected(path, s, der, breaks, left)
+        src = exact if exact is not None else corrected
+        use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+        if corrected is not None:
+            # the true derivatives in the cells that come close to a limit, then again
+            near = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1) > 1.0 - VERIFY_ABOVE
+            if corrected.add(_c[near]):
+                use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
         worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)
-        zu = _zoom(s, der, t, st, jk, lim, exact, worst, FINAL_CHECK_PER_PIECE + 2)
+        zu = _zoom(s, der, t, st, jk, lim, src, worst, FINAL_CHECK_PER_PIECE + 2)
         use = LimitUse(np.maximum(use.velocity, zu.velocity),
                        np.maximum(use.acceleration, zu.acceleration),
                        np.maximum(use.jerk, zu.jerk),
@@ -966,5 +1095,6 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                       time_scale=k_scale, limit_use=use, rounds=0 if sol is None else sol.rounds,
                       grid_derivatives=der,
                       info={"nodes": int(s.size), "tightened": tightened,
+                            "verified_points": 0 if corrected is None else corrected.evaluated,
                             "status": "fallback" if sol is None else sol.status,
                             "converged": sol is not None and sol.converged, "round_rtol": ROUND_RTOL})
