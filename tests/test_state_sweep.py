@@ -200,6 +200,7 @@ def test_fixed_duration_asymmetric_sweep(capsys):
                 continue
             except InfeasibleError as err:
                 assert "no profile found" in str(err)
+                assert "a longer duration may be feasible" in str(err)
                 n_req += 1
                 n_none += 1
                 continue

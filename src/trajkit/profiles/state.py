@@ -537,6 +537,12 @@ def _fail(ws, s, g, limits, what):
     if st == K.ST_BRAKE:
         raise InfeasibleError(
             f"start state {s!r}{name} cannot be brought back within the limits")
+    if what.startswith("of duration") and not limits.symmetric:
+        # the fixed-duration gap of asymmetric limits (docs/state-profiles.md)
+        raise InfeasibleError(
+            f"no profile found {what}{name} from state {s!r} to {g!r} within the limits: with "
+            "separate accel/decel limits this duration may lie in a blocked interval that "
+            "feasible_durations does not report; a longer duration may be feasible")
     raise InfeasibleError(
         f"no profile found {what}{name} from state {s!r} to {g!r} within the limits "
         "(please report this input)")
