@@ -32,6 +32,14 @@ def _ruckig_run(start, V, A, J, goal=None, goal_va=None, minimum_duration=None,
     velocity interface; ``minimum_duration`` asks for at least that long;
     ``catch_errors`` turns ruckig's own ``RuckigError`` into ``None``.
     """
+    traj = _ruckig_trajectory(start, V, A, J, goal, goal_va, minimum_duration, catch_errors)
+    return None if traj is None else traj.duration
+
+
+def _ruckig_trajectory(start, V, A, J, goal=None, goal_va=None, minimum_duration=None,
+                       catch_errors=False):
+    """ruckig's ``Trajectory`` of one ``Ruckig(1).calculate`` (see :func:`_ruckig_run`),
+    ``None`` if it fails."""
     from ruckig import ControlInterface, InputParameter, Result, Ruckig, RuckigError, Trajectory
 
     inp = InputParameter(1)
@@ -60,7 +68,7 @@ def _ruckig_run(start, V, A, J, goal=None, goal_va=None, minimum_duration=None,
         return None
     if res not in (Result.Working, Result.Finished):
         return None
-    return traj.duration
+    return traj
 
 
 def ruckig_goal_miss(start, goal, V, A, J):
@@ -70,20 +78,7 @@ def ruckig_goal_miss(start, goal, V, A, J):
     for a motion of a few nanometres."""
     from fractions import Fraction
 
-    from ruckig import InputParameter, Ruckig, Trajectory
-
-    inp = InputParameter(1)
-    inp.current_position = [start[0]]
-    inp.current_velocity = [start[1]]
-    inp.current_acceleration = [start[2]]
-    inp.target_position = [goal[0]]
-    inp.target_velocity = [goal[1]]
-    inp.target_acceleration = [goal[2]]
-    inp.max_velocity = [V]
-    inp.max_acceleration = [A]
-    inp.max_jerk = [J]
-    traj = Trajectory(1)
-    Ruckig(1).calculate(inp, traj)
+    traj = _ruckig_trajectory(start, V, A, J, goal=goal)
     prof = traj.profiles[0][0]
     p, v, a = (Fraction(x) for x in start)
     for t, j in zip(list(prof.brake.t) + list(prof.t), list(prof.brake.j) + list(prof.j)):

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 
+from ._check import leg_cuts
 from ._compile import jit_raw
 from ._phase import phase_end
 
@@ -616,35 +617,9 @@ def lingers(ph, n, v, a, A1, K1, A2, K2):
         dt = ph[k, 0]
         j = ph[k, 1]
         a = ph[k, 2]
-        # the legs change where v = 0 or a = 0 inside the phase: up to three cuts
-        c1 = math.inf
-        c2 = math.inf
-        c3 = math.inf
-        if j != 0.0:
-            ta = -a / j
-            if 0.0 < ta < dt:
-                c1 = ta
-            disc = a * a - 2.0 * j * v
-            if disc >= 0.0:
-                sq = math.sqrt(disc)
-                r1 = (-a - sq) / j
-                r2 = (-a + sq) / j
-                if 0.0 < r1 < dt:
-                    c2 = r1
-                if 0.0 < r2 < dt:
-                    c3 = r2
-        elif a != 0.0 and 0.0 < -v / a < dt:
-            c1 = -v / a
-        # sort the three cuts
-        if c1 > c2:
-            c1, c2 = c2, c1
-        if c2 > c3:
-            c2, c3 = c3, c2
-        if c1 > c2:
-            c1, c2 = c2, c1
+        c1, c2, c3 = leg_cuts(v, a, j, dt)
         t0 = 0.0
-        for c in (c1, c2, c3, dt):
-            t1 = min(c, dt)
+        for t1 in (c1, c2, c3, dt):
             if t1 > t0:
                 if _lingers_piece(v, a, j, t0, t1, dt, A1, K1, A2, K2):
                     return True

@@ -23,7 +23,7 @@ import math
 from ._compile import jit_raw
 from ._phase import phase_end
 
-__all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "clean"]
+__all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "clean", "leg_cuts"]
 
 #: Relative tolerance of every limit in the kernel check (ten times tighter
 #: than :data:`trajkit._constants.LIMIT_RTOL` of the public verifier).
@@ -68,6 +68,41 @@ def _leg(v, a, A1, K1, A2, K2):
     if v * a < 0.0:
         return A2, K2
     return A1, K1
+
+
+@jit_raw
+def leg_cuts(v, a, j, dt):
+    """The instants in ``(0, dt)`` where a phase of jerk ``j`` from ``(v, a)`` may
+    change its leg (``a = 0`` and ``v = 0``), ascending; ``dt`` where there is none."""
+    c0 = dt
+    c1 = dt
+    c2 = dt
+    if j != 0.0:
+        ta = -a / j
+        if 0.0 < ta < dt:
+            c0 = ta
+        disc = a * a - 2.0 * j * v
+        if disc >= 0.0:
+            sq = math.sqrt(disc)
+            q = -(a + math.copysign(sq, a)) if a != 0.0 else sq
+            if q != 0.0:
+                r1 = q / j
+                r2 = 2.0 * v / q
+                if 0.0 < r1 < dt:
+                    c1 = r1
+                if 0.0 < r2 < dt:
+                    c2 = r2
+    elif a != 0.0:
+        tv = -v / a
+        if 0.0 < tv < dt:
+            c1 = tv
+    if c0 > c1:
+        c0, c1 = c1, c0
+    if c1 > c2:
+        c1, c2 = c2, c1
+    if c0 > c1:
+        c0, c1 = c1, c0
+    return c0, c1, c2
 
 
 @jit_raw
@@ -117,36 +152,7 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
                 if a != 0.0 and _leg(v, a, A1, K1, A2, K2)[1] != 0.0:
                     return False
         if dt > 0.0:
-            # cut points: a = 0 and v = 0 inside the phase
-            c0 = dt
-            c1 = dt
-            c2 = dt
-            if j != 0.0:
-                ta = -a / j
-                if 0.0 < ta < dt:
-                    c0 = ta
-                disc = a * a - 2.0 * j * v
-                if disc >= 0.0:
-                    sq = math.sqrt(disc)
-                    q = -(a + math.copysign(sq, a)) if a != 0.0 else sq
-                    if q != 0.0:
-                        r1 = q / j
-                        r2 = 2.0 * v / q
-                        if 0.0 < r1 < dt:
-                            c1 = r1
-                        if 0.0 < r2 < dt:
-                            c2 = r2
-            elif a != 0.0:
-                tv = -v / a
-                if 0.0 < tv < dt:
-                    c1 = tv
-            # sort the three cuts
-            if c0 > c1:
-                c0, c1 = c1, c0
-            if c1 > c2:
-                c1, c2 = c2, c1
-            if c0 > c1:
-                c0, c1 = c1, c0
+            c0, c1, c2 = leg_cuts(v, a, j, dt)
             t_prev = 0.0
             for cut in (c0, c1, c2, dt):
                 if cut <= t_prev:

@@ -41,7 +41,7 @@ from ._brake import (
 from ._check import check
 from ._compile import jit_raw
 from ._phase import phase_end
-from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, step1
+from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, integrate, step1
 
 __all__ = [
     "NWS", "workspace", "solve",
@@ -339,11 +339,7 @@ def _vel_move(sv, v0, a0, vt, at, lim, best, res, W, vec, ivl, cfg, st):
     if not (t < math.inf):
         return math.inf, 0.0, 0
     n = int(res[R_N])
-    p = 0.0
-    v = v0
-    a = a0
-    for k in range(n):
-        p, v, a = phase_end(p, v, best[k, 2], best[k, 1], best[k, 0])
+    p, _, _ = integrate(best, 0, n, 0.0, v0, a0)
     return t, p, n
 
 
