@@ -451,6 +451,46 @@ def _emit(ws, out, keep, n, nb, total, tmin, ts, js, as_):
 
 
 @jit_raw
+def _onto_boundary(v, a, lim, vsc, asc):
+    """A brake's end state ``(v, a)``, which lies on the boundary of the inside set up
+    to the round-off of the brake's velocity and acceleration scales ``vsc``,
+    ``asc``, put onto it: ``(v, a, inside)``."""
+    # a velocity a few ulps beyond the limit is put on it (the shapes of step 1
+    # start within it)
+    if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
+        v = lim[0] if v > 0.0 else -lim[0]
+    # ... and an acceleration a few ulps beyond its leg's bound is put on it
+    al = lim[3] if v * a < 0.0 else lim[1]
+    if abs(a) > al and abs(a) - al <= BRAKE_SNAP_RTOL * asc:
+        a = al if a > 0.0 else -al
+    if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
+        # ... and of its acceleration scale
+        am = max(lim[1], lim[3])
+        if abs(a) > am and abs(a) - am <= BRAKE_SNAP_RTOL * asc:
+            a = am if a > 0.0 else -am
+        if abs(a) <= BRAKE_SNAP_RTOL * asc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
+                                                            lim[4]):
+            a = 0.0
+        # a brake cut at a velocity reversal ends at v = 0 up to round-off (the
+        # leg, hence the acceleration bound, changes there)
+        if abs(v) <= BRAKE_SNAP_RTOL * vsc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
+                                                           lim[4]):
+            v = 0.0
+        # a slowing acceleration whose velocity, through the reversal, lands a
+        # few ulps beyond v_max (an end on two bounds at once, e.g. a bump onto
+        # (v_max, 0) on the far side cut where |v| meets v_max)
+        if v * a < 0.0 and lim[2] > 0.0 and lim[4] > 0.0:
+            az2 = a * a - 2.0 * abs(v) / lim[4]
+            over = 0.5 * az2 * lim[2] - lim[0]
+            if 0.0 < over <= BRAKE_SNAP_RTOL * vsc:
+                a2 = math.copysign(math.sqrt(2.0 * lim[0] / lim[2] + 2.0 * abs(v) / lim[4]), a)
+                if inside(v, a2, lim[0], lim[1], lim[2], lim[3], lim[4]):
+                    a = a2
+        return v, a, inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4])
+    return v, a, True
+
+
+@jit_raw
 def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     """Brake candidate ``cand`` (0, 1: paths; 2, 3: bumps to +-v_max; 4: natural;
     5: hold; 6: ruckig's rule; only 0 = none when the start is inside): (phase count or -1,
@@ -494,40 +534,9 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
         tb += brk[k, 0]
         vsc = max(vsc, abs(v))
         asc = max(asc, abs(a), abs(brk[k, 2]))
-    # the brake ends on the boundary of the inside set; its end state carries
-    # the round-off of the brake's own velocity scale: a velocity a few ulps
-    # beyond the limit is put on it (the shapes of step 1 start within it)
-    if abs(v) > lim[0] and abs(v) - lim[0] <= BRAKE_SNAP_RTOL * vsc:
-        v = lim[0] if v > 0.0 else -lim[0]
-    # ... and an acceleration a few ulps beyond its leg's bound is put on it
-    al = lim[3] if v * a < 0.0 else lim[1]
-    if abs(a) > al and abs(a) - al <= BRAKE_SNAP_RTOL * asc:
-        a = al if a > 0.0 else -al
-    if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
-        # ... and of its acceleration scale
-        am = max(lim[1], lim[3])
-        if abs(a) > am and abs(a) - am <= BRAKE_SNAP_RTOL * asc:
-            a = am if a > 0.0 else -am
-        if abs(a) <= BRAKE_SNAP_RTOL * asc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
-                                                            lim[4]):
-            a = 0.0
-        # a brake cut at a velocity reversal ends at v = 0 up to round-off (the
-        # leg, hence the acceleration bound, changes there)
-        if abs(v) <= BRAKE_SNAP_RTOL * vsc and not inside(v, a, lim[0], lim[1], lim[2], lim[3],
-                                                           lim[4]):
-            v = 0.0
-        # a slowing acceleration whose velocity, through the reversal, lands a
-        # few ulps beyond v_max (an end on two bounds at once, e.g. a bump onto
-        # (v_max, 0) on the far side cut where |v| meets v_max)
-        if v * a < 0.0 and lim[2] > 0.0 and lim[4] > 0.0:
-            az2 = a * a - 2.0 * abs(v) / lim[4]
-            over = 0.5 * az2 * lim[2] - lim[0]
-            if 0.0 < over <= BRAKE_SNAP_RTOL * vsc:
-                a2 = math.copysign(math.sqrt(2.0 * lim[0] / lim[2] + 2.0 * abs(v) / lim[4]), a)
-                if inside(v, a2, lim[0], lim[1], lim[2], lim[3], lim[4]):
-                    a = a2
-        if not inside(v, a, lim[0], lim[1], lim[2], lim[3], lim[4]):
-            return -1, 0.0
+    v, a, ok = _onto_boundary(v, a, lim, vsc, asc)
+    if not ok:
+        return -1, 0.0
     s1[0] = p
     s1[1] = v
     s1[2] = a
