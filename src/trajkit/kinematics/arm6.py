@@ -51,6 +51,7 @@ import numpy as np
 from .._validate import check_array, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
+from . import _jets
 from .base import REACH_RTOL, REVOLUTE, Pose, RobotModel, parse_flags, rot_z, wrap_angle
 
 __all__ = ["Arm6", "default_arm6", "ARM6_FLAGS"]
@@ -142,6 +143,32 @@ class Arm6(RobotModel):
             t = t @ _dh(q[i] + _THETA_OFFSET[i], d[i], a[i], _ALPHA[i])
             out.append(t)
         return out
+
+    def fk_jet(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Forward kinematics of joint jets: ``q`` (n, N, 6) Taylor coefficients of the
+        joints (N <= 4) -> those of the flange position (n, N, 3) [m] and rotation (n, N, 3, 3)
+        (see :mod:`trajkit.kinematics._jets`)."""
+        d = (self.d1, 0.0, 0.0, self.d4, 0.0, self.d6)
+        a = (self.a1, self.a2, self.a3, 0.0, 0.0, 0.0)
+        lead = (q.shape[0],)
+        nc = q.shape[1]
+        rot = _jets.constant(np.eye(3), lead, nc)
+        pos = _jets.constant(np.zeros(3), lead, nc)
+        z = np.array([0.0, 0.0, 1.0])
+        for i in range(6):
+            theta = q[:, :, i].copy()
+            theta[:, 0] += _THETA_OFFSET[i]
+            rz = _jets.axis_motion(theta, z)
+            c, s = _jets.cos_sin(theta)
+            # DH: Rz(theta) then (a cos theta, a sin theta, d), then Rx(alpha)
+            t = np.zeros(lead + (nc, 3))
+            t[..., 0] = a[i] * c
+            t[..., 1] = a[i] * s
+            t[:, 0, 2] = d[i]
+            pos = pos + _jets.mat_vec(rot, t)
+            ca, sa = math.cos(_ALPHA[i]), math.sin(_ALPHA[i])
+            rot = _jets.mat_mul(rot, rz) @ np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
+        return pos, rot
 
     def fk(self, q: Any) -> Pose:
         """Flange pose of joints ``q`` (6,) [rad]."""

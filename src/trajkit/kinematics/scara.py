@@ -27,6 +27,7 @@ import numpy as np
 from .._validate import check_array, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
+from . import _jets
 from .base import PRISMATIC, REACH_RTOL, REVOLUTE, Pose, RobotModel, rot_z, wrap_angle
 
 __all__ = ["Scara", "default_scara"]
@@ -71,6 +72,18 @@ class Scara(RobotModel):
         x = self.a1 * math.cos(q1) + self.a2 * math.cos(q1 + q2)
         y = self.a1 * math.sin(q1) + self.a2 * math.sin(q1 + q2)
         return Pose(np.array([x, y, self.z0 - d3]), rot_z(q1 + q2 + q4))
+
+    def fk_jet(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Forward kinematics of joint jets: ``q`` (n, N, 4) Taylor coefficients of the
+        joints (N <= 4) -> those of the tool position (n, N, 3) [m] and rotation (n, N, 3, 3)
+        (see :mod:`trajkit.kinematics._jets`)."""
+        c1, s1 = _jets.cos_sin(q[:, :, 0])
+        c12, s12 = _jets.cos_sin(q[:, :, 0] + q[:, :, 1])
+        pos = np.stack([self.a1 * c1 + self.a2 * c12, self.a1 * s1 + self.a2 * s12, -q[:, :, 2]],
+                       axis=-1)
+        pos[:, 0, 2] += self.z0
+        rot = _jets.axis_motion(q[:, :, 0] + q[:, :, 1] + q[:, :, 3], np.array([0.0, 0.0, 1.0]))
+        return pos, rot
 
     def config_of(self, q: Any) -> str:
         """``"lefty"`` if q2 >= 0 else ``"righty"``."""

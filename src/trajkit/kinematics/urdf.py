@@ -26,6 +26,7 @@ from scipy.linalg.lapack import dposv as _dposv
 from .._validate import check_array, check_positive
 from ..errors import InvalidInputError, UnreachableError
 from ..limits import AxisLimits
+from . import _jets
 from .base import PRISMATIC, REVOLUTE, Pose, RobotModel, _fmt_xyz
 
 try:  # pragma: no cover - depends on the install
@@ -316,6 +317,52 @@ class UrdfRobot(RobotModel):
         rt = np.swapaxes(rot, 1, 2)
         jac = np.concatenate([rt @ jw[:, :3], rt @ jw[:, 3:]], axis=1)
         return pos, rot, jac
+
+    def jacobian_many(self, q: np.ndarray) -> np.ndarray:
+        """World-frame Jacobians (n, 6, n_joints) of many joint vectors ``q`` (n, n_joints):
+        the tool point's linear velocity (rows 0-2) and the tool's angular velocity
+        (rows 3-5) per joint velocity (pinocchio's LOCAL_WORLD_ALIGNED)."""
+        _pos, rot, jac = self._fk_jacobian_many(q)
+        return np.concatenate([rot @ jac[:, :3], rot @ jac[:, 3:]], axis=1)
+
+    def fk_jet(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Forward kinematics of joint jets (see :mod:`trajkit.kinematics._jets`).
+
+        Parameters
+        ----------
+        q : ndarray, shape (n, N, n_joints)
+            Taylor coefficients of the joints along a motion.
+
+        Returns
+        -------
+        position : ndarray, shape (n, N, 3)
+            Taylor coefficients of the tool position [m] (world frame).
+        rotation : ndarray, shape (n, N, 3, 3)
+            Taylor coefficients of the tool rotation matrix.
+
+        None when the chain has a joint kind the vectorised kinematics does not cover.
+        """
+        chain = self._chain()
+        if chain is None:
+            return None
+        lead = (q.shape[0],)
+        nc = q.shape[1]
+        rots = [_jets.constant(np.eye(3), lead, nc)]
+        poss = [_jets.constant(np.zeros(3), lead, nc)]
+        for parent, iq, r_pl, t_pl, axis, revolute in chain:
+            r_par, p_par = rots[parent], poss[parent]
+            r_j = r_par @ r_pl
+            p_j = p_par + r_par @ t_pl
+            if revolute:
+                rots.append(_jets.mat_mul(r_j, _jets.axis_motion(q[:, :, iq], axis)))
+                poss.append(p_j)
+            else:
+                rots.append(r_j)
+                poss.append(p_j + _jets.scale(q[:, :, iq], r_j @ axis))
+        frame = self.model.frames[self.frame_id]
+        r_par, p_par = rots[int(frame.parentJoint)], poss[int(frame.parentJoint)]
+        return (p_par + r_par @ np.array(frame.placement.translation),
+                r_par @ np.array(frame.placement.rotation))
 
     def ik_near_many(self, positions: np.ndarray, rotations: np.ndarray,
                      seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

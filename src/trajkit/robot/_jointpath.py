@@ -9,6 +9,14 @@ exact inverse kinematics on a small stencil (step :data:`STENCIL_STEP` times
 the robot's length scale) around that point, never across a junction of two
 pieces (a one-sided stencil there and at the path's ends): the numerical
 derivative of the kinematics, not of a sampled grid.
+
+A robot that offers its forward kinematics on Taylor series (``fk_jet``, see
+:mod:`trajkit.kinematics._jets`) and is not redundant gets the derivatives
+from the kinematics instead: one inverse kinematics per point, then the
+joints' Taylor coefficients order by order through the Jacobian and the
+exact higher-order terms of the forward kinematics. Only the tool path's own
+derivatives (closed-form, cheap and free of solver noise) are taken by
+differences, on the same stencils.
 """
 
 from __future__ import annotations
@@ -18,6 +26,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import UnreachableError
+from ..kinematics import _jets
 from ..kinematics.base import Pose, RobotModel
 from ._rotations import matrix_from_quat
 
@@ -67,6 +76,7 @@ class ChainJointPath:
         self.table_q = table_q
         self.labels = labels
         self.h = STENCIL_STEP * float(robot.length_scale)
+        self._fk_jet = self._jet_kinematics(robot)
         # seeds from a quintic spline through the walked joints: for a redundant arm
         # the inverse kinematics keeps the seed's null-space part, so the path is as
         # smooth as its seeds (a linear interpolation would put kinks in it)
@@ -117,30 +127,41 @@ class ChainJointPath:
                     f"of the path is unreachable: {exc}") from None
         return out
 
+    def _ik_at(self, pos: np.ndarray, rot: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
+        """IK of the poses ``pos`` (n, 3), ``rot`` (n, 3, 3) on pieces ``k`` (n,) from
+        ``seeds`` (n, m), all at once where the robot offers it (``ik_near_many``)."""
+        many = getattr(self.robot, "ik_near_many", None)
+        if many is None:
+            return self._solve(pos, rot, k, seeds)
+        q, ok = many(pos, rot, seeds)
+        if not ok.all():  # raises at the first failure, with the robot's message
+            q[~ok] = self._solve(pos[~ok], rot[~ok], k[~ok], seeds[~ok])
+        return q
+
     def _stencil_ik(self, pts: np.ndarray, k: np.ndarray) -> np.ndarray:
         """Joints (n, 7, m) at the stencil points ``pts`` (n, 7) on pieces ``k`` (n,), each
-        seeded from the walked branch (all at once where the robot offers it:
-        ``ik_near_many``)."""
+        seeded from the walked branch."""
         n = pts.shape[0]
-        m = self.n_joints
         kk = np.repeat(k, 7)
         flat = pts.ravel()
         pos, rot = self.poses(flat, kk)
         seeds = self.seeds(np.clip(flat, 0.0, self.length))
-        many = getattr(self.robot, "ik_near_many", None)
-        if many is None:
-            return self._solve(pos, rot, kk, seeds).reshape(n, 7, m)
-        q, ok = many(pos, rot, seeds)
-        if not ok.all():  # raises at the first failure, with the robot's message
-            q[~ok] = self._solve(pos[~ok], rot[~ok], kk[~ok], seeds[~ok])
-        return q.reshape(n, 7, m)
+        return self._ik_at(pos, rot, kk, seeds).reshape(n, 7, self.n_joints)
 
-    # ---- the JointPath protocol
-    def derivatives(self, s: np.ndarray):
-        s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length)
-        n = s.size
-        m = self.n_joints
-        h = self.h
+    @staticmethod
+    def _jet_kinematics(robot: RobotModel):
+        """The robot's ``fk_jet`` when it covers this robot (not redundant, chain supported)."""
+        fk_jet = getattr(robot, "fk_jet", None)
+        if fk_jet is None or robot.n_joints > 6:
+            return None
+        probe = np.zeros((1, _jets.ORDER + 1, robot.n_joints))
+        return fk_jet if fk_jet(probe) is not None else None
+
+    def _stencil(self, s: np.ndarray, h: float):
+        """7-point stencils at ``s`` (n,) of step ``h`` (or less) inside each point's piece.
+
+        Returns the stencil points (n, 7), the pieces (n,), the local steps (n,),
+        the forward / backward masks (n,) and the index of ``s`` in each stencil."""
         k = self.piece_of(s)
         lo = self.offsets[k]
         hi = self.offsets[k + 1]
@@ -154,16 +175,51 @@ class ChainJointPath:
                        np.where(bwd[:, None], s[:, None] - hk[:, None] * (off + 3),
                                 s[:, None] + hk[:, None] * off))
         centre = np.where(fwd | bwd, 0, 3)
-        q_all = self._stencil_ik(pts, k)
-        q = np.empty((n, m))
-        d = [np.empty((n, m)) for _ in range(3)]
-        q[:] = q_all[np.arange(n), centre]
+        return pts, k, hk, fwd, bwd, centre
+
+    @staticmethod
+    def _differences(vals: np.ndarray, hk: np.ndarray, fwd: np.ndarray, bwd: np.ndarray) -> list:
+        """First, second and third derivatives (each (n, ...)) from stencil values (n, 7, ...)."""
+        out = []
+        shape = (-1,) + (1,) * (vals.ndim - 2)
         for order in range(3):
-            wc = _CENTRAL[order]
-            wf = _FORWARD[order]
-            cen = np.einsum("j,njm->nm", wc, q_all)
-            one = np.einsum("j,njm->nm", wf, q_all)
+            cen = np.tensordot(vals, _CENTRAL[order], axes=([1], [0]))
+            one = np.tensordot(vals, _FORWARD[order], axes=([1], [0]))
             sign_b = (-1.0) ** (order + 1)  # backward stencil: mirrored offsets
-            val = np.where(fwd[:, None], one, np.where(bwd[:, None], sign_b * one, cen))
-            d[order] = val / hk[:, None] ** (order + 1)
+            val = np.where(fwd.reshape(shape), one, np.where(bwd.reshape(shape), sign_b * one, cen))
+            out.append(val / hk.reshape(shape) ** (order + 1))
+        return out
+
+    # ---- the JointPath protocol
+    def derivatives(self, s: np.ndarray):
+        s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length)
+        n = s.size
+        if self._fk_jet is not None:
+            return self._jet_derivatives(s)
+        pts, k, hk, fwd, bwd, centre = self._stencil(s, self.h)
+        q_all = self._stencil_ik(pts, k)
+        q = q_all[np.arange(n), centre]
+        d = self._differences(q_all, hk, fwd, bwd)
         return q, d[0], d[1], d[2]
+
+    def _jet_derivatives(self, s: np.ndarray):
+        n = s.size
+        pts, k, hk, fwd, bwd, centre = self._stencil(s, self.h)
+        pos, rot = self.poses(pts.ravel(), np.repeat(k, 7))
+        pos = pos.reshape(n, 7, 3)
+        rot = rot.reshape(n, 7, 3, 3)
+        rows = np.arange(n)
+        pj = np.empty((n, _jets.ORDER + 1, 3))
+        rj = np.empty((n, _jets.ORDER + 1, 3, 3))
+        pj[:, 0] = pos[rows, centre]
+        rj[:, 0] = rot[rows, centre]
+        fact = 1.0
+        for order, (dp, dr) in enumerate(zip(self._differences(pos, hk, fwd, bwd),
+                                             self._differences(rot, hk, fwd, bwd)), start=1):
+            fact *= order
+            pj[:, order] = dp / fact
+            rj[:, order] = dr / fact
+        q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s))
+        many = getattr(self.robot, "jacobian_many", None)
+        qj = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
+        return q, qj[:, 1], 2.0 * qj[:, 2], 6.0 * qj[:, 3]

@@ -1,0 +1,139 @@
+"""Joint-path derivatives from the kinematics: forward kinematics on Taylor series.
+
+Two independent references:
+
+- the forward kinematics pushed through a joint polynomial ``q(e)`` must have
+  the Taylor coefficients of a least-squares polynomial fitted to plain
+  forward-kinematics samples of that motion;
+- the derivatives of an inverse-kinematics joint path must equal those of a
+  high-degree polynomial fitted to inverse kinematics solved along a few
+  millimetres of the path (far from the stencils either method uses).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from arms import load_arm
+
+from trajkit.kinematics import _jets
+from trajkit.kinematics.arm6 import default_arm6
+from trajkit.kinematics.base import Pose, rot_x, rot_z
+from trajkit.kinematics.scara import default_scara
+from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
+
+
+def _robot(name):
+    if name == "arm6":
+        return default_arm6()
+    if name == "scara":
+        return default_scara()
+    return load_arm(name)
+
+
+def _fit(e, samples, deg):
+    """Taylor coefficients 0..3 at e = 0 of a polynomial fit (e scaled to [-1, 1])."""
+    E = np.abs(e).max()
+    c = np.polynomial.polynomial.polyfit(e / E, samples, deg)[:4]
+    return c / E ** np.arange(4)[:, None]
+
+
+@pytest.mark.parametrize("name", ["arm6", "scara", "ur5", "panda"])
+def test_forward_kinematics_on_jets_has_the_taylor_coefficients_of_the_motion(name):
+    robot = _robot(name)
+    m = robot.n_joints
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        qj = rng.uniform(-1.0, 1.0, size=(4, m))
+        if name == "scara":
+            qj[0, 2] = 0.1  # the quill inside its stroke
+        pos, rot = robot.fk_jet(qj[None])
+        e = np.linspace(-0.02, 0.02, 41)
+        poses = [robot.fk(qj[0] + qj[1] * x + qj[2] * x**2 + qj[3] * x**3) for x in e]
+        ref_p = _fit(e, np.array([p.position for p in poses]), 7)
+        ref_r = _fit(e, np.array([p.rotation.ravel() for p in poses]), 7)
+        np.testing.assert_allclose(pos[0], ref_p, rtol=0, atol=1e-7)
+        np.testing.assert_allclose(rot[0].reshape(4, 9), ref_r, rtol=0, atol=1e-7)
+        # fewer coefficients: the leading ones of the same series
+        p2, r2 = robot.fk_jet(qj[None, :2])
+        np.testing.assert_allclose(p2[0], pos[0, :2], rtol=0, atol=1e-14)
+        np.testing.assert_allclose(r2[0], rot[0, :2], rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("name", ["arm6", "ur5"])
+def test_jacobian_from_jets_equals_the_robots_own(name):
+    robot = _robot(name)
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-1.0, 1.0, size=(6, robot.n_joints))
+    jac = _jets.jacobian(robot.fk_jet, q)
+    h = 1e-6
+    for i in range(q.shape[0]):
+        for j in range(robot.n_joints):
+            dq = np.zeros(robot.n_joints)
+            dq[j] = h
+            a, b = robot.fk(q[i] + dq), robot.fk(q[i] - dq)
+            dp = (a.position - b.position) / (2 * h)
+            dr = (a.rotation - b.rotation) / (2 * h) @ robot.fk(q[i]).rotation.T
+            w = 0.5 * np.array([dr[2, 1] - dr[1, 2], dr[0, 2] - dr[2, 0], dr[1, 0] - dr[0, 1]])
+            np.testing.assert_allclose(jac[i, :, j], np.concatenate([dp, w]), rtol=0, atol=1e-8)
+    if hasattr(robot, "jacobian_many"):
+        np.testing.assert_allclose(robot.jacobian_many(q), jac, rtol=0, atol=1e-12)
+
+
+def _chain_path(robot, q0, motions):
+    run = run_motions(robot, motions, q0)
+    return next(sg.chain.path for sg in run.segments if sg.kind == "CP")
+
+
+def _paths():
+    """(robot name, start joints, motions): a LIN with a turn of the tool, a CIRC, a zone blend."""
+    out = []
+    for name, q0 in (("ur5", np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])),
+                     ("arm6", np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1]))):
+        robot = _robot(name)
+        p = robot.fk(q0)
+        turn = rot_z(0.6) @ rot_x(0.3) @ p.rotation
+
+        def at(d, rot=p.rotation, p=p):
+            return CartesianTarget(Pose(p.position + np.asarray(d), rot))
+
+        out.append((name, q0, [Lin(at([0.12, 0.2, -0.05], turn), 1.0, label="L")]))
+        out.append((name, q0, [Circ(at([0.1, 0.1, 0.0]), at([0.2, 0.0, 0.0]), 1.0, label="C")]))
+        out.append((name, q0, [Lin(at([0.15, 0.0, 0.0]), 1.0, zone=0.04, label="L1"),
+                               Lin(at([0.15, 0.15, 0.0]), 1.0, label="L2")]))
+    return out
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_joint_path_derivatives_equal_those_of_the_inverse_kinematics(case):
+    name, q0, motions = _paths()[case]
+    robot = _robot(name)
+    jp = _chain_path(robot, q0, motions)
+    assert jp._fk_jet is not None  # the derivatives come from the kinematics
+    rng = np.random.default_rng(case)
+    for k, piece in enumerate(jp.pieces):
+        lo, hi = jp.offsets[k], jp.offsets[k + 1]
+        if hi - lo < 0.02:
+            continue
+        s = rng.uniform(lo + 0.005, hi - 0.005, 3)
+        q, d1, d2, d3 = jp.derivatives(s)
+        for i, si in enumerate(s):
+            E = 0.004
+            e = np.linspace(-E, E, 61)
+            qs = jp.ik(si + e, np.full(e.size, k), jp.seeds(si + e))
+            ref = _fit(e, qs, 10)
+            for order, got in enumerate((q[i], d1[i], d2[i] / 2.0, d3[i] / 6.0)):
+                scale = max(1.0, np.abs(ref[order]).max())
+                np.testing.assert_allclose(got, ref[order], rtol=0, atol=5e-5 * scale,
+                                           err_msg=f"{name} piece {k} ({piece.kind}) order {order}")
+
+
+def test_a_redundant_arm_keeps_the_stencil_of_the_inverse_kinematics():
+    robot = _robot("panda")
+    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+    p = robot.fk(q0)
+    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position + np.array([0.1, 0.0, 0.0]),
+                                                          p.rotation)), 1.0, label="L")])
+    assert jp._fk_jet is None
+    with pytest.raises(ValueError, match="non-redundant"):
+        _jets.joint_taylor(robot.fk_jet, np.zeros((1, 7)), np.zeros((1, 4, 3)), np.zeros((1, 4, 3, 3)))
