@@ -49,9 +49,9 @@ known multiple of the position residual, which the tests confirm):
 The real roots on each shape's interval come from :func:`._roots.quartic_roots_unit`
 (derivative recursion, no grid), are polished by Newton steps on the
 polynomial, and each candidate is built as a phase table and checked exactly
-(:func:`._check.check`). The minimum time is the fastest candidate that
-passes. With every valid duration wanted (the blocked intervals), all
-candidates are checked; the valid durations of step 1 come as the minimum
+(:func:`._check.check_equal_legs`: :func:`._check.check` for equal legs). The
+minimum time is the fastest candidate that passes. With every valid duration
+wanted (the blocked intervals), all candidates are checked; the valid durations of step 1 come as the minimum
 plus pairs (ruckig's block scheme), so an even count of distinct durations
 means that a profile was missed or is degenerate, and the caller's general
 step 1 decides.
@@ -61,12 +61,13 @@ from __future__ import annotations
 
 import math
 
-from ._check import check, clean
+from ._check import check_equal_legs, clean
 from ._compile import jit_raw
 from ._roots import no_root_certain, quartic_roots_unit
 from ._shapes import NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, S_NONEW
 
-__all__ = ["NSF", "NCF", "SF_SCRATCH", "build_candidate", "sym_step1", "sym_applies"]
+__all__ = ["NSF", "NCF", "SF_SCRATCH", "build_candidate", "coef_acc0", "coef_acc01", "coef_acc1",
+           "coef_none", "invariants", "sym_applies", "sym_step1"]
 
 #: Largest number of candidates of both directions (4 roots of each quartic,
 #: 2 of the quadratic, 1 cruise profile).
@@ -104,6 +105,52 @@ def sym_applies(lim):
     checks that the start lies inside them.)"""
     V, A, K = lim[0], lim[1], lim[2]
     return A == lim[3] and K == lim[4] and K > 0.0 and A < math.inf and V < math.inf
+
+
+@jit_raw
+def invariants(v0, a0, D, vf, af, J):
+    """``(h0, hf, g, E)`` of the problem (see the module text)."""
+    h0 = 2.0 * J * v0 - a0 * a0
+    hf = 2.0 * J * vf - af * af
+    E = 3.0 * D * J * J + 3.0 * J * (a0 * v0 - af * vf) - a0 * a0 * a0 + af * af * af
+    return h0, hf, 0.5 * (hf - h0), E
+
+
+@jit_raw
+def coef_none(coef, h0, hf, g, E):
+    """NONE: coefficients (ascending, in ``w = c1 - c3``) into ``coef[:5]``."""
+    coef[0] = -3.0 * g * g
+    coef[1] = -4.0 * E
+    coef[2] = 6.0 * (h0 + hf)
+    coef[3] = 0.0
+    coef[4] = 3.0
+
+
+@jit_raw
+def coef_acc0(coef, A, h0, hf, E):
+    """ACC0: coefficients (ascending, in ``u = c3``) into ``coef[:5]``."""
+    coef[0] = 1.5 * A * A * (h0 + hf) - 2.0 * A * E + 0.75 * (hf * hf - h0 * h0)
+    coef[1] = -6.0 * A * hf
+    coef[2] = 3.0 * (A * A + hf)
+    coef[3] = -6.0 * A
+    coef[4] = 3.0
+
+
+@jit_raw
+def coef_acc1(coef, A, h0, hf, E):
+    """ACC1: coefficients (ascending, in ``u = c1``) into ``coef[:5]``."""
+    coef[0] = 1.5 * A * A * (h0 + hf) - 2.0 * A * E + 0.75 * (h0 * h0 - hf * hf)
+    coef[1] = 6.0 * A * h0
+    coef[2] = 3.0 * (A * A + h0)
+    coef[3] = 6.0 * A
+    coef[4] = 3.0
+
+
+@jit_raw
+def coef_acc01(A, J, h0, hf, E):
+    """ACC0_ACC1: coefficients ``(q0, q1, q2)`` (ascending, in ``x = t1``)."""
+    return (12.0 * A * A * A * A + 10.5 * A * A * h0 + 1.5 * A * A * hf - 2.0 * A * E
+            + 0.75 * (h0 * h0 - hf * hf), 6.0 * A * J * (3.0 * A * A + h0), 6.0 * A * A * J * J)
 
 
 @jit_raw
@@ -257,10 +304,7 @@ def _direction(sg, s1, lim, cand, nc, coef, unit, roots, tmp, ph):
     A = lim[1]
     K = lim[2]
     J = 1.0 / K
-    h0 = 2.0 * J * v0 - a0 * a0
-    hf = 2.0 * J * vf - af * af
-    g = 0.5 * (hf - h0)
-    E = 3.0 * D * J * J + 3.0 * J * (a0 * v0 - af * vf) - a0 * a0 * a0 + af * af * af
+    h0, hf, g, E = invariants(v0, a0, D, vf, af, J)
     # the scale of the durations (for the cheap bounds)
     tscale = 4.0 * A * K + abs(D) / V + (abs(v0) + abs(vf) + V) / A
     slack = PRE_RTOL * A
@@ -292,11 +336,7 @@ def _direction(sg, s1, lim, cand, nc, coef, unit, roots, tmp, ph):
     hold1 = x1 >= A * A * (1.0 - PRE_RTOL)
     hold3 = x3 >= A * A * (1.0 - PRE_RTOL)
     # ---- NONE: w = c1 - c3 > 0, c1 + c3 = g / w; c1 >= 0 >= c3 where w^2 >= |g|
-    coef[0] = -3.0 * g * g
-    coef[1] = -4.0 * E
-    coef[2] = 6.0 * (h0 + hf)
-    coef[3] = 0.0
-    coef[4] = 3.0
+    coef_none(coef, h0, hf, g, E)
     sg0 = math.sqrt(abs(g))
     for part in range(2):
         if part == 0:
@@ -339,12 +379,7 @@ def _direction(sg, s1, lim, cand, nc, coef, unit, roots, tmp, ph):
                 continue
             nc = _add(cand, nc, sg, CODE_NONE, c1, 0.0, c3, 0.0, 0.0, a0, af, A, K, tscale)
     # ---- ACC0: c1 = A, u = c3; t1 >= 0: u^2 >= A^2 - g
-    cst = 1.5 * A * A * (h0 + hf) - 2.0 * A * E
-    coef[0] = cst + 0.75 * (hf * hf - h0 * h0)
-    coef[1] = -6.0 * A * hf
-    coef[2] = 3.0 * (A * A + hf)
-    coef[3] = -6.0 * A
-    coef[4] = 3.0
+    coef_acc0(coef, A, h0, hf, E)
     r = math.sqrt(max(A * A - g, 0.0))
     for part in range(2):
         if part == 0:  # c3 <= 0
@@ -365,11 +400,7 @@ def _direction(sg, s1, lim, cand, nc, coef, unit, roots, tmp, ph):
             t1 = (g - A * A + u * u) * K / A
             nc = _add(cand, nc, sg, CODE_ACC0, A, t1, u, 0.0, 0.0, a0, af, A, K, tscale)
     # ---- ACC1: c3 = -A, u = c1; t3 >= 0: u^2 >= A^2 + g
-    coef[0] = cst + 0.75 * (h0 * h0 - hf * hf)
-    coef[1] = 6.0 * A * h0
-    coef[2] = 3.0 * (A * A + h0)
-    coef[3] = 6.0 * A
-    coef[4] = 3.0
+    coef_acc1(coef, A, h0, hf, E)
     r = math.sqrt(max(A * A + g, 0.0))
     for part in range(2):
         if part == 0:  # c1 >= 0
@@ -392,10 +423,7 @@ def _direction(sg, s1, lim, cand, nc, coef, unit, roots, tmp, ph):
     # ---- ACC0_ACC1: c1 = A, c3 = -A, x = t1 (a quadratic, stable roots)
     if not (hold1 and hold3):
         return nc
-    q2 = 6.0 * A * A * J * J
-    q1 = 6.0 * A * J * (3.0 * A * A + h0)
-    q0 = (12.0 * A * A * A * A + 10.5 * A * A * h0 + 1.5 * A * A * hf - 2.0 * A * E
-          + 0.75 * (h0 * h0 - hf * hf))
+    q0, q1, q2 = coef_acc01(A, J, h0, hf, E)
     disc = q1 * q1 - 4.0 * q2 * q0
     if disc >= 0.0:
         sq = math.sqrt(disc)
@@ -436,8 +464,8 @@ def _try(cand, i, s1, lim, ph):
     n, T, sg = build_candidate(cand, i, s1, lim, ph)
     if n == 0:
         return 0, 0.0
-    if not check(ph, n, 0.0, sg * s1[1], sg * s1[2], sg * (s1[3] - s1[0]), sg * s1[4], sg * s1[5],
-                 lim[0], lim[1], lim[2], lim[3], lim[4]):
+    if not check_equal_legs(ph, n, 0.0, sg * s1[1], sg * s1[2], sg * (s1[3] - s1[0]), sg * s1[4],
+                            sg * s1[5], lim[0], lim[1], lim[2]):
         return 0, 0.0
     return n, T
 
