@@ -267,3 +267,33 @@ def test_equal_legs_check_is_the_general_check():
                 assert a == b, (row.tolist(), i, trial, q)
                 agree[int(a)] += 1
     assert agree[0] > 100 and agree[1] > 100, agree
+
+
+def test_fixed_durations_after_the_closed_form_equal_the_general_path():
+    """A requested duration: step 1 (minimum, blocked intervals) in closed form, then
+    step 2 -- the same outcome as the general path: too short, blocked, or a profile
+    of exactly the duration that keeps every limit."""
+    rng = np.random.default_rng(21)
+    rows = _rows(17, sweep_size(1500))
+    outcomes = {}
+    for row in rows:
+        ws0 = _ws(row, K.TASK_BLOCK, general=True)
+        K.solve(ws0)
+        if ws0[K.OUT_STATUS] != K.ST_OK:
+            continue
+        T = ws0[K.OUT_TMIN] * float(rng.choice([0.9, 1.0, 1.0 + 1e-6, 1.02, 1.3, 3.0]))
+        got = []
+        for general in (True, False):
+            ws = _ws(row, K.TASK_FIXED, general)
+            ws[K.IN_T] = T
+            K.solve(ws)
+            got.append((int(ws[K.OUT_STATUS]), int(ws[K.OUT_NBLK]), _blocks(ws), ws))
+        (st_g, nb_g, blk_g, _), (st_f, nb_f, blk_f, wsf) = got
+        assert st_f == st_g and nb_f == nb_g
+        np.testing.assert_allclose(blk_f, blk_g, rtol=DURATION_RTOL)
+        outcomes[st_f] = outcomes.get(st_f, 0) + 1
+        if st_f == K.ST_OK:
+            n = int(wsf[K.OUT_N])
+            ph = wsf[K.OUT_PH:K.OUT_PH + 3 * n].reshape(n, 3)
+            assert math.fsum(ph[:, 0]) == pytest.approx(T, rel=1e-12)
+    assert outcomes.get(K.ST_OK, 0) > 0.5 * len(rows) and outcomes.get(K.ST_SHORT, 0) > 0

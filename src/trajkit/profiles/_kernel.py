@@ -205,9 +205,19 @@ def _normalise(ws, task):
 def solve(ws):
     """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
     task = int(ws[IN_TASK])
-    if ((task == TASK_MIN or task == TASK_BLOCK) and ws[IN_GENERAL] == 0.0
-            and ws[IN_A1] == ws[IN_A2] and ws[IN_J1] == ws[IN_J2] and _solve_sym(ws, task)):
+    sym = ws[IN_GENERAL] == 0.0 and ws[IN_A1] == ws[IN_A2] and ws[IN_J1] == ws[IN_J2]
+    if sym and (task == TASK_MIN or task == TASK_BLOCK) and _solve_sym(ws, task):
         return
+    nblk0 = 0
+    if sym and task == TASK_FIXED and _solve_sym(ws, TASK_BLOCK):
+        # the minimum and the blocked intervals in closed form; then step 2
+        if ws[IN_T] < ws[OUT_TMIN] * (1.0 - DURATION_RTOL):
+            ws[OUT_STATUS] = ST_SHORT
+            return
+        if ws[IN_T] <= ws[OUT_TMIN] * (1.0 + DURATION_RTOL):
+            return
+        task = TASK_STEP2
+        nblk0 = int(ws[OUT_NBLK])
     tmin_in = ws[OUT_TMIN]
     ts, vs, as_, js = _normalise(ws, task)
     lim = ws[_LIM:_LIM + 5]
@@ -224,7 +234,7 @@ def solve(ws):
     ws[OUT_STATUS] = ST_OK
     ws[OUT_N] = 0.0
     ws[OUT_NB] = 0.0
-    ws[OUT_NBLK] = 0.0
+    ws[OUT_NBLK] = nblk0
     # ---- the brake pre-phase (candidates) and step 1 from where each ends
     s1 = ws[_S1:_S1 + 7]
     bbuf = ws[_BBUF:_BBUF + 96]
@@ -235,7 +245,7 @@ def solve(ws):
         T = ws[IN_T] / ts
         tmin = tmin_in / ts
         if T > tmin * (1.0 + DURATION_RTOL):
-            _step2(ws, T, tmin, 0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+            _step2(ws, T, tmin, nblk0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
                    ivl, cfg, st, keep, out, ts, js, as_)
             return
         task = TASK_FIXED  # the minimum itself: plan it
