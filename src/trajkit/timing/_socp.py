@@ -73,12 +73,20 @@ SCREEN_SLACK = 0.25
 SCREEN_SLACK_LOOSE = 1.0
 
 #: ... unless the new solution violates it by more than this; then the round is
-#: solved again with every row.
+#: solved again with more rows (see SCREEN_PASSES).
 SCREEN_TOL = 1e-9
 
 #: ... or comes within this fraction of its bound (it would be active: solved
 #: again with it, so that the solver keeps it as accurately as the others).
 SCREEN_MARGIN = 1e-6
+
+#: Solves of one round at most: a round whose solution violates a row left out
+#: is solved again with those rows and the rows near its solution added, the
+#: last time with every row.
+SCREEN_PASSES = 4
+
+#: ... with every row of the nodes within this many nodes of a violated row.
+SCREEN_AROUND = 2
 
 #: Screening starts once a round changed the time by less than this fraction (the
 #: rounds' solutions are then close, and so are their active limits); with a
@@ -210,6 +218,16 @@ def _near(A: sp.csr_matrix, b: np.ndarray, z: np.ndarray) -> np.ndarray:
     """The rows ``A z <= b`` whose slack at ``z`` is below SCREEN_SLACK of their bound
     (and every row whose bound is not positive)."""
     return ((b - A @ z) < SCREEN_SLACK * b) | (b <= 0.0)
+
+
+def _around(A: sp.csr_matrix, rows: np.ndarray, n: int) -> np.ndarray:
+    """The rows of ``A`` (over ``x`` and ``u`` of ``n`` nodes) whose nodes lie within
+    SCREEN_AROUND nodes of a node of one of ``rows`` (a boolean mask)."""
+    node = np.minimum.reduceat(A.indices % n, A.indptr[:-1])
+    mark = np.zeros(n + 2 * SCREEN_AROUND + 1, dtype=bool)
+    for k in range(2 * SCREEN_AROUND + 1):
+        mark[node[rows] + k] = True
+    return mark[node + SCREEN_AROUND]
 
 
 def _clarabel_solve(clarabel, P, q, A, b, cones):
@@ -629,7 +647,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK_LOOSE
         else:
             keep = np.ones(b_in_all.size, dtype=bool)
-        for _screen in range(2):
+        for screen in range(SCREEN_PASSES):
             A_in, b_in = A_in_all[keep], b_in_all[keep]
             A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc], format="csc")
             b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
@@ -640,10 +658,14 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             if keep.all():
                 break
             # a row left out must not be violated, nor come close to its bound
-            viol = (b_in_all - A_in_all @ np.asarray(sol.x)) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
+            z_new = np.asarray(sol.x)
+            viol = (b_in_all - A_in_all @ z_new) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
             if not (viol & ~keep).any():
                 break
-            keep[:] = True
+            if screen + 2 >= SCREEN_PASSES:
+                keep[:] = True
+            else:  # every row around those, and the rows near the new solution, then again
+                keep |= _around(A_in_all, viol & ~keep, n) | _near(A_in_all, b_in_all, z_new)
         status = str(sol.status).split(".")[-1]
         times_status.append(status)
         usable = status in ("Solved", "AlmostSolved") or (
