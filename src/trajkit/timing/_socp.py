@@ -50,6 +50,10 @@ __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 #: Stop when a round changes the time by less than this fraction.
 ROUND_RTOL = 5e-4
 
+#: A solve that starts from a solution of the grid (``settled`` or ``near``) stops
+#: after its first round when that changed the time by less than this fraction.
+SETTLED_RTOL = ROUND_RTOL
+
 #: Most rounds (the first is jerk-free).
 MAX_ROUNDS = 6
 
@@ -695,6 +699,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                 best = (t, x.copy(), u.copy())
             if jerk_rounds >= 2 and abs(times[-2] - t) <= ROUND_RTOL * t:
                 converged = True
+                break
+            if jerk_rounds == 1 and (settled or near) and abs(t_init - t) <= SETTLED_RTOL * t:
+                converged = True  # the starting point was a solution: it was the round before
                 break
             if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
                 break  # the rounds got slower (the linearised terms moved): keep the best
