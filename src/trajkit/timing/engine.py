@@ -750,19 +750,22 @@ def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None)
     # where the product vanishes, the leg of the piece's middle (a jerk phase that
     # ends at rest is the end of a braking, one that starts there speeds up)
     prod = qd * qdd
-    at_rest = np.abs(qd) <= REST_RTOL * lim.vlim
+    aqd = np.abs(qd)
+    at_rest = aqd <= REST_RTOL * lim.vlim
     if at_rest.any():
-        if mid is None:
-            uniq = np.unique(piece)
+        rest_row = at_rest.any(axis=1)
+        if mid is None:  # (only the pieces with a joint at rest)
+            uniq = np.unique(piece[rest_row])
             mid = np.zeros((jerk.size, qd.shape[1]))
             mid[uniq] = _evaluate(s_grid, der, t, st, jerk, lim, path, uniq,
                                   0.5 * np.diff(t)[uniq], mid=np.ones((jerk.size, qd.shape[1])))[-1]
-        prod = np.where(at_rest, mid[piece], prod)
+        prod[rest_row] = np.where(at_rest[rest_row], mid[piece[rest_row]], prod[rest_row])
     speeding = prod > 0
-    alim = np.where(speeding, lim.alim_acc, np.where(prod < 0, lim.alim_dec,
+    slowing = prod < 0
+    alim = np.where(speeding, lim.alim_acc, np.where(slowing, lim.alim_dec,
                                                       np.minimum(lim.alim_acc, lim.alim_dec)))
-    jl = np.where(speeding, lim.jacc, np.where(prod < 0, lim.jdec, np.minimum(lim.jacc, lim.jdec)))
-    rv = np.abs(qd) / lim.vlim
+    jl = np.where(speeding, lim.jacc, np.where(slowing, lim.jdec, np.minimum(lim.jacc, lim.jdec)))
+    rv = aqd / lim.vlim
     ra = np.abs(qdd) / alim
     rj = np.abs(qddd) / jl
     w = (S_eval - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell])
