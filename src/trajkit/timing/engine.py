@@ -113,6 +113,10 @@ CHECK_PER_PIECE = 16
 #: choice of the leg (speeding up or slowing down) in the limit check.
 REST_RTOL = 1e-9
 
+#: Samples the limit check evaluates at once (whole pieces; the numbers of a chunk
+#: stay in the processor's cache).
+CHECK_CHUNK = 4096
+
 #: Points checked inside every piece by the final check of the chosen timing.
 FINAL_CHECK_PER_PIECE = 64
 
@@ -807,7 +811,11 @@ def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None):
     piece = np.repeat(np.arange(k), npp)
     dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
     dt[npp - 1::npp] = np.diff(t)  # the piece's end exactly
-    rv, ra, rj, rs, acc, jk, cell, _S, _p = _evaluate(s_grid, der, t, st, jerk, lim, path, piece, dt)
+    # in chunks of whole pieces (the arrays of a chunk stay in the cache)
+    step = max(1, CHECK_CHUNK // npp) * npp
+    parts = [_evaluate(s_grid, der, t, st, jerk, lim, path, piece[i:i + step], dt[i:i + step])[:7]
+             for i in range(0, piece.size, step)]
+    rv, ra, rj, rs, acc, jk, cell = (np.concatenate([pt[j] for pt in parts]) for j in range(7))
     return _use_of(lim, rv, ra, rj, rs, acc, jk), cell, rv, ra, rj, rs
 
 
