@@ -135,7 +135,7 @@ ZOOM_LEVELS = 4
 VERIFY_ABOVE = 1e-2
 
 #: Points (fractions of a cell) where the true derivatives are evaluated (each
-#: costs a derivative stencil: 7 inverse kinematics).
+#: costs an inverse kinematics and the derivatives of the path at that point).
 VERIFY_POINTS = (0.5,)
 
 #: Rounds of lowering a limit locally after the check found an excess.
