@@ -112,7 +112,7 @@ def jacobian(fk_jet, q0: np.ndarray) -> np.ndarray:
 
 
 def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
-                 jac: np.ndarray | None = None) -> np.ndarray:
+                 jac: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Taylor coefficients of the joints that follow a tool-pose jet.
 
     Parameters
