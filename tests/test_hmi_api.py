@@ -232,6 +232,10 @@ def test_jog_teach_build_and_files(client, tmp_path):
     assert "jog step must not be zero" in error_of(client.post("/api/jog", json={"joint": "J1", "step": 0}), 422)
     np.testing.assert_array_equal(sess.q, q0)
 
+    # the elbow bent: a line between points with the arm stretched (a singularity)
+    # cannot be followed (tested below)
+    assert client.post("/api/jog", json={"joint": "J2", "step": 60}).status_code == 200
+    wait_state(client, "idle")
     client.post("/api/teach", json={"name": "home"})
     assert client.post("/api/jog", json={"joint": "J3", "step": 40}).status_code == 200
     wait_state(client, "idle")
@@ -255,8 +259,13 @@ def test_jog_teach_build_and_files(client, tmp_path):
     res = client.post("/api/job", json={"kind": "program", "text": text})
     assert res.status_code == 200, res.text
     tb = sess.job
-    np.testing.assert_allclose(tb.q[0], [0, 0, 0, 0], atol=1e-9)
-    np.testing.assert_allclose(tb.q[-1], [math.radians(30), 0, 0.04, 0], atol=1e-7)
+    np.testing.assert_allclose(tb.q[0], [0, math.radians(60), 0, 0], atol=1e-9)
+    np.testing.assert_allclose(tb.q[-1], [math.radians(30), math.radians(60), 0.04, 0], atol=1e-7)
+    # a line that leaves the stretched arm along the arm is refused, with the reason
+    stretched = text.replace("J2_deg: 60.0", "J2_deg: 0.0")
+    assert stretched != text
+    msg = error_of(client.post("/api/job", json={"kind": "program", "text": stretched}), 400)
+    assert "singularity" in msg and "cannot follow" in msg
 
     # files: a bad program is not saved; a good one round-trips
     pdir = Path(sess.programs_dir)

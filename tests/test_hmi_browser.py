@@ -283,6 +283,14 @@ def test_jog_teach_build_save_load(hmi_server, page):
                            " && document.querySelector('#joints').textContent.includes('50.000 mm')"
                            " && document.getElementById('msg').textContent === 'jogging J3'")
     assert sess.q[2] == pytest.approx(0.05, abs=1e-12)
+    # the elbow bent: a line between points with the arm stretched (a singularity)
+    # cannot be followed
+    page.select_option("#jog-joint", "J2")
+    page.fill("#jog-step", "45")
+    page.click("#jog-plus")
+    until(page, "document.getElementById('state').textContent === 'idle'"
+                " && document.querySelector('#joints').textContent.includes('45.000 deg')"
+                " && document.getElementById('msg').textContent === 'jogging J2'")
     page.click("#btn-teach")  # p1
     until(page, "document.querySelectorAll('#step-point option').length === 1")
     page.select_option("#jog-joint", "J1")

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from arms import load_arm
 
+from trajkit.errors import UnreachableError
 from trajkit.kinematics import _jets
 from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_x, rot_z
@@ -147,11 +148,17 @@ def test_a_singular_jacobian_is_flagged_and_the_path_falls_back_to_differences()
     qj, singular = _jets.joint_taylor(robot.fk_jet, q, pos, rot)
     assert singular.tolist() == [True, False]
     assert np.isnan(qj[0, 1:]).all() and np.isfinite(qj[1]).all()
-    # a line that starts on the singularity (the arm stretched) plans, with derivatives
-    # from differences of the inverse kinematics at its first point
+    # the arm stretched: a vertical line (the quill alone) can be followed, and gets
+    # differences of the inverse kinematics on the singularity ...
     q0 = np.array([0.0, 0.0, 0.05, 0.0])
     p = robot.fk(q0)
-    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position - np.array([0.2, 0.05, 0.0]),
+    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position - np.array([0.0, 0.0, 0.05]),
                                                           p.rotation)), 0.5, label="L")])
     q, d1, d2, d3 = jp.derivatives(np.array([0.0, 0.5 * jp.length]))
-    assert np.isfinite(d1).all() and np.isfinite(d2).all() and np.isfinite(d3).all()
+    np.testing.assert_allclose(d1, [[0.0, 0.0, 1.0, 0.0]] * 2, atol=1e-6)
+    assert np.abs(d2).max() < 1e-3 and np.abs(d3).max() < 1e-1
+    # ... a line along the arm cannot: the elbow's speed would be unbounded
+    with pytest.raises(UnreachableError, match=r"L: the path meets a singularity of scara at "
+                                               r"\(600\.000, 0\.000, 150\.000\) mm .* cannot follow"):
+        _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position - np.array([0.2, 0.05, 0.0]),
+                                                         p.rotation)), 0.5, label="L")])

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["ORDER", "cos_sin", "mat_mul", "mat_vec", "scale", "axis_motion", "constant", "jacobian",
-           "joint_taylor"]
+           "joint_taylor", "vee", "COND_MAX"]
 
 #: Highest Taylor coefficient carried.
 ORDER = 3
@@ -90,7 +90,7 @@ def constant(m: np.ndarray, lead: tuple, nc: int = _N) -> np.ndarray:
     return out
 
 
-def _vee(x: np.ndarray) -> np.ndarray:
+def vee(x: np.ndarray) -> np.ndarray:
     """Vector of the skew-symmetric part of ``x`` (..., 3, 3)."""
     return 0.5 * np.stack([x[..., 2, 1] - x[..., 1, 2], x[..., 0, 2] - x[..., 2, 0],
                            x[..., 1, 0] - x[..., 0, 1]], axis=-1)
@@ -107,7 +107,7 @@ def jacobian(fk_jet, q0: np.ndarray) -> np.ndarray:
     pj, rj = fk_jet(unit.reshape(n * m, 2, m))
     r0t = np.swapaxes(rj[::m, 0], -1, -2)
     jv = pj[:, 1].reshape(n, m, 3)
-    jw = _vee(rj[:, 1].reshape(n, m, 3, 3) @ r0t[:, None])
+    jw = vee(rj[:, 1].reshape(n, m, 3, 3) @ r0t[:, None])
     return np.swapaxes(np.concatenate([jv, jw], axis=2), 1, 2)
 
 
@@ -165,6 +165,6 @@ def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
         else:  # the coefficient k of the motion so far (q_k still 0): jets of k + 1 terms
             p_now, r_now = fk_jet(qj[ok, :k + 1])
             dp, dr = pos[ok, k] - p_now[:, k], rot[ok, k] - r_now[:, k]
-        rhs = np.concatenate([dp, _vee(dr @ r0t)], axis=1)[..., None]
+        rhs = np.concatenate([dp, vee(dr @ r0t)], axis=1)[..., None]
         qj[ok, k] = np.linalg.solve(lhs, rhs if jt is None else jt @ rhs)[..., 0]
     return qj, singular

@@ -36,6 +36,11 @@ __all__ = ["ChainJointPath", "STENCIL_STEP"]
 #: Step of the derivative stencils, as a fraction of the robot's length scale.
 STENCIL_STEP = 1e-4
 
+#: At a singular configuration, the path's rate (tool velocity and angular
+#: velocity per path unit) must lie in the range of the Jacobian to this
+#: relative residual, else the joints cannot follow the path there.
+FOLLOW_RTOL = 1e-6
+
 # central (offsets -3..3) and one-sided forward (offsets 0..6) weights, order
 # 6 and 5 in the step, for the 1st, 2nd and 3rd derivative
 _CENTRAL = (
@@ -191,6 +196,26 @@ class ChainJointPath:
             out.append(val / hk.reshape(shape) ** (order + 1))
         return out
 
+    def _check_followable(self, idx: np.ndarray, q: np.ndarray, pj: np.ndarray, rj: np.ndarray,
+                          k: np.ndarray) -> None:
+        """Raise where the path leaves a singular configuration ``q[idx]`` in a direction
+        outside the range of the Jacobian: the joints' speed would be unbounded there
+        (e.g. a SCARA or an elbow stretched and the tool moving along the arm)."""
+        jac = _jets.jacobian(self._fk_jet, q[idx])
+        rate = np.concatenate([pj[idx, 1], _jets.vee(rj[idx, 1] @ np.swapaxes(rj[idx, 0], -1, -2))],
+                              axis=1)
+        for i, row in enumerate(idx):
+            x = np.linalg.lstsq(jac[i], rate[i], rcond=None)[0]
+            miss = float(np.linalg.norm(jac[i] @ x - rate[i]))
+            if miss > FOLLOW_RTOL * max(float(np.linalg.norm(rate[i])), 1e-300):
+                p = pj[row, 0]
+                lab = self.labels[self.pieces[int(k[row])].motion]
+                raise UnreachableError(
+                    f"{lab}: the path meets a singularity of {self.robot.name} at "
+                    f"({1e3 * p[0]:.3f}, {1e3 * p[1]:.3f}, {1e3 * p[2]:.3f}) mm in a direction the "
+                    "joints cannot follow (their speed would be unbounded): move the point off "
+                    "the singularity or use PTP")
+
     # ---- the JointPath protocol
     def derivatives(self, s: np.ndarray):
         s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length)
@@ -225,6 +250,7 @@ class ChainJointPath:
         qj, singular = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
         d1, d2, d3 = qj[:, 1], 2.0 * qj[:, 2], 6.0 * qj[:, 3]
         if singular.any():  # on a singularity: differences of the inverse kinematics there
+            self._check_followable(np.flatnonzero(singular), q, pj, rj, k)
             pts, kk, hk, fwd, bwd, _ = self._stencil(s[singular], self.h)
             d = self._differences(self._stencil_ik(pts, kk), hk, fwd, bwd)
             d1[singular], d2[singular], d3[singular] = d
