@@ -124,9 +124,18 @@ S_NONEW = 15
 # search may stop at the first valid profile (set when it did), valid durations...
 R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7
 
-# step 2 searches the shape families in stages, each over both directions
-# (the first profile of the duration found ends the search; cheap families first):
+# step 2 searches the shape families in stages, each in both directions (the
+# first profile of the duration found ends the search; the likeliest pair
+# first, see _step2_pair): a cruise at a free velocity (UDDU), a hold at a free
+# acceleration, a cruise at an inflection (UDUD), equal jerks on every ramp
 STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL = 0, 1, 2, 3
+
+#: (stage, direction) pairs of step 2 (4 stages x 2 directions), searched in the
+#: order of :func:`_step2_pair`.
+STEP2_PAIRS = 8
+
+#: Fixed-point rounds of the cruise-velocity estimate that orders step 2's search.
+CRUISE_ESTIMATE_ROUNDS = 3
 
 #: Names of the shape codes (ruckig's names of the reached limits).
 SHAPE_NAMES = ("none", "acc0", "acc1", "acc0_acc1", "vel", "acc0_vel", "acc1_vel",
@@ -1688,6 +1697,90 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
 
 
 @jit_raw
+def _vel_change_time(dv, A, K):
+    """Duration of the fastest change of the velocity by ``dv`` from ``a = 0`` to
+    ``a = 0`` (limits ``A``, ``K = 1/j``)."""
+    dv = abs(dv)
+    if K == 0.0:
+        return dv / A if A < math.inf else 0.0
+    if A < math.inf and dv > A * A * K:
+        return dv / A + A * K
+    return 2.0 * math.sqrt(dv * K)
+
+
+@jit_raw
+def _cruise_margins(st0, lim):
+    """Where the cruise velocity ``vc`` of a profile of duration ``T = st0[6]``
+    lies relative to the start and goal: ``(vc - v0', vf' - vc)``.
+
+    ``v0'`` is the velocity where the start's acceleration, ramped straight to
+    zero, leaves it; ``vf'`` the one from which a ramp straight to the goal's
+    acceleration ends at the goal's velocity. ``vc`` is estimated from the
+    mean velocity ``D / T``, corrected for the velocity changes at both ends
+    (each taken as a straight ramp of velocity over its fastest duration). An
+    estimate: it only orders the search (every family is still tried).
+    """
+    A = min(lim[1], lim[3])
+    K = max(lim[2], lim[4])
+    V = lim[0]
+    v0 = st0[1] + 0.5 * st0[2] * abs(st0[2]) * K
+    vf = st0[4] - 0.5 * st0[5] * abs(st0[5]) * K
+    T = st0[6]
+    D = st0[3] - st0[0]
+    vc = min(max(D / T, -V), V)
+    for _ in range(CRUISE_ESTIMATE_ROUNDS):
+        t1 = _vel_change_time(vc - v0, A, K)
+        t2 = _vel_change_time(vc - vf, A, K)
+        x = (D + 0.5 * (vc - v0) * t1 + 0.5 * (vc - vf) * t2) / T
+        if not (abs(x) < math.inf):
+            break
+        vc = min(max(x, -V), V)
+    return vc - v0, vf - vc
+
+
+@jit_raw
+def _cruise_pair(up1, up2):
+    """(stage, direction) of the cruise family whose velocity rises into the
+    cruise (``up1``) and rises out of it (``up2``): UD|DU is UDDU, DU|UD its
+    mirror, UD|UD and DU|DU the inflections."""
+    if up1 and not up2:
+        return STAGE_CRUISE, 1.0
+    if up2 and not up1:
+        return STAGE_CRUISE, -1.0
+    return STAGE_INFLECTION, (1.0 if up1 else -1.0)
+
+
+@jit_raw
+def _step2_pair(k, m1, m2):
+    """The ``k``-th (stage, direction) pair searched by step 2 (``k`` in
+    ``range(STEP2_PAIRS)``; each pair exactly once).
+
+    With the margins ``(m1, m2)`` of :func:`_cruise_margins`: first the cruise
+    family their signs predict, then the one with the smaller margin's sign
+    flipped, the holds (both directions), the cruise with the other sign
+    flipped, with both flipped, and last the equal-jerk families (the most
+    expensive). The first valid profile ends the search, so the order
+    changes only the work, never whether a profile is found.
+    """
+    up1 = m1 > 0.0
+    up2 = m2 > 0.0
+    small1 = abs(m1) < abs(m2)
+    if k == 0:
+        return _cruise_pair(up1, up2)
+    if k == 1:
+        return _cruise_pair(up1 != small1, up2 == small1)
+    if k == 2:
+        return STAGE_HOLD, 1.0
+    if k == 3:
+        return STAGE_HOLD, -1.0
+    if k == 4:
+        return _cruise_pair(up1 == small1, up2 != small1)
+    if k == 5:
+        return _cruise_pair(not up1, not up2)
+    return STAGE_EQUAL, (1.0 if k == 6 else -1.0)
+
+
+@jit_raw
 def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     """Minimum time (``st0[6]`` NaN) or exactly ``st0[6]`` (step 2) from
     ``st0[:3]`` (inside the limits) to ``st0[3:6]``.
@@ -1707,12 +1800,12 @@ def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     rest_goal = st0[4] == 0.0 and st0[5] == 0.0 and st0[3] == st0[3] and st0[6] != st0[6]
     res[R_STOP] = -1.0 if (symmetric and rest_goal and res[R_ALL] == 0.0 and EARLY) else 0.0
     if st0[6] == st0[6] and st0[3] == st0[3]:
-        for stage in range(STAGE_EQUAL + 1):
+        # every (stage, direction) pair, the likeliest first (see _step2_pair)
+        m1, m2 = _cruise_margins(st0, lim)
+        for k in range(STEP2_PAIRS):
+            stage, sgn = _step2_pair(k, m1, m2)
             res[R_STAGE] = stage
-            direction(1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
-            if res[R_T] < math.inf:
-                break
-            direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
+            direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st)
             if res[R_T] < math.inf:
                 break
         return
