@@ -121,8 +121,9 @@ S_NONEW = 15
 # result vector: best duration, best phase count, number of valid durations, the
 # shape of the best (code, see SHAPE_NAMES; +16 when mirrored), whether every valid
 # duration is wanted (else candidates that cannot win are not checked), whether the
-# search may stop at the first valid profile (set when it did), valid durations...
-R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7
+# search may stop at the first valid profile (set when it did), the stage of step 2
+# and its cruise shape tried first (see _cruise_hint), valid durations...
+R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_HINT, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7, 8
 
 # step 2 searches the shape families in stages, each in both directions (the
 # first profile of the duration found ends the search; the likeliest pair
@@ -371,9 +372,50 @@ def _g(cfg):
 
 
 @jit_raw
+def _rt(T, x, y, K, sgn):
+    """``T`` after a ramp x -> y at jerk sgn/K (the duration :func:`_rp` adds)."""
+    if K == 0.0:
+        return T
+    return T + (y - x) * sgn * K
+
+
+@jit_raw
 def _durations(cfg, work, c1, t1, z, c3, t3):
-    """Sum of the template's phase durations without a cruise."""
-    return walk(cfg, c1, t1, z, c3, t3, 0.0)[1]
+    """Sum of the template's phase durations without a cruise: the duration
+    :func:`walk` returns (the same sums in the same order), without integrating
+    the positions."""
+    T = _rt(0.0, cfg[AS], c1, cfg[K1], 1.0)
+    if t1 != 0.0:
+        T = T + t1
+    mode = int(cfg[MODE])
+    if mode == M_SINGLE:
+        T = _rt(T, c1, c3, cfg[K2P], -1.0)
+    elif mode == M_ZERO:
+        T = _rt(T, c1, 0.0, cfg[K2P], -1.0)
+        T = _rt(T, 0.0, c3, cfg[K2N], -cfg[SG2])
+    elif mode == M_ZFIRST:
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, 0.0, cfg[K2Q], -1.0)
+        T = _rt(T, 0.0, c3, cfg[K2N], -1.0)
+    elif mode == M_ZSECOND:
+        T = _rt(T, c1, 0.0, cfg[K2P], -1.0)
+        T = _rt(T, 0.0, z, cfg[K2N], -1.0)
+        T = _rt(T, z, c3, cfg[K2Q], -1.0)
+    elif mode == M_MID:
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, c3, cfg[K2N], -1.0)
+    elif mode == M_ZBOTH:
+        z2 = -z * math.sqrt(cfg[K2Q] / cfg[K2N]) if cfg[K2N] > 0.0 else 0.0
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, 0.0, cfg[K2Q], -1.0)
+        T = _rt(T, 0.0, z2, cfg[K2N], -1.0)
+        T = _rt(T, z2, c3, cfg[K2R], -1.0)
+    else:
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, c3, cfg[K2Q], -1.0)
+    if t3 != 0.0:
+        T = T + t3
+    return _rt(T, c3, cfg[AE], cfg[K4], cfg[SG2])
 
 
 @jit_raw
@@ -1119,6 +1161,16 @@ def solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scr
 
 
 @jit_raw
+def _cruise_shape(i, hint):
+    """The ``i``-th cruise shape (S2_NN..S2_AA) to try: ``hint`` first, then the
+    others in their order."""
+    if i == 0:
+        return hint
+    shape = S2_NN + i - 1
+    return shape + 1 if shape >= hint else shape
+
+
+@jit_raw
 def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     """Every shape of one template instance."""
     work = W[0]
@@ -1131,8 +1183,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     if cfg[TT] == cfg[TT]:  # step 2: exactly T
         stage = int(res[R_STAGE])
         if stage == STAGE_CRUISE or stage == STAGE_HOLD:
-            for shape in range(S2_NN if stage == STAGE_CRUISE else S2_H1,
-                               (S2_AA if stage == STAGE_CRUISE else S2_H3) + 1):
+            hint = int(res[R_HINT])
+            for i in range(4 if stage == STAGE_CRUISE else 2):
+                shape = _cruise_shape(i, hint) if stage == STAGE_CRUISE else S2_H1 + i
                 solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                             scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
                 if res[R_T] < math.inf:
@@ -1153,7 +1206,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
             cfg[C3LO] = max(cfg[AE], 0.0)
             cfg[C3HI] = Am
             cfg[S3] = 1.0
-            for shape in range(S2_NN, S2_AA + 1):
+            hint = int(res[R_HINT])
+            for i in range(4):
+                shape = _cruise_shape(i, hint)
                 solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                             scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
                 if res[R_T] < math.inf:
@@ -1751,6 +1806,35 @@ def _cruise_pair(up1, up2):
 
 
 @jit_raw
+def _peak_over(m, a, s, A, K):
+    """Whether the acceleration peak of a half of a cruise (a velocity change by
+    ``s m`` with ``m`` from :func:`_cruise_margins`, rising for ``s = 1``, at the
+    boundary acceleration ``a``) exceeds ``A``: the half then holds at ``A``.
+    Its square, from the velocity change of two ramps at jerk ``1/K``, is
+    ``s m / K + (a^2 + s a |a|) / 2``."""
+    if not (A < math.inf):
+        return False
+    if K == 0.0:
+        return True
+    return s * m / K + 0.5 * (a * a + s * a * abs(a)) > A * A
+
+
+@jit_raw
+def _cruise_hint(st0, lim, stage, sgn, m1, m2):
+    """The cruise shape (S2_NN..S2_AA) of the (stage, direction) pair that the
+    estimated cruise velocity predicts: which halves reach the acceleration
+    limit (tried first; the others follow)."""
+    if stage != STAGE_CRUISE and stage != STAGE_INFLECTION:
+        return S2_NN
+    A = min(lim[1], lim[3])
+    K = max(lim[2], lim[4])
+    s2 = -sgn if stage == STAGE_CRUISE else sgn
+    h1 = _peak_over(m1, st0[2], sgn, A, K)
+    h2 = _peak_over(m2, st0[5], s2, A, K)
+    return S2_NN + (1 if h1 else 0) + (2 if h2 else 0)
+
+
+@jit_raw
 def _step2_pair(k, m1, m2):
     """The ``k``-th (stage, direction) pair searched by step 2 (``k`` in
     ``range(STEP2_PAIRS)``; each pair exactly once).
@@ -1805,6 +1889,7 @@ def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
         for k in range(STEP2_PAIRS):
             stage, sgn = _step2_pair(k, m1, m2)
             res[R_STAGE] = stage
+            res[R_HINT] = _cruise_hint(st0, lim, stage, sgn, m1, m2)
             direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st)
             if res[R_T] < math.inf:
                 break
