@@ -67,9 +67,14 @@ class Trajectory:
         self.axes = tuple(axes)
         self.sync = sync
         self.duration = max((p.duration for p in self.axes), default=0.0)
-        if names is None:
-            names = [_axis_name(p.limits.name, i) for i, p in enumerate(self.axes)]
-        self.names = tuple(names)
+        self._names = None if names is None else tuple(names)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Axis names (for export headers): the limits' names, or ``q<i>``."""
+        if self._names is None:
+            self._names = tuple(_axis_name(p.limits.name, i) for i, p in enumerate(self.axes))
+        return self._names
 
     @property
     def n_axes(self) -> int:

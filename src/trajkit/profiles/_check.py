@@ -23,7 +23,7 @@ import math
 from ._compile import jit_raw
 from ._phase import phase_end
 
-__all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "clean", "leg_cuts"]
+__all__ = ["LIMIT_RTOL", "GOAL_RTOL", "SLIVER_RTOL", "check", "check_equal_legs", "clean", "leg_cuts"]
 
 #: Relative tolerance of every limit in the kernel check (ten times tighter
 #: than :data:`trajkit._constants.LIMIT_RTOL` of the public verifier).
@@ -183,6 +183,78 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
         p, v, a_prev = phase_end(p, v, a, j, dt)
     # end state (an acceleration jump onto the goal is a zero-length phase)
     if pf == pf:  # a NaN goal position: the position is free (velocity interface)
+        psc = max(abs(pf - p0), dp_path, 1e-300)
+        if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
+            return False
+    if abs(v - vf) > GOAL_RTOL * max(vsc, dv_path):
+        return False
+    if abs(a_prev - af) > GOAL_RTOL * asc:
+        return False
+    return True
+
+
+@jit_raw
+def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
+    """:func:`check` for limits whose legs are equal (``A1 = A2 = A``,
+    ``K1 = K2 = K > 0``), with its tolerances: the leg of a piece does not
+    matter, so the pieces are the phases cut where the acceleration crosses
+    zero (the velocity extrema); the velocity is checked at the ends of the
+    pieces, the acceleration (linear in a phase) and the jerk per phase, and
+    no acceleration may jump (the jerk is finite)."""
+    T = 0.0
+    vsc = max(abs(v0), abs(vf))
+    asc = max(abs(a0), abs(af))
+    dv_path = 0.0
+    dp_path = 0.0
+    p = p0
+    v = v0
+    for k in range(n):
+        dt = ph[k, 0]
+        j = ph[k, 1]
+        a = ph[k, 2]
+        asc = max(asc, abs(a))
+        vb = abs(v)
+        p, v, ae = phase_end(p, v, a, j, dt)
+        vsc = max(vsc, abs(v))
+        asc = max(asc, abs(ae))
+        da = max(abs(a), abs(ae)) * dt
+        dv_path += da
+        dp_path += (max(vb, abs(v)) + da) * dt
+        T += dt
+    if not (T < 1e300):
+        return False
+    vsc = max(vsc, 1e-300)
+    asc = max(asc, 1e-300)
+    vlim = V * (1.0 + LIMIT_RTOL)
+    alim = A * (1.0 + LIMIT_RTOL)
+    p = p0
+    v = v0
+    a_prev = a0
+    for k in range(n):
+        dt = ph[k, 0]
+        j = ph[k, 1]
+        a = ph[k, 2]
+        if a != a_prev and abs(a - a_prev) > 1e-12 * asc:
+            return False
+        if dt > 0.0:
+            if j != 0.0:
+                if abs(j) * K > 1.0 + LIMIT_RTOL:
+                    return False
+                ta = -a / j
+                if 0.0 < ta < dt:
+                    _, vm, _ = phase_end(p, v, a, j, ta)
+                    if abs(vm) > vlim:
+                        return False
+            if abs(a) > alim:
+                return False
+            p, v, a_prev = phase_end(p, v, a, j, dt)
+            if abs(v) > vlim or abs(a_prev) > alim:
+                return False
+        else:
+            if abs(v) > vlim:
+                return False
+            p, v, a_prev = phase_end(p, v, a, j, dt)
+    if pf == pf:
         psc = max(abs(pf - p0), dp_path, 1e-300)
         if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
             return False

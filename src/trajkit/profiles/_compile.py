@@ -31,7 +31,7 @@ __all__ = ["ENABLED", "KERNEL_MODULES", "compiled_twins", "jit", "jit_parallel",
 ENABLED = numba is not None and os.environ.get("TRAJKIT_NO_JIT", "") in ("", "0")
 
 #: Source files of the compiled kernels (next to this file).
-KERNEL_MODULES = ("_phase.py", "_roots.py", "_check.py", "_brake.py", "_shapes.py", "_kernel.py",
+KERNEL_MODULES = ("_phase.py", "_roots.py", "_check.py", "_brake.py", "_shapes.py", "_symfast.py", "_kernel.py",
                   "_batch_states.py", "_scalar.py", "_jit.py")
 
 _HERE = os.path.dirname(os.path.abspath(__file__))

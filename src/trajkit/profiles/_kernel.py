@@ -42,10 +42,11 @@ from ._check import check
 from ._compile import jit_raw
 from ._phase import phase_end
 from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, integrate, step1
+from ._symfast import NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1
 
 __all__ = [
     "NWS", "workspace", "solve",
-    "TASK_MIN", "TASK_BLOCK", "TASK_FIXED", "TASK_VELOCITY", "TASK_STEP2",
+    "TASK_MIN", "TASK_BLOCK", "TASK_FIXED", "TASK_VELOCITY", "TASK_STEP2", "IN_GENERAL",
     "ST_OK", "ST_NONE", "ST_BRAKE", "ST_BLOCKED", "ST_SHORT",
 ]
 
@@ -109,7 +110,12 @@ _VALID = _KEEP + 3 * NPH
 _TS = _VALID + NVALID
 _FBA = _TS + 1                  # the cruise fallback of step 2: first velocity change
 _FBS = _FBA + 3 * NPH           # ... and its velocity problem
-NWS = _FBS + 7
+_SFC = _FBS + 7                 # the symmetric closed-form step 1: candidates
+_SFS = _SFC + NCF * NSF         # ... and its scratch
+#: Input: non-zero to plan with the general step 1 only (the closed form of
+#: symmetric limits off; for the tests that compare both).
+IN_GENERAL = _SFS + SF_SCRATCH
+NWS = IN_GENERAL + 1
 
 
 def workspace() -> np.ndarray:
@@ -157,10 +163,11 @@ def _scales(ws):
 
 
 @jit_raw
-def solve(ws):
-    """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
-    task = int(ws[IN_TASK])
-    tmin_in = ws[OUT_TMIN]
+def _normalise(ws, task):
+    """The problem in the kernel's units (see the module text): the limits to
+    ``ws[_LIM:]``, start and goal (positions relative to the start) to
+    ``ws[_ST0:]``, ``ws[_TS]`` the time scale; returns the scales
+    ``(time, velocity, acceleration, jerk)``."""
     ts, ls = _scales(ws)
     ws[_TS] = ts
     vs = ls / ts
@@ -191,6 +198,30 @@ def solve(ws):
         d = abs(st0[3]) if st0[3] == st0[3] else 0.0
         lim[0] = 8.0 * (abs(st0[1]) + abs(st0[4]) + math.sqrt(am * d) + am * am * km
                         + abs(st0[2]) * abs(st0[2]) * km + abs(st0[5]) * abs(st0[5]) * km) + 1.0
+    return ts, vs, as_, js
+
+
+@jit_raw
+def solve(ws):
+    """Plan the task written in ``ws`` (see the module text); results in ``ws``."""
+    task = int(ws[IN_TASK])
+    sym = ws[IN_GENERAL] == 0.0 and ws[IN_A1] == ws[IN_A2] and ws[IN_J1] == ws[IN_J2]
+    if sym and (task == TASK_MIN or task == TASK_BLOCK) and _solve_sym(ws, task):
+        return
+    nblk0 = 0
+    if sym and task == TASK_FIXED and _solve_sym(ws, TASK_BLOCK):
+        # the minimum and the blocked intervals in closed form; then step 2
+        if ws[IN_T] < ws[OUT_TMIN] * (1.0 - DURATION_RTOL):
+            ws[OUT_STATUS] = ST_SHORT
+            return
+        if ws[IN_T] <= ws[OUT_TMIN] * (1.0 + DURATION_RTOL):
+            return
+        task = TASK_STEP2
+        nblk0 = int(ws[OUT_NBLK])
+    tmin_in = ws[OUT_TMIN]
+    ts, vs, as_, js = _normalise(ws, task)
+    lim = ws[_LIM:_LIM + 5]
+    st0 = ws[_ST0:_ST0 + 7]
     W = ws[_W:_W + 5 * NPH * 3].reshape((5, NPH, 3))
     vec = ws[_VEC:_VEC + 19 * 16].reshape((19, 16))
     ivl = ws[_IVL:_IVL + 16].reshape((8, 2))
@@ -203,7 +234,7 @@ def solve(ws):
     ws[OUT_STATUS] = ST_OK
     ws[OUT_N] = 0.0
     ws[OUT_NB] = 0.0
-    ws[OUT_NBLK] = 0.0
+    ws[OUT_NBLK] = nblk0
     # ---- the brake pre-phase (candidates) and step 1 from where each ends
     s1 = ws[_S1:_S1 + 7]
     bbuf = ws[_BBUF:_BBUF + 96]
@@ -214,7 +245,7 @@ def solve(ws):
         T = ws[IN_T] / ts
         tmin = tmin_in / ts
         if T > tmin * (1.0 + DURATION_RTOL):
-            _step2(ws, T, tmin, 0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+            _step2(ws, T, tmin, nblk0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
                    ivl, cfg, st, keep, out, ts, js, as_)
             return
         task = TASK_FIXED  # the minimum itself: plan it
@@ -277,6 +308,59 @@ def solve(ws):
         return
     _step2(ws, T, best_total, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
            ivl, cfg, st, keep, out, ts, js, as_)
+
+
+@jit_raw
+def _solve_sym(ws, task):
+    """Step 1 (minimum time, with ``TASK_BLOCK`` the blocked intervals) by the
+    closed form of symmetric limits (:mod:`._symfast`), where it applies: a
+    start inside the limits, finite jerk and acceleration limits, a goal that
+    is not the start. True when it planned (results written as :func:`solve`
+    writes them); False leaves the task to the general path."""
+    ts, vs, as_, js = _normalise(ws, task)
+    lim = ws[_LIM:_LIM + 5]
+    if not sym_applies(lim):
+        return False
+    st0 = ws[_ST0:_ST0 + 7]
+    if not inside(st0[1], st0[2], lim[0], lim[1], lim[2], lim[3], lim[4]):
+        return False
+    if st0[3] == 0.0 and st0[1] == st0[4] and st0[2] == st0[5]:
+        return False  # the goal is the start (see solve)
+    # (as a brake candidate of no phases: a start within round-off of the
+    # boundary put onto it)
+    v, a, ok = _onto_boundary(st0[1], st0[2], lim, abs(st0[1]), abs(st0[2]))
+    if not ok:
+        return False
+    s1 = ws[_S1:_S1 + 7]
+    s1[0] = 0.0
+    s1[1] = v
+    s1[2] = a
+    s1[3] = st0[3]
+    s1[4] = st0[4]
+    s1[5] = st0[5]
+    s1[6] = math.nan
+    res = ws[_RES:_RES + R_V0 + NVALID]
+    cand = ws[_SFC:_SFC + NCF * NSF]
+    ph = ws[_BEST:_BEST + 3 * NPH].reshape((NPH, 3))
+    ib = sym_step1(s1, lim, res, task == TASK_BLOCK, cand, ws[_SFS:_SFS + SF_SCRATCH], ph)
+    if ib < 0:
+        return False
+    n, total, sg = build_candidate(cand, ib, s1, lim, ph)
+    ws[OUT_STATUS] = ST_OK
+    ws[OUT_NB] = 0.0
+    ws[OUT_NBLK] = 0.0
+    ws[OUT_SHAPE] = res[R_SHAPE]
+    for k in range(n):
+        o = OUT_PH + 3 * k
+        ws[o] = ph[k, 0] * ts
+        ws[o + 1] = sg * ph[k, 1] * js
+        ws[o + 2] = sg * ph[k, 2] * as_
+    ws[OUT_N] = n
+    ws[OUT_T] = total * ts
+    ws[OUT_TMIN] = total * ts
+    if task == TASK_BLOCK:
+        _blocks(ws[_RES + R_V0:_RES + R_V0 + NVALID], int(res[R_NV]), total, ws)
+    return True
 
 
 @jit_raw

@@ -21,7 +21,8 @@ import numpy as np
 
 from ._compile import jit_raw
 
-__all__ = ["MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner", "no_root_certain"]
+__all__ = ["MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner", "no_root_certain",
+           "quartic_roots_unit"]
 
 #: Highest polynomial degree a shape equation reduces to.
 MAX_DEGREE = 12
@@ -303,3 +304,117 @@ def real_roots_unit(c, deg, out, D):
             crit[i] = roots[i]
         nc = nr
     return 0
+
+
+# ------------------------------------------------------------------ quartics
+# The same derivative recursion as :func:`real_roots_unit`, specialised to
+# degree 4 with the coefficients in scalars (the closed-form step 1 of
+# symmetric limits solves a few quartics per plan).
+
+@jit_raw
+def _poly4(c0, c1, c2, c3, c4, x):
+    return (((c4 * x + c3) * x + c2) * x + c1) * x + c0
+
+
+@jit_raw
+def _bracket4(c0, c1, c2, c3, c4, a, b, fa, fb, tol):
+    """Root in ``[a, b]`` (``fa fb < 0``) of ``c0 + ... + c4 x^4``, monotone there:
+    Newton steps kept inside the shrinking bracket, else regula falsi (Illinois),
+    else bisection; converged when a step is below ``tol``."""
+    x = a - fa * (b - a) / (fb - fa)
+    if not (a < x < b):
+        x = 0.5 * (a + b)
+    side = 0
+    for _ in range(ROOT_MAX_ITER):
+        fx = _poly4(c0, c1, c2, c3, c4, x)
+        if fx == 0.0:
+            return x
+        if (fx < 0.0) == (fa < 0.0):
+            a = x
+            fa = fx
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b = x
+            fb = fx
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        d = ((4.0 * c4 * x + 3.0 * c3) * x + 2.0 * c2) * x + c1
+        xn = x - fx / d if d != 0.0 else a - 1.0
+        if not (a < xn < b):
+            xn = a - fa * (b - a) / (fb - fa)
+            if not (a < xn < b):
+                xn = 0.5 * (a + b)
+        if abs(xn - x) <= tol or b - a <= 2.0 * tol:
+            return xn
+        x = xn
+    return x
+
+
+@jit_raw
+def _monotone_roots(c0, c1, c2, c3, c4, brk, nb, out, n, tol):
+    """Roots of ``c0 + ... + c4 x^4`` on the pieces between ``-1``, ``brk[:nb]``
+    (ascending) and ``1``, on each of which it is monotone, appended to
+    ``out[n:]``: the new count."""
+    a = -1.0
+    fa = _poly4(c0, c1, c2, c3, c4, a)
+    if fa == 0.0:
+        out[n] = a
+        n += 1
+    for i in range(nb + 1):
+        b = brk[i] if i < nb else 1.0
+        if not (b > a):
+            continue
+        fb = _poly4(c0, c1, c2, c3, c4, b)
+        if fb == 0.0:
+            if n == 0 or out[n - 1] != b:
+                out[n] = b
+                n += 1
+        elif fa != 0.0 and (fa < 0.0) != (fb < 0.0):
+            out[n] = _bracket4(c0, c1, c2, c3, c4, a, b, fa, fb, tol)
+            n += 1
+        a = b
+        fa = fb
+    return n
+
+
+@jit_raw
+def quartic_roots_unit(c, out, tmp):
+    """Every real root of ``c[0] + ... + c[4] x^4`` (``c[4] != 0``) in ``[-1, 1]``,
+    ascending, into ``out`` (length >= 8); ``tmp``: scratch of length >= 8.
+
+    The roots of ``N''`` (closed form) split ``[-1, 1]`` into pieces where ``N'``
+    is monotone, its roots (the local extrema of ``N``) into pieces where ``N``
+    is monotone, and each sign change is refined by :func:`_bracket4`. A local
+    extremum within :data:`TOUCH_RTOL` of zero is a (double) root, as in
+    :func:`real_roots_unit`. Returns the number of roots.
+    """
+    c0, c1, c2, c3, c4 = c[0], c[1], c[2], c[3], c[4]
+    # inflection points: N'' = 2 c2 + 6 c3 x + 12 c4 x^2
+    ni = _quadratic_in(2.0 * c2, 6.0 * c3, 12.0 * c4, tmp)
+    # local extrema: N' = c1 + 2 c2 x + 3 c3 x^2 + 4 c4 x^3 (monotone between them)
+    nc = _monotone_roots(c1, 2.0 * c2, 3.0 * c3, 4.0 * c4, 0.0, tmp, ni, tmp[4:], 0, 1e-13)
+    crit = tmp[4:4 + nc]
+    n = _monotone_roots(c0, c1, c2, c3, c4, crit, nc, out, 0, 4.4e-16)
+    scale = abs(c0) + abs(c1) + abs(c2) + abs(c3) + abs(c4)
+    n0 = n
+    for i in range(nc):
+        x = crit[i]
+        if abs(_poly4(c0, c1, c2, c3, c4, x)) <= TOUCH_RTOL * scale:
+            dup = False
+            for r in range(n0):
+                if abs(out[r] - x) <= 1e-9:
+                    dup = True
+            if not dup:
+                out[n] = x
+                n += 1
+    for i in range(1, n):
+        x = out[i]
+        k = i - 1
+        while k >= 0 and out[k] > x:
+            out[k + 1] = out[k]
+            k -= 1
+        out[k + 1] = x
+    return n

@@ -1,0 +1,555 @@
+"""Step 1 with symmetric limits in closed form (the common case, ruckig's problem).
+
+Kernel code (plain floats and views of the workspace, compiled by numba when
+present), in the kernel's normalised units (see :mod:`._kernel`). It applies
+when both legs share their limits (``a_max == a_max_decel``, ``j_max ==
+j_max_decel``), the jerk and acceleration limits are finite and the start
+lies inside the limits (no brake). :func:`sym_step1` fills the same result
+vector as :func:`._shapes.step1`; when it finds nothing it says so and the
+caller runs the general step 1.
+
+The profiles
+------------
+Every time-optimal profile is UDDU in one of the two directions (the other
+direction is the mirrored problem): with jerk ``J = 1/K`` ::
+
+    ramp a0 -> c1 (+J) | hold c1 for t1 | ramp c1 -> c3 (-J), with a
+    cruise of tc at v = v_max where it crosses a = 0 | hold c3 for t3 |
+    ramp c3 -> af (+J)
+
+With ``h0 = 2 J v0 - a0^2``, ``hf = 2 J vf - af^2``, ``g = (hf - h0) / 2``
+and ``E = 3 D J^2 + 3 J (a0 v0 - af vf) - a0^3 + af^3`` (``D`` the
+distance), the end velocity fixes one unknown and the end position leaves
+one polynomial equation per shape (derived symbolically; each equals a
+known multiple of the position residual, which the tests confirm):
+
+* NONE (``t1 = t3 = tc = 0``), ``w = c1 - c3``, ``c1 + c3 = g / w``::
+
+      3 w^4 + 6 (h0 + hf) w^2 - 4 E w - 3 g^2 = 0          (12 J^2 w  x residual)
+
+* ACC0 (``c1 = A``, ``u = c3``, ``t1 = (g - A^2 + u^2) / (J A)``)::
+
+      3 u^4 - 6 A u^3 + 3 (A^2 + hf) u^2 - 6 A hf u
+      + 3/2 A^2 (h0 + hf) + 3/4 (hf^2 - h0^2) - 2 A E = 0   (6 A J^2 x residual)
+
+* ACC1 (``c3 = -A``, ``u = c1``, ``t3 = (u^2 - A^2 - g) / (J A)``)::
+
+      3 u^4 + 6 A u^3 + 3 (A^2 + h0) u^2 + 6 A h0 u
+      + 3/2 A^2 (h0 + hf) + 3/4 (h0^2 - hf^2) - 2 A E = 0   (6 A J^2 x residual)
+
+* ACC0_ACC1 (``c1 = A``, ``c3 = -A``, ``x = t1``, ``t3 = x - g / (J A)``)::
+
+      6 A^2 J^2 x^2 + 6 A J (3 A^2 + h0) x
+      + 12 A^4 + 21/2 A^2 h0 + 3/2 A^2 hf - 2 A E + 3/4 (h0^2 - hf^2) = 0
+
+* with a cruise (VEL, ACC0_VEL, ACC1_VEL, ACC0_ACC1_VEL) both halves are
+  closed forms (``c1^2 = J v_max - h0 / 2``, ``c3^2 = J v_max - hf / 2``,
+  held at ``A`` where they exceed it) and the cruise is linear.
+
+The real roots on each shape's interval come from :func:`._roots.quartic_roots_unit`
+(derivative recursion, no grid), are polished by Newton steps on the
+polynomial, and each candidate is built as a phase table and checked exactly
+(:func:`._check.check_equal_legs`: :func:`._check.check` for equal legs). The
+minimum time is the fastest candidate that passes. With every valid duration
+wanted (the blocked intervals), all candidates are checked; the valid durations of step 1 come as the minimum
+plus pairs (ruckig's block scheme), so an even count of distinct durations
+means that a profile was missed or is degenerate, and the caller's general
+step 1 decides.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ._check import check_equal_legs, clean
+from ._compile import jit_raw
+from ._roots import no_root_certain, quartic_roots_unit
+from ._shapes import NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, S_NONEW
+
+__all__ = ["NSF", "NCF", "SF_SCRATCH", "build_candidate", "coef_acc0", "coef_acc01", "coef_acc1",
+           "coef_none", "invariants", "sym_applies", "sym_step1"]
+
+#: Largest number of candidates of both directions (4 roots of each quartic,
+#: 2 of the quadratic, 1 cruise profile).
+NCF = 32
+
+#: Columns of a candidate row: direction, shape code, c1, t1, c3, t3, tc, duration.
+NSF = 8
+
+#: Scratch floats :func:`sym_step1` needs besides the candidate table (polynomial
+#: coefficients, on the unit interval, roots, the root finder's break points).
+SF_SCRATCH = 32
+
+#: A candidate whose durations or corners miss their bounds by more than this
+#: (relative) is not built; the exact check decides on the rest.
+PRE_RTOL = 1e-9
+
+#: Newton steps polishing a root on the shape's polynomial.
+NEWTON_STEPS = 2
+
+#: Valid durations closer than this (relative) are one profile (as the blocks).
+MERGE_RTOL = 1e-10
+
+# candidate columns
+C_SG, C_CODE, C_C1, C_T1, C_C3, C_T3, C_TC, C_T = range(NSF)
+
+# shape codes (as :data:`._shapes.SHAPE_NAMES`; NONE as the general step 1 reports it)
+CODE_NONE = S_NONEW
+CODE_ACC0, CODE_ACC1, CODE_ACC01, CODE_VEL = 1, 2, 3, 4
+
+
+@jit_raw
+def sym_applies(lim):
+    """Whether :func:`sym_step1` applies to the (normalised) limits ``lim``: both
+    legs alike, finite jerk, acceleration and velocity limits. (The caller
+    checks that the start lies inside them.)"""
+    V, A, K = lim[0], lim[1], lim[2]
+    return A == lim[3] and K == lim[4] and K > 0.0 and A < math.inf and V < math.inf
+
+
+@jit_raw
+def invariants(v0, a0, D, vf, af, J):
+    """``(h0, hf, g, E)`` of the problem (see the module text)."""
+    h0 = 2.0 * J * v0 - a0 * a0
+    hf = 2.0 * J * vf - af * af
+    E = 3.0 * D * J * J + 3.0 * J * (a0 * v0 - af * vf) - a0 * a0 * a0 + af * af * af
+    return h0, hf, 0.5 * (hf - h0), E
+
+
+@jit_raw
+def coef_none(coef, h0, hf, g, E):
+    """NONE: coefficients (ascending, in ``w = c1 - c3``) into ``coef[:5]``."""
+    coef[0] = -3.0 * g * g
+    coef[1] = -4.0 * E
+    coef[2] = 6.0 * (h0 + hf)
+    coef[3] = 0.0
+    coef[4] = 3.0
+
+
+@jit_raw
+def coef_acc0(coef, A, h0, hf, E):
+    """ACC0: coefficients (ascending, in ``u = c3``) into ``coef[:5]``."""
+    coef[0] = 1.5 * A * A * (h0 + hf) - 2.0 * A * E + 0.75 * (hf * hf - h0 * h0)
+    coef[1] = -6.0 * A * hf
+    coef[2] = 3.0 * (A * A + hf)
+    coef[3] = -6.0 * A
+    coef[4] = 3.0
+
+
+@jit_raw
+def coef_acc1(coef, A, h0, hf, E):
+    """ACC1: coefficients (ascending, in ``u = c1``) into ``coef[:5]``."""
+    coef[0] = 1.5 * A * A * (h0 + hf) - 2.0 * A * E + 0.75 * (h0 * h0 - hf * hf)
+    coef[1] = 6.0 * A * h0
+    coef[2] = 3.0 * (A * A + h0)
+    coef[3] = 6.0 * A
+    coef[4] = 3.0
+
+
+@jit_raw
+def coef_acc01(A, J, h0, hf, E):
+    """ACC0_ACC1: coefficients ``(q0, q1, q2)`` (ascending, in ``x = t1``)."""
+    return (12.0 * A * A * A * A + 10.5 * A * A * h0 + 1.5 * A * A * hf - 2.0 * A * E
+            + 0.75 * (h0 * h0 - hf * hf), 6.0 * A * J * (3.0 * A * A + h0), 6.0 * A * A * J * J)
+
+
+@jit_raw
+def _horner4(c, u):
+    return (((c[4] * u + c[3]) * u + c[2]) * u + c[1]) * u + c[0]
+
+
+@jit_raw
+def _dhorner4(c, u):
+    return ((4.0 * c[4] * u + 3.0 * c[3]) * u + 2.0 * c[2]) * u + c[1]
+
+
+@jit_raw
+def _roots_in(c, lo, hi, unit, roots, tmp):
+    """Real roots in ``[lo, hi]`` of the quartic ``c[0] + ... + c[4] u^4``, each
+    polished by Newton steps (written to ``roots``): their count (-1 when the
+    interval is too small for the quartic to be resolved)."""
+    m = 0.5 * (lo + hi)
+    h = 0.5 * (hi - lo)
+    if not (h > 0.0):
+        return 0
+    # q(x) = p(m + h x): Taylor shift to m, then scale by h
+    b0, b1, b2, b3, b4 = c[0], c[1], c[2], c[3], c[4]
+    # synthetic division by (u - m), repeated
+    b3 = b3 + m * b4
+    b2 = b2 + m * b3
+    b1 = b1 + m * b2
+    b0 = b0 + m * b1
+    b3 = b3 + m * b4
+    b2 = b2 + m * b3
+    b1 = b1 + m * b2
+    b3 = b3 + m * b4
+    b2 = b2 + m * b3
+    b3 = b3 + m * b4
+    unit[0] = b0
+    unit[1] = b1 * h
+    unit[2] = b2 * h * h
+    unit[3] = b3 * h * h * h
+    unit[4] = b4 * h * h * h * h
+    if no_root_certain(unit, 4):
+        return 0
+    if unit[4] == 0.0:
+        return -1
+    nr = quartic_roots_unit(unit, roots, tmp)
+    for i in range(nr):
+        u = m + h * roots[i]
+        f = _horner4(c, u)
+        for _ in range(NEWTON_STEPS):
+            if f == 0.0:
+                break
+            d = _dhorner4(c, u)
+            if d == 0.0:
+                break
+            un = u - f / d
+            fn = _horner4(c, un)
+            if not (abs(fn) < abs(f)):
+                break
+            u = un
+            f = fn
+        roots[i] = u
+    return nr
+
+
+@jit_raw
+def _add(cand, nc, sg, code, c1, t1, c3, t3, tc, a0, af, A, K, tscale):
+    """Append a candidate when it meets the cheap necessary bounds: the new count."""
+    tol = PRE_RTOL * A
+    if not (c1 - a0 >= -tol and c1 - c3 >= -tol and af - c3 >= -tol):
+        return nc
+    if not (abs(c1) <= A + tol and abs(c3) <= A + tol):
+        return nc
+    ttol = -PRE_RTOL * tscale
+    if not (t1 >= ttol and t3 >= ttol and tc >= ttol):
+        return nc
+    if nc >= NCF:
+        return nc
+    T = (c1 - a0) * K + t1 + (c1 - c3) * K + tc + t3 + (af - c3) * K
+    b = nc * NSF
+    cand[b + C_SG] = sg
+    cand[b + C_CODE] = code
+    cand[b + C_C1] = c1
+    cand[b + C_T1] = t1
+    cand[b + C_C3] = c3
+    cand[b + C_T3] = t3
+    cand[b + C_TC] = tc
+    cand[b + C_T] = T
+    return nc + 1
+
+
+@jit_raw
+def _build(ph, c1, t1, c3, t3, tc, a0, af, K):
+    """The UDDU phase table (mirrored frame) into ``ph``: its phase count."""
+    J = 1.0 / K
+    ph[0, 0] = (c1 - a0) * K
+    ph[0, 1] = J
+    ph[0, 2] = a0
+    n = 1
+    if t1 != 0.0:
+        ph[n, 0] = t1
+        ph[n, 1] = 0.0
+        ph[n, 2] = c1
+        n += 1
+    if tc != 0.0 or c1 >= 0.0 >= c3:
+        ph[n, 0] = c1 * K
+        ph[n, 1] = -J
+        ph[n, 2] = c1
+        n += 1
+        if tc != 0.0:
+            ph[n, 0] = tc
+            ph[n, 1] = 0.0
+            ph[n, 2] = 0.0
+            n += 1
+        ph[n, 0] = -c3 * K
+        ph[n, 1] = -J
+        ph[n, 2] = 0.0
+        n += 1
+    else:
+        ph[n, 0] = (c1 - c3) * K
+        ph[n, 1] = -J
+        ph[n, 2] = c1
+        n += 1
+    if t3 != 0.0:
+        ph[n, 0] = t3
+        ph[n, 1] = 0.0
+        ph[n, 2] = c3
+        n += 1
+    ph[n, 0] = (af - c3) * K
+    ph[n, 1] = J
+    ph[n, 2] = c3
+    return n + 1
+
+
+@jit_raw
+def _cruise_half(x, A, J):
+    """(corner, hold) of a half whose velocity changes by ``x / J`` between
+    ``a = 0`` and its outer corner (``x = corner^2`` without a hold)."""
+    if x <= A * A:
+        return math.sqrt(x), 0.0
+    return A, (x - A * A) / (J * A)
+
+
+@jit_raw
+def _direction(sg, s1, lim, cand, nc, coef, unit, roots, tmp, ph):
+    """The candidates of one direction (``sg``: +1 as given, -1 mirrored)."""
+    v0 = sg * s1[1]
+    a0 = sg * s1[2]
+    D = sg * (s1[3] - s1[0])
+    vf = sg * s1[4]
+    af = sg * s1[5]
+    V = lim[0]
+    A = lim[1]
+    K = lim[2]
+    J = 1.0 / K
+    h0, hf, g, E = invariants(v0, a0, D, vf, af, J)
+    # the scale of the durations (for the cheap bounds)
+    tscale = 4.0 * A * K + abs(D) / V + (abs(v0) + abs(vf) + V) / A
+    slack = PRE_RTOL * A
+    # ---- a cruise at v_max: both halves in closed form, the cruise linear
+    x1 = J * V - 0.5 * h0
+    x3 = J * V - 0.5 * hf
+    if x1 >= 0.0 and x3 >= 0.0:
+        c1, t1 = _cruise_half(x1, A, J)
+        c3, t3 = _cruise_half(x3, A, J)
+        c3 = -c3
+        n = _build(ph, c1, t1, c3, t3, 0.0, a0, af, K)
+        p = 0.0
+        v = v0
+        for k in range(n):
+            dt = ph[k, 0]
+            jk = ph[k, 1]
+            a = ph[k, 2]
+            p = p + dt * (v + dt * (0.5 * a + dt * jk / 6.0))
+            v = v + dt * (a + 0.5 * dt * jk)
+        tc = (D - p) / V
+        code = CODE_VEL + (1 if t1 > 0.0 else 0) + (2 if t3 > 0.0 else 0)
+        nc = _add(cand, nc, sg, code, c1, t1, c3, t3, tc, a0, af, A, K, tscale)
+    # The velocity limit where the acceleration crosses zero going down
+    # (c1 >= 0 >= c3): c1^2 <= x1 and c3^2 <= x3 (both from the one velocity
+    # of that point); they bound the corners of such profiles (p1, p3), and a
+    # hold at A needs x1 >= A^2 (c1 = A) or x3 >= A^2 (c3 = -A).
+    p1 = min(A, math.sqrt(max(x1, 0.0)))
+    p3 = min(A, math.sqrt(max(x3, 0.0)))
+    hold1 = x1 >= A * A * (1.0 - PRE_RTOL)
+    hold3 = x3 >= A * A * (1.0 - PRE_RTOL)
+    # ---- NONE: w = c1 - c3 > 0, c1 + c3 = g / w; c1 >= 0 >= c3 where w^2 >= |g|
+    coef_none(coef, h0, hf, g, E)
+    sg0 = math.sqrt(abs(g))
+    for part in range(2):
+        if part == 0:
+            # crossing: c1 <= p1, c3 >= -p3
+            d1 = p1 * p1 - g
+            d3 = p3 * p3 + g
+            if d1 < -slack * A or d3 < -slack * A:
+                continue
+            r1 = math.sqrt(max(d1, 0.0))
+            r3 = math.sqrt(max(d3, 0.0))
+            lo = max(sg0, p1 - r1, p3 - r3)
+            hi = min(p1 + r1, p3 + r3)
+        elif g > 0.0:
+            # every acceleration >= 0: 0 < c3 <= af, c1 <= A
+            if not (af > 0.0) or A * A < g:
+                continue
+            lo = max(A - math.sqrt(A * A - g), math.sqrt(af * af + g) - af)
+            hi = sg0
+        elif g < 0.0:
+            # every acceleration <= 0: a0 <= c1 < 0, c3 >= -A
+            if not (a0 < 0.0) or A * A < -g:
+                continue
+            lo = max(A - math.sqrt(A * A + g), a0 + math.sqrt(a0 * a0 - g))
+            hi = sg0
+        else:
+            continue
+        nr = _roots_in(coef, max(lo - slack, 0.0), hi + slack, unit, roots, tmp)
+        if nr < 0:
+            return -1
+        for i in range(nr):
+            w = roots[i]
+            if w > 0.0:
+                q = g / w
+                c1 = 0.5 * (w + q)
+                c3 = 0.5 * (q - w)
+            elif g == 0.0:
+                c1 = 0.0
+                c3 = 0.0
+            else:
+                continue
+            nc = _add(cand, nc, sg, CODE_NONE, c1, 0.0, c3, 0.0, 0.0, a0, af, A, K, tscale)
+    # ---- ACC0: c1 = A, u = c3; t1 >= 0: u^2 >= A^2 - g
+    coef_acc0(coef, A, h0, hf, E)
+    r = math.sqrt(max(A * A - g, 0.0))
+    for part in range(2):
+        if part == 0:  # c3 <= 0
+            if not hold1:
+                continue
+            lo = -p3
+            hi = -r
+        else:  # c3 > 0
+            lo = r
+            hi = min(A, af)
+        if hi + slack < lo - slack:
+            continue
+        nr = _roots_in(coef, lo - slack, hi + slack, unit, roots, tmp)
+        if nr < 0:
+            return -1
+        for i in range(nr):
+            u = roots[i]
+            t1 = (g - A * A + u * u) * K / A
+            nc = _add(cand, nc, sg, CODE_ACC0, A, t1, u, 0.0, 0.0, a0, af, A, K, tscale)
+    # ---- ACC1: c3 = -A, u = c1; t3 >= 0: u^2 >= A^2 + g
+    coef_acc1(coef, A, h0, hf, E)
+    r = math.sqrt(max(A * A + g, 0.0))
+    for part in range(2):
+        if part == 0:  # c1 >= 0
+            if not hold3:
+                continue
+            lo = r
+            hi = p1
+        else:  # c1 < 0
+            lo = max(-A, a0)
+            hi = -r
+        if hi + slack < lo - slack:
+            continue
+        nr = _roots_in(coef, lo - slack, hi + slack, unit, roots, tmp)
+        if nr < 0:
+            return -1
+        for i in range(nr):
+            u = roots[i]
+            t3 = (u * u - A * A - g) * K / A
+            nc = _add(cand, nc, sg, CODE_ACC1, u, 0.0, -A, t3, 0.0, a0, af, A, K, tscale)
+    # ---- ACC0_ACC1: c1 = A, c3 = -A, x = t1 (a quadratic, stable roots)
+    if not (hold1 and hold3):
+        return nc
+    q0, q1, q2 = coef_acc01(A, J, h0, hf, E)
+    disc = q1 * q1 - 4.0 * q2 * q0
+    if disc >= 0.0:
+        sq = math.sqrt(disc)
+        qq = -0.5 * (q1 + math.copysign(sq, q1))
+        for k in range(2):
+            if k == 0:
+                x = qq / q2
+            elif qq != 0.0:
+                x = q0 / qq
+            else:
+                continue
+            t3 = x - g * K / A
+            nc = _add(cand, nc, sg, CODE_ACC01, A, x, -A, t3, 0.0, a0, af, A, K, tscale)
+    return nc
+
+
+@jit_raw
+def build_candidate(cand, i, s1, lim, ph):
+    """Phase table of candidate ``i`` (in its own, possibly mirrored, frame) into
+    ``ph``, round-off negative durations zeroed: (phase count, or 0 when a
+    duration is really negative; duration; direction)."""
+    b = i * NSF
+    sg = cand[b + C_SG]
+    n = _build(ph, cand[b + C_C1], cand[b + C_T1], cand[b + C_C3], cand[b + C_T3],
+               cand[b + C_TC], sg * s1[2], sg * s1[5], lim[2])
+    if not clean(ph, n):
+        return 0, 0.0, sg
+    T = 0.0
+    for k in range(n):
+        T += ph[k, 0]
+    return n, T, sg
+
+
+@jit_raw
+def _try(cand, i, s1, lim, ph):
+    """Build and exactly check candidate ``i``: (phase count, duration), count 0
+    when it fails."""
+    n, T, sg = build_candidate(cand, i, s1, lim, ph)
+    if n == 0:
+        return 0, 0.0
+    if not check_equal_legs(ph, n, 0.0, sg * s1[1], sg * s1[2], sg * (s1[3] - s1[0]), sg * s1[4],
+                            sg * s1[5], lim[0], lim[1], lim[2]):
+        return 0, 0.0
+    return n, T
+
+
+@jit_raw
+def sym_step1(s1, lim, res, want_all, cand, scr, ph):
+    """Minimum-time step 1 from ``s1[:3]`` to ``s1[3:6]`` (see the module text).
+
+    ``cand``: scratch of ``NCF * NSF`` floats, ``scr`` of :data:`SF_SCRATCH`,
+    ``ph`` a phase table of at least 8 rows. Fills ``res`` as
+    :func:`._shapes.step1` does (``R_T``, ``R_N``, ``R_SHAPE``, and with
+    ``want_all`` every valid duration in ``res[R_V0:]``, else the fastest) and
+    returns the index of the fastest valid candidate (rebuild it with
+    :func:`build_candidate`). Returns -1 when no candidate passes, or (with
+    ``want_all``) when the count of distinct valid durations is even: the
+    caller then runs the general step 1.
+    """
+    coef = scr[0:8]
+    unit = scr[8:16]
+    roots = scr[16:24]
+    tmp = scr[24:32]
+    res[R_T] = math.inf
+    res[R_N] = 0.0
+    res[R_NV] = 0.0
+    res[R_SHAPE] = 0.0
+    nc = _direction(1.0, s1, lim, cand, 0, coef, unit, roots, tmp, ph)
+    if nc < 0:
+        return -1
+    nc = _direction(-1.0, s1, lim, cand, nc, coef, unit, roots, tmp, ph)
+    if nc < 0:
+        return -1
+    ib = -1
+    if want_all:
+        nv = 0
+        for i in range(nc):
+            n, T = _try(cand, i, s1, lim, ph)
+            if n == 0:
+                continue
+            if nv < NVALID:
+                res[R_V0 + nv] = T
+                nv += 1
+            if T < res[R_T]:
+                ib = i
+                _keep(cand, i, n, T, res)
+        res[R_NV] = nv
+        if nv == 0:
+            return -1
+        # distinct durations (sorted), their count must be odd
+        v = res[R_V0:R_V0 + nv]
+        for i in range(1, nv):
+            x = v[i]
+            k = i - 1
+            while k >= 0 and v[k] > x:
+                v[k + 1] = v[k]
+                k -= 1
+            v[k + 1] = x
+        m = 1
+        for i in range(1, nv):
+            if v[i] - v[i - 1] > MERGE_RTOL * max(v[i], 1e-300):
+                m += 1
+        return ib if m % 2 == 1 else -1
+    # the fastest first: the first that passes is the minimum
+    for _ in range(nc):
+        ib = -1
+        tb = math.inf
+        for i in range(nc):
+            t = cand[i * NSF + C_T]
+            if t < tb:
+                tb = t
+                ib = i
+        if ib < 0:
+            break
+        n, T = _try(cand, ib, s1, lim, ph)
+        if n > 0:
+            _keep(cand, ib, n, T, res)
+            res[R_V0] = T
+            res[R_NV] = 1.0
+            return ib
+        cand[ib * NSF + C_T] = math.inf
+    return -1
+
+
+@jit_raw
+def _keep(cand, i, n, T, res):
+    res[R_T] = T
+    res[R_N] = n
+    res[R_SHAPE] = cand[i * NSF + C_CODE] + (16.0 if cand[i * NSF + C_SG] < 0.0 else 0.0)
