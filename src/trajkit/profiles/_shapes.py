@@ -904,6 +904,20 @@ def _plausible(cfg, c1, t1, c3, t3, tc):
 
 
 @jit_raw
+def _plausible_cruise(cfg, c1, c3):
+    """Cheap necessary conditions of a step-2 cruise candidate of ramp 2 split at
+    ``a = 0`` (:data:`M_ZERO`): the ramps ``c1 -> 0``, ``0 -> c3`` and ``c3 ->
+    a_e`` have non-negative durations (to the slack of :func:`_plausible`);
+    the root of the other sign branch of ``c3`` fails here, before polishing."""
+    eps = -PLAUSIBLE_RTOL * (1.0 + abs(cfg[TT]))
+    if c1 * cfg[K2P] < eps:
+        return False
+    if -cfg[SG2] * c3 * cfg[K2N] < eps:
+        return False
+    return cfg[SG2] * (cfg[AE] - c3) * cfg[K4] >= eps
+
+
+@jit_raw
 def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
                 vals, coef, roots, ivl, dscr):
     """Every root of one shape of one template, each offered as a candidate."""
@@ -1032,6 +1046,9 @@ def _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res
                     continue
                 c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u0, sz, s3)
                 if not _plausible(cfg, c1, t1, c3, t3, tc):
+                    continue
+                if S2_NN <= shape <= S2_AA and mode == M_ZERO and not _plausible_cruise(cfg, c1,
+                                                                                        c3):
                     continue
                 u, _ = _polish(cfg, work, shape, u0, sz, s3, a, b)
                 c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
