@@ -89,6 +89,9 @@ ZOOM_LEVELS = 10
 #: Slack of the cheap pre-check of a root before it is polished (normalised units).
 PLAUSIBLE_RTOL = 1e-6
 
+#: Regula-falsi steps of the bracketed root a step-2 cruise tries first.
+BRANCH_ROOT_ITER = 100
+
 # configuration vector (one template instance)
 (PS, VS, AS, PE, VE, AE, K1, K2P, K2N, K2Q, K4, MODE, L1, L3, VM, C1LO, C1HI, C3LO, C3HI, S3,
  SZ, K2R, TT, SG2) = range(24)
@@ -904,6 +907,49 @@ def _plausible(cfg, c1, t1, c3, t3, tc):
 
 
 @jit_raw
+def _branch_root(cfg, work, shape, a, b, s3):
+    """A root in ``[a, b]`` of the exact residual of one sign branch (``s3``) of a
+    step-2 cruise shape, where its values at ``a`` and ``b`` differ in sign
+    (regula falsi, Illinois variant, on the residual itself); NaN when they
+    do not (the branch may still have roots there)."""
+    if not (a < b):
+        return math.nan
+    fa = _resid(cfg, work, shape, a, 1.0, s3)
+    fb = _resid(cfg, work, shape, b, 1.0, s3)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if not (fa * fb < 0.0):
+        return math.nan
+    tol = POLISH_RTOL * (abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]) + 1e-300)
+    side = 0
+    x = 0.5 * (a + b)
+    for _ in range(BRANCH_ROOT_ITER):
+        x = (a * fb - b * fa) / (fb - fa)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+            if not (a < x < b):
+                return x
+        fx = _resid(cfg, work, shape, x, 1.0, s3)
+        if abs(fx) <= tol or not (fx == fx):
+            return x
+        if (fx < 0.0) == (fa < 0.0):
+            a = x
+            fa = fx
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b = x
+            fb = fx
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return x
+
+
+@jit_raw
 def _plausible_cruise(cfg, c1, c3):
     """Cheap necessary conditions of a step-2 cruise candidate of ramp 2 split at
     ``a = 0`` (:data:`M_ZERO`): the ramps ``c1 -> 0``, ``0 -> c3`` and ``c3 ->
@@ -963,6 +1009,18 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
             if res[R_STOP] > 0.0 or (S2_NN <= shape <= S2_JF and res[R_T] < math.inf):
                 return
             continue
+        if S2_NN <= shape <= S2_AA and mode == M_ZERO:
+            # step 2 needs one valid root: first the one that a sign change of
+            # the valid branch's exact residual brackets (then every root)
+            # (ramp c1 -> 0 needs c1 >= 0; above it the cruise velocity grows with u)
+            u = _branch_root(cfg, work, shape, max(a, 0.0) if shape == S2_NN or shape == S2_NA
+                             else a, b, cfg[S3] if cfg[S3] != 0.0 else -cfg[SG2])
+            if u == u:
+                roots[0] = 0.0
+                _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                             scratch, roots, 1, u, 0.0, a, b)
+                if res[R_T] < math.inf:
+                    return
         # the whole interval, then (where N nearly vanishes at an end, i.e. a
         # root may sit within round-off of it) ever smaller pieces at that end
         zoom_lo = False
