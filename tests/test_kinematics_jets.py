@@ -137,3 +137,21 @@ def test_a_redundant_arm_keeps_the_stencil_of_the_inverse_kinematics():
     assert jp._fk_jet is None
     with pytest.raises(ValueError, match="non-redundant"):
         _jets.joint_taylor(robot.fk_jet, np.zeros((1, 7)), np.zeros((1, 4, 3)), np.zeros((1, 4, 3, 3)))
+
+
+def test_a_singular_jacobian_is_flagged_and_the_path_falls_back_to_differences():
+    robot = _robot("scara")
+    q = np.array([[0.3, 0.0, 0.05, 0.1], [0.3, 0.8, 0.05, 0.1]])  # stretched, bent
+    pos, rot = robot.fk_jet(np.concatenate([q[:, None], np.zeros((2, 3, 4))], axis=1))
+    pos[:, 1] = [[0.0, -1.0, 0.0], [0.0, -1.0, 0.0]]  # some motion of the tool
+    qj, singular = _jets.joint_taylor(robot.fk_jet, q, pos, rot)
+    assert singular.tolist() == [True, False]
+    assert np.isnan(qj[0, 1:]).all() and np.isfinite(qj[1]).all()
+    # a line that starts on the singularity (the arm stretched) plans, with derivatives
+    # from differences of the inverse kinematics at its first point
+    q0 = np.array([0.0, 0.0, 0.05, 0.0])
+    p = robot.fk(q0)
+    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position - np.array([0.2, 0.05, 0.0]),
+                                                          p.rotation)), 0.5, label="L")])
+    q, d1, d2, d3 = jp.derivatives(np.array([0.0, 0.5 * jp.length]))
+    assert np.isfinite(d1).all() and np.isfinite(d2).all() and np.isfinite(d3).all()

@@ -25,6 +25,10 @@ __all__ = ["ORDER", "cos_sin", "mat_mul", "mat_vec", "scale", "axis_motion", "co
 #: Highest Taylor coefficient carried.
 ORDER = 3
 
+#: A Jacobian whose condition number (largest over smallest singular value) is
+#: above this is singular for :func:`joint_taylor`.
+COND_MAX = 1e12
+
 _N = ORDER + 1
 
 
@@ -108,7 +112,7 @@ def jacobian(fk_jet, q0: np.ndarray) -> np.ndarray:
 
 
 def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
-                 jac: np.ndarray | None = None) -> np.ndarray:
+                 jac: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Taylor coefficients of the joints that follow a tool-pose jet.
 
     Parameters
@@ -126,10 +130,13 @@ def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
 
     Returns
     -------
-    ndarray, shape (n, 4, m)
+    qj : ndarray, shape (n, 4, m)
         Joint Taylor coefficients ``q_0 .. q_3``: ``q_k = q^(k) / k!`` [rad or m per
         path unit^k]. Least squares where the robot has fewer than 6 joints (a
         reachable pose path is matched exactly); the robot must not be redundant.
+    singular : ndarray of bool, shape (n,)
+        Points where the Jacobian is singular (condition number above
+        :data:`COND_MAX`): their higher coefficients are not computed (NaN).
     """
     n, m = q0.shape
     if m > 6:
@@ -143,13 +150,21 @@ def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
         lhs = jt @ jac
     qj = np.zeros((n, _N, m))
     qj[:, 0] = q0
-    r0t = np.swapaxes(rot[:, 0], -1, -2)
+    sv = np.linalg.svd(jac, compute_uv=False)
+    singular = ~(sv[:, -1] * COND_MAX > sv[:, 0])
+    ok = ~singular
+    qj[singular, 1:] = np.nan
+    if not ok.any():
+        return qj, singular
+    lhs = lhs[ok]
+    jt = None if jt is None else jt[ok]
+    r0t = np.swapaxes(rot[ok, 0], -1, -2)
     for k in range(1, _N):
         if k == 1:  # nothing of lower order contributes to the first coefficient
-            dp, dr = pos[:, 1], rot[:, 1]
+            dp, dr = pos[ok, 1], rot[ok, 1]
         else:  # the coefficient k of the motion so far (q_k still 0): jets of k + 1 terms
-            p_now, r_now = fk_jet(qj[:, :k + 1])
-            dp, dr = pos[:, k] - p_now[:, k], rot[:, k] - r_now[:, k]
+            p_now, r_now = fk_jet(qj[ok, :k + 1])
+            dp, dr = pos[ok, k] - p_now[:, k], rot[ok, k] - r_now[:, k]
         rhs = np.concatenate([dp, _vee(dr @ r0t)], axis=1)[..., None]
-        qj[:, k] = np.linalg.solve(lhs, rhs if jt is None else jt @ rhs)[..., 0]
-    return qj
+        qj[ok, k] = np.linalg.solve(lhs, rhs if jt is None else jt @ rhs)[..., 0]
+    return qj, singular

@@ -22,14 +22,20 @@ import numpy as np
 from . import _kernel as K
 from ._brake import inside
 from ._compile import jit, jit_parallel, prange
+from ._range import DISTANCE_ABS_MIN
 from ._shapes import NPH
 
-__all__ = ["NIN", "NBLK", "ST_GOAL", "solve_many", "sync_time", "NPH"]
+__all__ = ["NIN", "NSYNC", "NBLK", "ST_GOAL", "solve_many", "sync_time", "NPH"]
 
 NBLK = K.NBLK
 
 #: Columns of an input row.
 NIN = 11
+
+#: Columns of an input row of :func:`sync_time`: a row of :data:`NIN`, then the
+#: bounds of a state the caller validated the limits for (position range,
+#: |v|, |a|, ``1/(2 min j)``, the forced-speed bound; see ``profiles.state._fast_pair``).
+NSYNC = NIN + 6
 
 #: Status (beyond the kernel's): the goal state cannot be reached within the limits.
 ST_GOAL = 9
@@ -48,6 +54,25 @@ def _goal_ok(vf, af, V, A1, J1, A2, J2):
     K1 = 1.0 / J1 if J1 < math.inf else 0.0
     K2 = 1.0 / J2 if J2 < math.inf else 0.0
     return inside(vf, -af, V, A2, K2, A1, K1)
+
+
+@jit
+def _state_ok(row):
+    """Whether the start and goal of a :data:`NSYNC` row lie within its bounds (the
+    checks of the one-axis planner's fast path) and the distance is zero or
+    resolvable; NaN fails."""
+    plo = row[NIN]
+    phi = row[NIN + 1]
+    vb = row[NIN + 2]
+    ab = row[NIN + 3]
+    k2 = row[NIN + 4]
+    vb2 = row[NIN + 5]
+    for o in (0, 3):
+        p, v, a = row[o], row[o + 1], row[o + 2]
+        if not (plo <= p <= phi and abs(v) <= vb and abs(a) <= ab and abs(v) + a * a * k2 <= vb2):
+            return False
+    d = abs(row[3] - row[0])
+    return d == 0.0 or d >= DISTANCE_ABS_MIN
 
 
 @jit
@@ -112,17 +137,21 @@ def solve_many(inp, T, status, dur, tmin, nph, nbr, shape, ph):
 
 @jit
 def sync_time(inp, Treq, status, dur, tmin, nph, nbr, shape, ph, blk, nblk):
-    """Time-synchronised plan of the axes in ``inp`` (rows as in :func:`solve_many`).
+    """Time-synchronised plan of the axes in ``inp`` (rows of :data:`NSYNC`).
 
     ``Treq``: the requested common duration, NaN for the minimum. Returns
     ``(code, T)``: code 0 and the common duration when every axis is planned
     (outputs filled per axis), else a negative code (-1: an axis' step 1
     failed, see ``status``; -2: the requested duration is below the
     synchronised minimum; -3: it lies in a blocked interval of an axis; -4:
-    step 2 failed on an axis, which the caller plans again in Python) and the
-    axis index in ``T``'s place.
+    step 2 failed on an axis, which the caller plans again in Python; -5: a
+    state of an axis is outside its row's bounds, which the caller checks
+    again with its messages) and the axis index in ``T``'s place.
     """
     n = inp.shape[0]
+    for i in range(n):
+        if not _state_ok(inp[i]):
+            return -5, float(i)
     ws = np.zeros(K.NWS)
     # step 1 on every axis, with its blocked intervals
     for i in range(n):

@@ -304,7 +304,8 @@ def _cache_fast(limits: AxisLimits) -> None:
     acceleration bounds of a state (capped at the largest float: a bound passed
     implies a finite value), ``1/(2 min j)``, the uncapped velocity bound of the
     forced speed, whether the position range is unbounded, the kernel's five
-    limits and ``v_max``."""
+    limits and ``v_max``; and the same limits and bounds as one row tail of the
+    compiled synchronisation (``_srow``)."""
     vb = _SMAX * limits.v_max
     tol = 1.0 + 1e-12  # (as in _goal_violation)
     object.__setattr__(limits, "_sgoal", (
@@ -317,6 +318,10 @@ def _cache_fast(limits: AxisLimits) -> None:
         limits.position_min == -math.inf and limits.position_max == math.inf,
         (limits.v_max, limits.a_max, limits.j_max, limits.a_max_decel, limits.j_max_decel),
         limits.v_max))
+    sf = limits.__dict__["_sfast"]
+    # the compiled synchronisation's row tail: the kernel's limits, then the bounds
+    # of :func:`_fast_pair` (checked in the compiled code)
+    object.__setattr__(limits, "_srow", sf[7] + tuple(float(x) for x in sf[:6]))
 
 
 def _num(x, field, name):

@@ -16,7 +16,8 @@ from the kinematics instead: one inverse kinematics per point, then the
 joints' Taylor coefficients order by order through the Jacobian and the
 exact higher-order terms of the forward kinematics. Only the tool path's own
 derivatives (closed-form, cheap and free of solver noise) are taken by
-differences, on the same stencils.
+differences, on the same stencils. A point where the Jacobian is singular
+(a stretched arm) gets the differences of the inverse kinematics.
 """
 
 from __future__ import annotations
@@ -221,5 +222,10 @@ class ChainJointPath:
             rj[:, order] = dr / fact
         q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s))
         many = getattr(self.robot, "jacobian_many", None)
-        qj = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
-        return q, qj[:, 1], 2.0 * qj[:, 2], 6.0 * qj[:, 3]
+        qj, singular = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
+        d1, d2, d3 = qj[:, 1], 2.0 * qj[:, 2], 6.0 * qj[:, 3]
+        if singular.any():  # on a singularity: differences of the inverse kinematics there
+            pts, kk, hk, fwd, bwd, _ = self._stencil(s[singular], self.h)
+            d = self._differences(self._stencil_ik(pts, kk), hk, fwd, bwd)
+            d1[singular], d2[singular], d3[singular] = d
+        return q, d1, d2, d3

@@ -27,8 +27,6 @@ from ..profiles.state import (
     StateProfile,
     _check_limits,
     _check_range,
-    _fast_pair,
-    _prepare,
     _profile,
     feasible_durations,
     plan_state_to_state,
@@ -189,23 +187,20 @@ def plan_ptp_states(
 
 
 def _sync_time_compiled(S, G, lims, duration):
-    """Time synchronisation in one compiled call (:func:`._batch_states.sync_time`),
-    or None: then the Python path plans again and gives the precise error."""
+    """Time synchronisation in one compiled call (:func:`._batch_states.sync_time`,
+    which also checks every state against the bounds the limits were validated
+    for), or None: then the Python path plans again and gives the precise error."""
     n = len(S)
     row = []
     for k in range(n):
-        lim = _check_limits(lims[k])
-        sf = _fast_pair(S[k], G[k], lim)
-        if sf is None:
-            lim, s, g = _prepare(S[k], G[k], lim)
-            row += s
-            row += g
-            row += lim.__dict__["_sfast"][7]
-        else:
-            row += S[k]
-            row += G[k]
-            row += sf[7]
-    inp = np.fromiter(row, np.float64, n * B.NIN).reshape(n, B.NIN)
+        lim = lims[k]
+        tail = lim.__dict__.get("_srow") if type(lim) is AxisLimits else None
+        if tail is None:
+            tail = _check_limits(lim).__dict__["_srow"]
+        row += S[k]
+        row += G[k]
+        row += tail
+    inp = np.fromiter(row, np.float64, n * B.NSYNC).reshape(n, B.NSYNC)
     out = _sync_outputs(n)
     status, dur, tmin, nph, nbr, shape, ph, blk, nblk = out
     code, T = B.sync_time(inp, math.nan if duration is None else float(duration), *out)

@@ -50,6 +50,10 @@ __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 #: Stop when a round changes the time by less than this fraction.
 ROUND_RTOL = 5e-4
 
+#: A solve that starts from a solution of the grid (``settled`` or ``near``) stops
+#: after its first round when that changed the time by less than this fraction.
+SETTLED_RTOL = ROUND_RTOL
+
 #: Most rounds (the first is jerk-free).
 MAX_ROUNDS = 6
 
@@ -73,12 +77,20 @@ SCREEN_SLACK = 0.25
 SCREEN_SLACK_LOOSE = 1.0
 
 #: ... unless the new solution violates it by more than this; then the round is
-#: solved again with every row.
+#: solved again with more rows (see SCREEN_PASSES).
 SCREEN_TOL = 1e-9
 
 #: ... or comes within this fraction of its bound (it would be active: solved
 #: again with it, so that the solver keeps it as accurately as the others).
 SCREEN_MARGIN = 1e-6
+
+#: Solves of one round at most: a round whose solution violates a row left out
+#: is solved again with those rows and the rows near its solution added, the
+#: last time with every row.
+SCREEN_PASSES = 4
+
+#: ... with every row of the nodes within this many nodes of a violated row.
+SCREEN_AROUND = 2
 
 #: Screening starts once a round changed the time by less than this fraction (the
 #: rounds' solutions are then close, and so are their active limits); with a
@@ -206,10 +218,72 @@ class _Rows:
         return A.tocsc(), b
 
 
-def _near(A: sp.csr_matrix, b: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """The rows ``A z <= b`` whose slack at ``z`` is below SCREEN_SLACK of their bound
-    (and every row whose bound is not positive)."""
-    return ((b - A @ z) < SCREEN_SLACK * b) | (b <= 0.0)
+def _near(Az: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rows ``A z <= b`` (``Az`` = ``A z``) whose slack is below SCREEN_SLACK of
+    their bound (and every row whose bound is not positive)."""
+    return ((b - Az) < SCREEN_SLACK * b) | (b <= 0.0)
+
+
+def _around(node: np.ndarray, rows: np.ndarray, n: int) -> np.ndarray:
+    """The rows (of nodes ``node``, one per row, of ``n``) whose nodes lie within
+    SCREEN_AROUND nodes of a node of one of ``rows`` (a boolean mask)."""
+    mark = np.zeros(n + 2 * SCREEN_AROUND + 1, dtype=bool)
+    for k in range(2 * SCREEN_AROUND + 1):
+        mark[node[rows] + k] = True
+    return mark[node + SCREEN_AROUND]
+
+
+class _Layout:
+    """The constraint matrix of the cone program in CSC, its sparsity pattern fixed for
+    the grid: blocks of rows stacked in order, each with fixed (row, column) entries;
+    one block (the inequalities) has rows that a solve may leave out. Built once;
+    per solve only the values and the rows kept change (the CSC order of the entries
+    is computed once).
+
+    Parameters
+    ----------
+    nv : int
+        Unknowns.
+    blocks : list of (int, ndarray, ndarray)
+        Rows of the block, and the row (within the block) and column of every entry.
+    select : int
+        Index of the block whose rows can be left out.
+    """
+
+    def __init__(self, nv: int, blocks: list[tuple[int, np.ndarray, np.ndarray]], select: int) -> None:
+        self.nv = nv
+        sizes = [b[0] for b in blocks]
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.n_rows = int(self.offsets[-1])
+        self.select = select
+        rows = np.concatenate([np.asarray(r, dtype=np.int64) + self.offsets[k]
+                               for k, (_n, r, _c) in enumerate(blocks)])
+        cols = np.concatenate([np.asarray(c, dtype=np.int64) for _n, _r, c in blocks])
+        self.order = np.lexsort((rows, cols))  # column by column, rows increasing
+        self.rows = rows[self.order]
+        self.cols = cols[self.order]
+        lo, hi = self.offsets[select], self.offsets[select + 1]
+        self.in_select = (self.rows >= lo) & (self.rows < hi)
+        self.local = self.rows[self.in_select] - lo
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.cols, minlength=nv))])
+
+    def matrix(self, values: list[np.ndarray], keep: np.ndarray) -> sp.csc_matrix:
+        """The matrix with the block values ``values`` (each in its block's entry order)
+        and the rows ``keep`` (mask) of the selectable block."""
+        data = np.concatenate(values)[self.order]
+        if keep.all():
+            return sp.csc_matrix((data, self.rows, self.indptr), shape=(self.n_rows, self.nv))
+        lo = self.offsets[self.select]
+        dropped = np.zeros(self.n_rows, dtype=np.int64)
+        dropped[lo + np.nonzero(~keep)[0]] = 1
+        shift = np.cumsum(dropped)
+        entry = np.ones(self.rows.size, dtype=bool)
+        entry[self.in_select] = keep[self.local]
+        rows = self.rows[entry]
+        cols = self.cols[entry]
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=self.nv))])
+        return sp.csc_matrix((data[entry], rows - shift[rows], indptr),
+                             shape=(self.n_rows - int(shift[-1]), self.nv))
 
 
 def _clarabel_solve(clarabel, P, q, A, b, cones):
@@ -289,20 +363,59 @@ def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: 
     return out
 
 
+def _jerk_cells(g: np.ndarray, m: int, path_jerk: bool) -> np.ndarray:
+    """The interval of every jerk row of :func:`_jerk_rows` (in its order)."""
+    cells = [np.repeat(g, m)] * 4 + ([g, g] if path_jerk else [])
+    return np.concatenate(cells) if cells else np.zeros(0, dtype=int)
+
+
+class _JerkRows:
+    """The jerk rows of one round (see :func:`_jerk_rows`): ``coef`` (r, 4) on the
+    columns ``x_i, x_{i+1}, u_i, u_{i+1}`` of the row's interval ``i`` (``cell``),
+    then the rest intervals' bounds (one coefficient ``rest`` on ``u`` of ``node``);
+    ``b`` the right-hand side of all."""
+
+    def __init__(self, coef: np.ndarray, cell: np.ndarray, rest: np.ndarray, node: np.ndarray,
+                 b: np.ndarray, n: int) -> None:
+        self.coef = coef
+        self.cols = (cell, cell + 1, n + cell, n + cell + 1)
+        self.rest = rest
+        self.rest_col = n + node
+        self.b = b
+
+    def values(self) -> np.ndarray:
+        """The coefficients in the entry order of :meth:`pattern`."""
+        return np.concatenate([self.coef.ravel(), self.rest])
+
+    @staticmethod
+    def pattern(cell: np.ndarray, node: np.ndarray, n: int) -> tuple[int, np.ndarray, np.ndarray]:
+        """Rows, and row and column of every entry."""
+        nr = cell.size
+        rows = np.concatenate([np.repeat(np.arange(nr), 4), nr + np.arange(node.size)])
+        cols = np.concatenate([np.column_stack([cell, cell + 1, n + cell, n + cell + 1]).ravel(),
+                               n + node])
+        return nr + node.size, rows, cols
+
+    def times(self, z: np.ndarray) -> np.ndarray:
+        """``A z`` of the rows (summed as a CSR product does: entry by entry)."""
+        C = self.coef
+        c0, c1, c2, c3 = self.cols
+        return np.concatenate([C[:, 0] * z[c0] + C[:, 1] * z[c1] + C[:, 2] * z[c2] + C[:, 3] * z[c3],
+                               self.rest * z[self.rest_col]])
+
+
 def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.ndarray,
                g: np.ndarray, ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray,
                d1: np.ndarray, d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray,
                j_dec: np.ndarray, j_both: np.ndarray, D: np.ndarray, n: int,
-               rest_rows: list[tuple[int, float, float]]) -> tuple[sp.csr_matrix, np.ndarray]:
+               rest_rows: list[tuple[int, float, float]]) -> _JerkRows:
     """The jerk rows linearised at ``(x_bar, u_bar)`` (see the module notes), normalised.
 
     Every row of a free interval ``i`` has its coefficients on ``x_i, x_{i+1}, u_i,
     u_{i+1}`` (columns ``i, i + 1, n + i, n + i + 1``): the joints' jerk at both ends
     of the interval, both signs, then the path's jerk, then the rest intervals' bounds.
-    Returns the rows (CSR, over the ``3 n + N`` unknowns) and their right-hand side.
     """
     m = d1.shape[1]
-    N = n - 1
     sq = np.sqrt(np.maximum(x_bar, TINY_X * max(float(x_bar.max()), TINY_X)))
     S = sq[g] + sq[g + 1] + 2.0 * ecorr[g]
     S = np.maximum(S, 0.5 * (sq[g] + sq[g + 1]))
@@ -313,7 +426,6 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
     si, sj = sq[g][:, None], sq[g + 1][:, None]
     coef: list[np.ndarray] = []  # (r, 4) each
     rhs: list[np.ndarray] = []
-    cell: list[np.ndarray] = []
     for e, nd in enumerate(ends):
         speeding = sig[nd] * qdd_bar[nd]
         jl = np.where(speeding > 0, j_acc[nd], np.where(speeding < 0, j_dec[nd], j_both[nd]))
@@ -330,7 +442,6 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
                 c = (-gi, c3 - gj, -w, c2 + w)
             coef.append(np.stack(c, axis=-1).reshape(-1, 4))
             rhs.append(r)
-            cell.append(np.repeat(g, m))
     if math.isfinite(p.j_path):
         f1 = 2.0 * p.j_path / S
         gi1 = -p.j_path / (S * S * sq[g])
@@ -340,26 +451,16 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
             w1 = sgn / D[g]
             coef.append(np.column_stack([-gi1, -gj1, -w1, w1]))
             rhs.append(r1)
-            cell.append(g)
     C = np.concatenate(coef) if coef else np.zeros((0, 4))
     b = np.concatenate(rhs) if rhs else np.zeros(0)
-    c0 = np.concatenate(cell) if cell else np.zeros(0, dtype=int)
-    cols = np.column_stack([c0, c0 + 1, n + c0, n + c0 + 1])
     big = np.maximum(np.maximum(np.abs(C).max(axis=1, initial=0.0), np.abs(b)), 1e-300)
     C = C / big[:, None]
     b = b / big
-    nr = b.size
-    rows = np.repeat(np.arange(nr), 4)
-    data, rr, cc = [C.ravel()], [rows], [cols.ravel()]
-    extra = []
-    for k, (node, sgn, ub) in enumerate(rest_rows):
-        data.append(np.array([sgn / max(1.0, ub)]))
-        rr.append(np.array([nr + k]))
-        cc.append(np.array([n + node]))
-        extra.append(ub / max(1.0, ub))
-    A = sp.csr_matrix((np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))),
-                      shape=(nr + len(rest_rows), 3 * n + N))
-    return A, np.concatenate([b, np.asarray(extra, dtype=float)])
+    rest = np.array([sgn / max(1.0, ub) for _node, sgn, ub in rest_rows], dtype=float)
+    extra = np.array([ub / max(1.0, ub) for _node, _sgn, ub in rest_rows], dtype=float)
+    node = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=int)
+    return _JerkRows(C, _jerk_cells(g, m, math.isfinite(p.j_path)), rest, node,
+                     np.concatenate([b, extra]), n)
 
 
 #: Nodes within this fraction of the path's speed cap are put on it (a cruise
@@ -484,13 +585,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     c2 = np.concatenate([idd, ic[:-1], ic[1:], idd, ic[:-1], ic[1:]])
     b_cone = np.concatenate([np.tile([1.0, -1.0, 0.0], nf), np.tile([0.0, 0.0, 2.0], N)])
 
-    def cone_matrix(sigma: np.ndarray, rho: np.ndarray) -> sp.csc_matrix:
+    def cone_values(sigma: np.ndarray, rho: np.ndarray) -> np.ndarray:
         sf = sigma[free]
-        cone_v = np.concatenate([-1.0 / sf, -1.0 / sf, -2.0 / np.sqrt(sf)])
-        v2 = np.concatenate([-1.0 / rho, -rho, -rho, -1.0 / rho, rho, rho])
-        return sp.coo_matrix((np.concatenate([cone_v, v2]), (np.concatenate([cone_r, r2]),
-                                                              np.concatenate([cone_c, c2]))),
-                             shape=(3 * nf + 3 * N, nv)).tocsc()
+        return np.concatenate([-1.0 / sf, -1.0 / sf, -2.0 / np.sqrt(sf),
+                               -1.0 / rho, -rho, -rho, -1.0 / rho, rho, rho])
 
     sigma = np.ones(n)
     rho = np.ones(N)
@@ -498,16 +596,12 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     # the path's acceleration vector: ||(u_i, kappa_i x_i)|| <= a_path
     if p.kappa is not None and math.isfinite(p.a_path):
         kn = free[np.asarray(p.kappa)[free] > 0]
-        kr = np.arange(kn.size)
-        A_acc = sp.coo_matrix((np.concatenate([-np.ones(kn.size), -np.asarray(p.kappa)[kn]]),
-                               (np.concatenate([3 * kr + 1, 3 * kr + 2]),
-                                np.concatenate([iu[kn], ix[kn]]))),
-                              shape=(3 * kn.size, nv)).tocsc()
-        b_acc = np.tile([p.a_path, 0.0, 0.0], kn.size)
     else:
         kn = np.zeros(0, dtype=int)
-        A_acc = sp.csc_matrix((0, nv))
-        b_acc = np.zeros(0)
+    kr = np.arange(kn.size)
+    acc_block = (3 * kn.size, np.concatenate([3 * kr + 1, 3 * kr + 2]), np.concatenate([iu[kn], ix[kn]]))
+    acc_values = np.concatenate([-np.ones(kn.size), -np.asarray(p.kappa)[kn]]) if kn.size else np.zeros(0)
+    b_acc = np.tile([p.a_path, 0.0, 0.0], kn.size)
 
     x_bar = None
     u_bar = np.zeros(n)
@@ -562,10 +656,15 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         ineq.add([iu[inner]], [-np.ones(inner.size)], np.full(inner.size, p.a_path))
     A_static, b_static = ineq.matrix(normalise=True)
     A_static = A_static.tocsr()
-    nonneg = _Rows(nv)
+    st = A_static.tocoo()
+    n_static = b_static.size
+    # the node of every inequality (the first node it involves: screening around a node)
+    node_static = np.full(n_static, n, dtype=np.int64)
+    np.minimum.at(node_static, st.row, st.col % n)
+    node_static[node_static == n] = 0
+    # the signs of c and d
     both = np.concatenate([ic[free], idd])
-    nonneg.add([both], [-np.ones(both.size)], np.zeros(both.size))
-    A_nn, b_nn = nonneg.matrix()
+    b_nn = np.zeros(both.size)
 
     mid = np.arange(N)
     special = np.zeros(N, dtype=bool)
@@ -575,6 +674,46 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     # the jerk rows' limit (leg) at both ends of every free interval, both signs
     ends = (g, g + 1)
     rest_rows = _rest_jerk_bounds(p, d1, j_acc, j_dec, D, rest0, restN)
+
+    # the equalities: the boundary states, the rest intervals' relation and the node relations
+    eq_cols = [ix[0:1], iu[0:1], ix[N:], iu[N:], ic[0:1], ic[N:]]
+    eq_rows = [np.arange(1) + k for k in range(6)]
+    n_eq = 6
+    if rest0:
+        eq_cols += [ix[1:2], iu[1:2]]
+        eq_rows += [np.array([n_eq])] * 2
+        n_eq += 1
+    if restN:
+        eq_cols += [ix[N - 1:N], iu[N - 1:N]]
+        eq_rows += [np.array([n_eq])] * 2
+        n_eq += 1
+    rel = n_eq + np.arange(g.size)
+    eq_cols += [ix[g + 1], ix[g], iu[g], iu[g + 1]]
+    eq_rows += [rel] * 4
+    n_eq += g.size
+    eq_fixed = [np.ones(6)]
+    b_eq_fixed = [np.array([p.x0, p.u0, p.xN, p.uN, math.sqrt(p.x0), math.sqrt(p.xN)])]
+    if rest0:
+        eq_fixed.append(np.array([1.0, -1.5 * D[0]]))
+        b_eq_fixed.append(np.zeros(1))
+    if restN:
+        eq_fixed.append(np.array([1.0, 1.5 * D[N - 1]]))
+        b_eq_fixed.append(np.zeros(1))
+    ones_g = np.ones(g.size)
+
+    # every inequality that a round may have: the static rows, then the jerk rows
+    jcell = _jerk_cells(g, m, math.isfinite(p.j_path))
+    jnode = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=np.int64)
+    n_jerk, j_rows, j_cols = _JerkRows.pattern(jcell, jnode, n)
+    node_in = np.concatenate([node_static, jcell, jnode])
+    layout = _Layout(nv, [(n_eq, np.concatenate(eq_rows), np.concatenate(eq_cols)),
+                          (n_static + n_jerk, np.concatenate([st.row, n_static + j_rows]),
+                           np.concatenate([st.col, j_cols])),
+                          (both.size, np.arange(both.size), both),
+                          (3 * nf + 3 * N, np.concatenate([cone_r, r2]), np.concatenate([cone_c, c2])),
+                          acc_block], select=1)
+    nn_values = -np.ones(both.size)
+    no_jerk = np.zeros(j_rows.size)
 
     jerk_rounds = 0
     best = None
@@ -589,61 +728,69 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         with np.errstate(divide="ignore"):
             t_init = float(np.sum(wts / (sqi[:-1] + sqi[1:])))
     for _ in range(max_rounds):
-        eq = _Rows(nv)
-        eq.add([ix[0:1]], [np.ones(1)], np.array([p.x0]))
-        eq.add([iu[0:1]], [np.ones(1)], np.array([p.u0]))
-        eq.add([ix[N:]], [np.ones(1)], np.array([p.xN]))
-        eq.add([iu[N:]], [np.ones(1)], np.array([p.uN]))
-        eq.add([ic[0:1]], [np.ones(1)], np.array([math.sqrt(p.x0)]))
-        eq.add([ic[N:]], [np.ones(1)], np.array([math.sqrt(p.xN)]))
-        if rest0:
-            eq.add([ix[1:2], iu[1:2]], [np.ones(1), np.array([-1.5 * D[0]])], np.zeros(1))
-        if restN:
-            eq.add([ix[N - 1:N], iu[N - 1:N]], [np.ones(1), np.array([1.5 * D[N - 1]])], np.zeros(1))
-        eq.add([ix[g + 1], ix[g], iu[g], iu[g + 1]],
-               [np.ones(g.size), -np.ones(g.size), -(D[g] - u_bar[g] * tau2[g] / 6.0),
-                -(D[g] + u_bar[g + 1] * tau2[g] / 6.0)],
-               -(u_bar[g + 1] ** 2 - u_bar[g] ** 2) * tau2[g] / 12.0)
+        eq_values = eq_fixed + [ones_g, -ones_g, -(D[g] - u_bar[g] * tau2[g] / 6.0),
+                                -(D[g] + u_bar[g + 1] * tau2[g] / 6.0)]
+        b_eq = np.concatenate(b_eq_fixed + [-(u_bar[g + 1] ** 2 - u_bar[g] ** 2) * tau2[g] / 12.0])
 
         if x_bar is not None:
-            A_jerk, b_jerk = _jerk_rows(p, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
-                                        j_acc, j_dec, j_both, D, n, rest_rows)
-            A_in_all = sp.vstack([A_static, A_jerk], format="csr")
-            b_in_all = np.concatenate([b_static, b_jerk])
-        else:
-            A_in_all, b_in_all = A_static, b_static
+            jerk = _jerk_rows(p, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
+                              j_acc, j_dec, j_both, D, n, rest_rows)
+            b_in_all = np.concatenate([b_static, jerk.b])
+            jerk_values = jerk.values()
+        else:  # the jerk-free round: no jerk rows
+            jerk = None
+            b_in_all = np.concatenate([b_static, np.full(n_jerk, np.inf)])
+            jerk_values = no_jerk
 
-        A_eq, b_eq = eq.matrix()
-        A_cn = cone_matrix(sigma, rho)
+        def ineq_times(zz: np.ndarray, jerk: _JerkRows | None = jerk) -> np.ndarray:
+            """``A z`` of every inequality of the round."""
+            az = A_static @ zz
+            return np.concatenate([az, jerk.times(zz) if jerk is not None else np.zeros(n_jerk)])
+
+        cn_values = cone_values(sigma, rho)
         # screening: the rows with a wide margin at the previous round's solution are
         # left out (a narrower one once the rounds have settled); if the new solution violates one of
-        # them, the round is solved again with every row (the result is the same either
+        # them, the round is solved again with more rows (the result is the same either
         # way: the solution of fewer rows that keeps all of them is the optimum)
         t_prev = times[-2] if jerk_rounds >= 2 else (t_init if jerk_rounds == 1 else math.nan)
         if z_prev is not None and (((settled or near) and not times)
                                    or (times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1])):
-            keep = _near(A_in_all, b_in_all, z_prev)
+            az_prev = ineq_times(z_prev)
+            keep = _near(az_prev, b_in_all)
             # the velocity and speed-cap rows only loosely (a cruise at the cap stays exact)
-            keep[:n_vel] |= (b_static[:n_vel] - A_static[:n_vel] @ z_prev) < SCREEN_SLACK_LOOSE
+            keep[:n_vel] |= (b_static[:n_vel] - az_prev[:n_vel]) < SCREEN_SLACK_LOOSE
         elif z_prev is not None:
-            keep = (b_in_all - A_in_all @ z_prev) < SCREEN_SLACK_LOOSE
+            keep = (b_in_all - ineq_times(z_prev)) < SCREEN_SLACK_LOOSE
         else:
             keep = np.ones(b_in_all.size, dtype=bool)
-        for _screen in range(2):
-            A_in, b_in = A_in_all[keep], b_in_all[keep]
-            A = sp.vstack([A_eq, A_in, A_nn, A_cn, A_acc], format="csc")
+        if jerk is None:
+            keep[n_static:] = False
+        values = [np.concatenate(eq_values), np.concatenate([st.data, jerk_values]), nn_values,
+                  cn_values, acc_values]
+        for screen in range(SCREEN_PASSES):
+            A = layout.matrix(values, keep)
+            b_in = b_in_all[keep]
             b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
-            cones = [clarabel.ZeroConeT(A_eq.shape[0]),
-                     clarabel.NonnegativeConeT(A_in.shape[0] + A_nn.shape[0])]
+            cones = [clarabel.ZeroConeT(n_eq),
+                     clarabel.NonnegativeConeT(b_in.size + b_nn.size)]
             cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
             sol = _clarabel_solve(clarabel, P, q, A, b, cones)
-            if keep.all():
+            if keep.all() or (jerk is None and keep[:n_static].all()):
                 break
             # a row left out must not be violated, nor come close to its bound
-            viol = (b_in_all - A_in_all @ np.asarray(sol.x)) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
+            z_new = np.asarray(sol.x)
+            az_new = ineq_times(z_new)
+            viol = (b_in_all - az_new) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
+            if jerk is None:
+                viol[n_static:] = False
             if not (viol & ~keep).any():
                 break
-            keep[:] = True
+            if screen + 2 >= SCREEN_PASSES:
+                keep[:] = True
+            else:  # every row around those, and the rows near the new solution, then again
+                keep |= _around(node_in, viol & ~keep, n) | _near(az_new, b_in_all)
+            if jerk is None:
+                keep[n_static:] = False
         status = str(sol.status).split(".")[-1]
         times_status.append(status)
         usable = status in ("Solved", "AlmostSolved") or (
@@ -673,6 +820,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                 best = (t, x.copy(), u.copy())
             if jerk_rounds >= 2 and abs(times[-2] - t) <= ROUND_RTOL * t:
                 converged = True
+                break
+            if jerk_rounds == 1 and (settled or near) and abs(t_init - t) <= SETTLED_RTOL * t:
+                converged = True  # the starting point was a solution: it was the round before
                 break
             if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
                 break  # the rounds got slower (the linearised terms moved): keep the best

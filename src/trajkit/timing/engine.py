@@ -113,6 +113,10 @@ CHECK_PER_PIECE = 16
 #: choice of the leg (speeding up or slowing down) in the limit check.
 REST_RTOL = 1e-9
 
+#: Samples the limit check evaluates at once (whole pieces; the numbers of a chunk
+#: stay in the processor's cache).
+CHECK_CHUNK = 4096
+
 #: Points checked inside every piece by the final check of the chosen timing.
 FINAL_CHECK_PER_PIECE = 64
 
@@ -131,7 +135,7 @@ ZOOM_LEVELS = 4
 VERIFY_ABOVE = 1e-2
 
 #: Points (fractions of a cell) where the true derivatives are evaluated (each
-#: costs a derivative stencil: 7 inverse kinematics).
+#: costs an inverse kinematics and the derivatives of the path at that point).
 VERIFY_POINTS = (0.5,)
 
 #: Rounds of lowering a limit locally after the check found an excess.
@@ -373,6 +377,43 @@ def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
     return h00 * f0 + h10 * h * g0 + h01 * f1 + h11 * h * g1
 
 
+class _Cached:
+    """The path's derivatives, each parameter value evaluated once: the grid nodes and
+    the cells' middles recur from the refinement to the splits and the final check
+    (a value comes out the same whichever batch it is evaluated in)."""
+
+    def __init__(self, path: JointPath) -> None:
+        self.path = path
+        self.length = path.length
+        self.n_joints = path.n_joints
+        self.breakpoints = getattr(path, "breakpoints", np.zeros(0))
+        self.s = np.zeros(0)
+        self.values: tuple = ()
+
+    def derivatives(self, S: np.ndarray) -> tuple:
+        S = np.atleast_1d(np.asarray(S, dtype=np.float64))
+        if self.s.size:
+            at = np.minimum(np.searchsorted(self.s, S), self.s.size - 1)
+            hit = self.s[at] == S
+        else:
+            at = np.zeros(S.size, dtype=int)
+            hit = np.zeros(S.size, dtype=bool)
+        if hit.all():
+            return tuple(v[at] for v in self.values)
+        miss = np.unique(S[~hit])
+        new = self.path.derivatives(miss)
+        if self.s.size:
+            s_all = np.concatenate([self.s, miss])
+            order = np.argsort(s_all, kind="stable")
+            self.s = s_all[order]
+            self.values = tuple(np.concatenate([v, w])[order] for v, w in zip(self.values, new))
+        else:
+            self.s = miss
+            self.values = tuple(np.asarray(w) for w in new)
+        at = np.searchsorted(self.s, S)
+        return tuple(v[at] for v in self.values)
+
+
 def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
             breaks: np.ndarray | None = None, rtol: float = GRID_RTOL) -> tuple:
     breaks = np.zeros(0) if breaks is None else breaks
@@ -477,16 +518,33 @@ def _solution_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray) -> np.ndarray:
     return pts[:max(room, 0)]
 
 
+def _cell_interp(s0, s1, S, a0, a1, b0, b1, c0, c1):
+    """The first three joint-path derivatives at ``S`` (n,) in the cells ``[s0, s1]``
+    from their values at the cells' ends (each (n, m)): ``a`` the first, ``b`` the
+    second, ``c`` the third. The first two by cubic Hermite interpolation (the next
+    derivative as the slope, :func:`_hermite_interp` with the basis shared), the
+    third linearly."""
+    h = (s1 - s0)[:, None]
+    t = ((S - s0) / (s1 - s0))[:, None]
+    t2 = t**2
+    t3 = t**3
+    h00 = 2 * t3 - 3 * t2 + 1
+    k10 = (t3 - 2 * t2 + t) * h
+    h01 = -2 * t3 + 3 * t2
+    k11 = (t3 - t2) * h
+    f1 = h00 * a0 + k10 * b0 + h01 * a1 + k11 * b1
+    f2 = h00 * b0 + k10 * c0 + h01 * b1 + k11 * c1
+    f3 = (1 - t) * c0 + t * c1
+    return f1, f2, f3
+
+
 def _interp_derivatives(s_grid: np.ndarray, der: tuple, S: np.ndarray):
     """First three joint-path derivatives at ``S`` from the grid (see PathTiming.grid_interpolated)."""
     cell = np.clip(np.searchsorted(s_grid, S, side="right") - 1, 0, s_grid.size - 2)
     _, d1, d2, d3 = der
-    s0g, s1g = s_grid[cell], s_grid[cell + 1]
-    f1 = _hermite_interp(s0g, s1g, d1[cell], d1[cell + 1], d2[cell], d2[cell + 1], S)
-    f2 = _hermite_interp(s0g, s1g, d2[cell], d2[cell + 1], d3[cell], d3[cell + 1], S)
-    w = ((S - s0g) / (s1g - s0g))[:, None]
-    f3 = (1 - w) * d3[cell] + w * d3[cell + 1]
-    return f1, f2, f3
+    nxt = cell + 1
+    return _cell_interp(s_grid[cell], s_grid[nxt], S, d1[cell], d1[nxt], d2[cell], d2[nxt],
+                        d3[cell], d3[nxt])
 
 
 class _Interp:
@@ -515,11 +573,8 @@ class _Interp:
         cell = np.clip(np.searchsorted(s, S, side="right") - 1, 0, s.size - 2)
         _, d1, d2, d3 = self.der
         r1, r2, r3 = self.right
-        s0g, s1g = s[cell], s[cell + 1]
-        f1 = _hermite_interp(s0g, s1g, d1[cell], r1[cell], d2[cell], r2[cell], S)
-        f2 = _hermite_interp(s0g, s1g, d2[cell], r2[cell], d3[cell], r3[cell], S)
-        w = ((S - s0g) / (s1g - s0g))[:, None]
-        f3 = (1 - w) * d3[cell] + w * r3[cell]
+        f1, f2, f3 = _cell_interp(s[cell], s[cell + 1], S, d1[cell], r1[cell], d2[cell], r2[cell],
+                                  d3[cell], r3[cell])
         return cell, [f1, f2, f3]
 
     def derivatives(self, S: np.ndarray):
@@ -554,7 +609,7 @@ class _Corrected(_Interp):
             return 0
         w = np.asarray(VERIFY_POINTS)
         s0, s1 = self.s[cells], self.s[cells + 1]
-        S = (s0[:, None] + (s1 - s0)[:, None] * w[None, :]).ravel()
+        S = (s0[:, None] * (1.0 - w[None, :]) + s1[:, None] * w[None, :]).ravel()
         _, t1, t2, t3 = self.path.derivatives(S)
         _, (i1, i2, i3) = self._base(S)
         k, npt = cells.size, w.size
@@ -699,19 +754,22 @@ def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None)
     # where the product vanishes, the leg of the piece's middle (a jerk phase that
     # ends at rest is the end of a braking, one that starts there speeds up)
     prod = qd * qdd
-    at_rest = np.abs(qd) <= REST_RTOL * lim.vlim
+    aqd = np.abs(qd)
+    at_rest = aqd <= REST_RTOL * lim.vlim
     if at_rest.any():
-        if mid is None:
-            uniq = np.unique(piece)
+        rest_row = at_rest.any(axis=1)
+        if mid is None:  # (only the pieces with a joint at rest)
+            uniq = np.unique(piece[rest_row])
             mid = np.zeros((jerk.size, qd.shape[1]))
             mid[uniq] = _evaluate(s_grid, der, t, st, jerk, lim, path, uniq,
                                   0.5 * np.diff(t)[uniq], mid=np.ones((jerk.size, qd.shape[1])))[-1]
-        prod = np.where(at_rest, mid[piece], prod)
+        prod[rest_row] = np.where(at_rest[rest_row], mid[piece[rest_row]], prod[rest_row])
     speeding = prod > 0
-    alim = np.where(speeding, lim.alim_acc, np.where(prod < 0, lim.alim_dec,
+    slowing = prod < 0
+    alim = np.where(speeding, lim.alim_acc, np.where(slowing, lim.alim_dec,
                                                       np.minimum(lim.alim_acc, lim.alim_dec)))
-    jl = np.where(speeding, lim.jacc, np.where(prod < 0, lim.jdec, np.minimum(lim.jacc, lim.jdec)))
-    rv = np.abs(qd) / lim.vlim
+    jl = np.where(speeding, lim.jacc, np.where(slowing, lim.jdec, np.minimum(lim.jacc, lim.jdec)))
+    rv = aqd / lim.vlim
     ra = np.abs(qdd) / alim
     rj = np.abs(qddd) / jl
     w = (S_eval - s_grid[cell]) / (s_grid[cell + 1] - s_grid[cell])
@@ -753,7 +811,11 @@ def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None):
     piece = np.repeat(np.arange(k), npp)
     dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
     dt[npp - 1::npp] = np.diff(t)  # the piece's end exactly
-    rv, ra, rj, rs, acc, jk, cell, _S, _p = _evaluate(s_grid, der, t, st, jerk, lim, path, piece, dt)
+    # in chunks of whole pieces (the arrays of a chunk stay in the cache)
+    step = max(1, CHECK_CHUNK // npp) * npp
+    parts = [_evaluate(s_grid, der, t, st, jerk, lim, path, piece[i:i + step], dt[i:i + step])[:7]
+             for i in range(0, piece.size, step)]
+    rv, ra, rj, rs, acc, jk, cell = (np.concatenate([pt[j] for pt in parts]) for j in range(7))
     return _use_of(lim, rv, ra, rj, rs, acc, jk), cell, rv, ra, rj, rs
 
 
@@ -877,7 +939,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
         s = np.unique(np.concatenate([s, _cap_edges(cap_fn, L)]))
-    der = path.derivatives(s)
+    cached = _Cached(path)
+    der = cached.derivatives(s)
     alim = np.minimum(aacc, adec)
     jlim = np.minimum(jacc, jdec)
     # a path with cheap exact derivatives is checked with them: its grid only
@@ -889,7 +952,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     left = None
     if not cheap and breaks.size:
         left = path.derivatives(np.nextafter(breaks, -np.inf))[1:]
-    s, der = _refine(path, s, der, vlim, alim, jlim, cap_fn, breaks,
+    s, der = _refine(cached, s, der, vlim, alim, jlim, cap_fn, breaks,
                      GRID_RTOL_CHEAP if cheap else GRID_RTOL)
     q, d1, d2, d3 = der
     if not (np.isfinite(d1).all() and np.isfinite(d2).all() and np.isfinite(d3).all()):
@@ -936,7 +999,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         add = _solution_splits(s, first.x, first.u)
         if add.size:
             s_new = np.unique(np.concatenate([s, add]))
-            der_new = path.derivatives(s_new)
+            der_new = cached.derivatives(s_new)
             init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
             s, der = s_new, der_new
             q, d1, d2, d3 = der
@@ -1007,7 +1070,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
                                                     (scale_v, scale_a, scale_j, x_cap))
                 xmid_scale = np.ones(s_new.size - 1)
-                s, der = s_new, path.derivatives(s_new)
+                s, der = s_new, cached.derivatives(s_new)
                 q, d1, d2, d3 = der
                 cap = cap_fn(s)
                 x_cap = np.minimum(x_cap, cap ** 2)
@@ -1063,7 +1126,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                       cap_fn if callable(speed) else None)
         if exact is None and (corrected is None or corrected.s is not s):
-            corrected = _Corrected(path, s, der, breaks, left)
+            corrected = _Corrected(cached, s, der, breaks, left)
         src = exact if exact is not None else corrected
         use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         if corrected is not None:
