@@ -89,6 +89,9 @@ ZOOM_LEVELS = 10
 #: Slack of the cheap pre-check of a root before it is polished (normalised units).
 PLAUSIBLE_RTOL = 1e-6
 
+#: Regula-falsi steps of the bracketed root a step-2 cruise tries first.
+BRANCH_ROOT_ITER = 100
+
 # configuration vector (one template instance)
 (PS, VS, AS, PE, VE, AE, K1, K2P, K2N, K2Q, K4, MODE, L1, L3, VM, C1LO, C1HI, C3LO, C3HI, S3,
  SZ, K2R, TT, SG2) = range(24)
@@ -121,12 +124,22 @@ S_NONEW = 15
 # result vector: best duration, best phase count, number of valid durations, the
 # shape of the best (code, see SHAPE_NAMES; +16 when mirrored), whether every valid
 # duration is wanted (else candidates that cannot win are not checked), whether the
-# search may stop at the first valid profile (set when it did), valid durations...
-R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7
+# search may stop at the first valid profile (set when it did), the stage of step 2
+# and its cruise shape tried first (see _cruise_hint), valid durations...
+R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_HINT, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7, 8
 
-# step 2 searches the shape families in stages, each over both directions
-# (the first profile of the duration found ends the search; cheap families first):
+# step 2 searches the shape families in stages, each in both directions (the
+# first profile of the duration found ends the search; the likeliest pair
+# first, see _step2_pair): a cruise at a free velocity (UDDU), a hold at a free
+# acceleration, a cruise at an inflection (UDUD), equal jerks on every ramp
 STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL = 0, 1, 2, 3
+
+#: (stage, direction) pairs of step 2 (4 stages x 2 directions), searched in the
+#: order of :func:`_step2_pair`.
+STEP2_PAIRS = 8
+
+#: Fixed-point rounds of the cruise-velocity estimate that orders step 2's search.
+CRUISE_ESTIMATE_ROUNDS = 3
 
 #: Names of the shape codes (ruckig's names of the reached limits).
 SHAPE_NAMES = ("none", "acc0", "acc1", "acc0_acc1", "vel", "acc0_vel", "acc1_vel",
@@ -362,9 +375,50 @@ def _g(cfg):
 
 
 @jit_raw
+def _rt(T, x, y, K, sgn):
+    """``T`` after a ramp x -> y at jerk sgn/K (the duration :func:`_rp` adds)."""
+    if K == 0.0:
+        return T
+    return T + (y - x) * sgn * K
+
+
+@jit_raw
 def _durations(cfg, work, c1, t1, z, c3, t3):
-    """Sum of the template's phase durations without a cruise."""
-    return walk(cfg, c1, t1, z, c3, t3, 0.0)[1]
+    """Sum of the template's phase durations without a cruise: the duration
+    :func:`walk` returns (the same sums in the same order), without integrating
+    the positions."""
+    T = _rt(0.0, cfg[AS], c1, cfg[K1], 1.0)
+    if t1 != 0.0:
+        T = T + t1
+    mode = int(cfg[MODE])
+    if mode == M_SINGLE:
+        T = _rt(T, c1, c3, cfg[K2P], -1.0)
+    elif mode == M_ZERO:
+        T = _rt(T, c1, 0.0, cfg[K2P], -1.0)
+        T = _rt(T, 0.0, c3, cfg[K2N], -cfg[SG2])
+    elif mode == M_ZFIRST:
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, 0.0, cfg[K2Q], -1.0)
+        T = _rt(T, 0.0, c3, cfg[K2N], -1.0)
+    elif mode == M_ZSECOND:
+        T = _rt(T, c1, 0.0, cfg[K2P], -1.0)
+        T = _rt(T, 0.0, z, cfg[K2N], -1.0)
+        T = _rt(T, z, c3, cfg[K2Q], -1.0)
+    elif mode == M_MID:
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, c3, cfg[K2N], -1.0)
+    elif mode == M_ZBOTH:
+        z2 = -z * math.sqrt(cfg[K2Q] / cfg[K2N]) if cfg[K2N] > 0.0 else 0.0
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, 0.0, cfg[K2Q], -1.0)
+        T = _rt(T, 0.0, z2, cfg[K2N], -1.0)
+        T = _rt(T, z2, c3, cfg[K2R], -1.0)
+    else:
+        T = _rt(T, c1, z, cfg[K2P], -1.0)
+        T = _rt(T, z, c3, cfg[K2Q], -1.0)
+    if t3 != 0.0:
+        T = T + t3
+    return _rt(T, c3, cfg[AE], cfg[K4], cfg[SG2])
 
 
 @jit_raw
@@ -853,6 +907,63 @@ def _plausible(cfg, c1, t1, c3, t3, tc):
 
 
 @jit_raw
+def _branch_root(cfg, work, shape, a, b, s3):
+    """A root in ``[a, b]`` of the exact residual of one sign branch (``s3``) of a
+    step-2 cruise shape, where its values at ``a`` and ``b`` differ in sign
+    (regula falsi, Illinois variant, on the residual itself); NaN when they
+    do not (the branch may still have roots there)."""
+    if not (a < b):
+        return math.nan
+    fa = _resid(cfg, work, shape, a, 1.0, s3)
+    fb = _resid(cfg, work, shape, b, 1.0, s3)
+    if fa == 0.0:
+        return a
+    if fb == 0.0:
+        return b
+    if not (fa * fb < 0.0):
+        return math.nan
+    tol = POLISH_RTOL * (abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]) + 1e-300)
+    side = 0
+    x = 0.5 * (a + b)
+    for _ in range(BRANCH_ROOT_ITER):
+        x = (a * fb - b * fa) / (fb - fa)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+            if not (a < x < b):
+                return x
+        fx = _resid(cfg, work, shape, x, 1.0, s3)
+        if abs(fx) <= tol or not (fx == fx):
+            return x
+        if (fx < 0.0) == (fa < 0.0):
+            a = x
+            fa = fx
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b = x
+            fb = fx
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return x
+
+
+@jit_raw
+def _plausible_cruise(cfg, c1, c3):
+    """Cheap necessary conditions of a step-2 cruise candidate of ramp 2 split at
+    ``a = 0`` (:data:`M_ZERO`): the ramps ``c1 -> 0``, ``0 -> c3`` and ``c3 ->
+    a_e`` have non-negative durations (to the slack of :func:`_plausible`);
+    the root of the other sign branch of ``c3`` fails here, before polishing."""
+    eps = -PLAUSIBLE_RTOL * (1.0 + abs(cfg[TT]))
+    if c1 * cfg[K2P] < eps:
+        return False
+    if -cfg[SG2] * c3 * cfg[K2N] < eps:
+        return False
+    return cfg[SG2] * (cfg[AE] - c3) * cfg[K4] >= eps
+
+
+@jit_raw
 def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
                 vals, coef, roots, ivl, dscr):
     """Every root of one shape of one template, each offered as a candidate."""
@@ -898,6 +1009,18 @@ def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
             if res[R_STOP] > 0.0 or (S2_NN <= shape <= S2_JF and res[R_T] < math.inf):
                 return
             continue
+        if S2_NN <= shape <= S2_AA and mode == M_ZERO:
+            # step 2 needs one valid root: first the one that a sign change of
+            # the valid branch's exact residual brackets (then every root)
+            # (ramp c1 -> 0 needs c1 >= 0; above it the cruise velocity grows with u)
+            u = _branch_root(cfg, work, shape, max(a, 0.0) if shape == S2_NN or shape == S2_NA
+                             else a, b, cfg[S3] if cfg[S3] != 0.0 else -cfg[SG2])
+            if u == u:
+                roots[0] = 0.0
+                _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                             scratch, roots, 1, u, 0.0, a, b)
+                if res[R_T] < math.inf:
+                    return
         # the whole interval, then (where N nearly vanishes at an end, i.e. a
         # root may sit within round-off of it) ever smaller pieces at that end
         zoom_lo = False
@@ -981,6 +1104,9 @@ def _offer_roots(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res
                     continue
                 c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u0, sz, s3)
                 if not _plausible(cfg, c1, t1, c3, t3, tc):
+                    continue
+                if S2_NN <= shape <= S2_AA and mode == M_ZERO and not _plausible_cruise(cfg, c1,
+                                                                                        c3):
                     continue
                 u, _ = _polish(cfg, work, shape, u0, sz, s3, a, b)
                 c1, t1, z, c3, t3, tc, _, _ = _unknowns(cfg, work, shape, u, sz, s3)
@@ -1110,6 +1236,16 @@ def solve_velocity(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scr
 
 
 @jit_raw
+def _cruise_shape(i, hint):
+    """The ``i``-th cruise shape (S2_NN..S2_AA) to try: ``hint`` first, then the
+    others in their order."""
+    if i == 0:
+        return hint
+    shape = S2_NN + i - 1
+    return shape + 1 if shape >= hint else shape
+
+
+@jit_raw
 def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     """Every shape of one template instance."""
     work = W[0]
@@ -1122,8 +1258,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
     if cfg[TT] == cfg[TT]:  # step 2: exactly T
         stage = int(res[R_STAGE])
         if stage == STAGE_CRUISE or stage == STAGE_HOLD:
-            for shape in range(S2_NN if stage == STAGE_CRUISE else S2_H1,
-                               (S2_AA if stage == STAGE_CRUISE else S2_H3) + 1):
+            hint = int(res[R_HINT])
+            for i in range(4 if stage == STAGE_CRUISE else 2):
+                shape = _cruise_shape(i, hint) if stage == STAGE_CRUISE else S2_H1 + i
                 solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                             scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
                 if res[R_T] < math.inf:
@@ -1144,7 +1281,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
             cfg[C3LO] = max(cfg[AE], 0.0)
             cfg[C3HI] = Am
             cfg[S3] = 1.0
-            for shape in range(S2_NN, S2_AA + 1):
+            hint = int(res[R_HINT])
+            for i in range(4):
+                shape = _cruise_shape(i, hint)
                 solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                             scratch, vec[0], vec[1], vec[2], ivl, vec[3:])
                 if res[R_T] < math.inf:
@@ -1688,6 +1827,119 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
 
 
 @jit_raw
+def _vel_change_time(dv, A, K):
+    """Duration of the fastest change of the velocity by ``dv`` from ``a = 0`` to
+    ``a = 0`` (limits ``A``, ``K = 1/j``)."""
+    dv = abs(dv)
+    if K == 0.0:
+        return dv / A if A < math.inf else 0.0
+    if A < math.inf and dv > A * A * K:
+        return dv / A + A * K
+    return 2.0 * math.sqrt(dv * K)
+
+
+@jit_raw
+def _cruise_margins(st0, lim):
+    """Where the cruise velocity ``vc`` of a profile of duration ``T = st0[6]``
+    lies relative to the start and goal: ``(vc - v0', vf' - vc)``.
+
+    ``v0'`` is the velocity where the start's acceleration, ramped straight to
+    zero, leaves it; ``vf'`` the one from which a ramp straight to the goal's
+    acceleration ends at the goal's velocity. ``vc`` is estimated from the
+    mean velocity ``D / T``, corrected for the velocity changes at both ends
+    (each taken as a straight ramp of velocity over its fastest duration). An
+    estimate: it only orders the search (every family is still tried).
+    """
+    A = min(lim[1], lim[3])
+    K = max(lim[2], lim[4])
+    V = lim[0]
+    v0 = st0[1] + 0.5 * st0[2] * abs(st0[2]) * K
+    vf = st0[4] - 0.5 * st0[5] * abs(st0[5]) * K
+    T = st0[6]
+    D = st0[3] - st0[0]
+    vc = min(max(D / T, -V), V)
+    for _ in range(CRUISE_ESTIMATE_ROUNDS):
+        t1 = _vel_change_time(vc - v0, A, K)
+        t2 = _vel_change_time(vc - vf, A, K)
+        x = (D + 0.5 * (vc - v0) * t1 + 0.5 * (vc - vf) * t2) / T
+        if not (abs(x) < math.inf):
+            break
+        vc = min(max(x, -V), V)
+    return vc - v0, vf - vc
+
+
+@jit_raw
+def _cruise_pair(up1, up2):
+    """(stage, direction) of the cruise family whose velocity rises into the
+    cruise (``up1``) and rises out of it (``up2``): UD|DU is UDDU, DU|UD its
+    mirror, UD|UD and DU|DU the inflections."""
+    if up1 and not up2:
+        return STAGE_CRUISE, 1.0
+    if up2 and not up1:
+        return STAGE_CRUISE, -1.0
+    return STAGE_INFLECTION, (1.0 if up1 else -1.0)
+
+
+@jit_raw
+def _peak_over(m, a, s, A, K):
+    """Whether the acceleration peak of a half of a cruise (a velocity change by
+    ``s m`` with ``m`` from :func:`_cruise_margins`, rising for ``s = 1``, at the
+    boundary acceleration ``a``) exceeds ``A``: the half then holds at ``A``.
+    Its square, from the velocity change of two ramps at jerk ``1/K``, is
+    ``s m / K + (a^2 + s a |a|) / 2``."""
+    if not (A < math.inf):
+        return False
+    if K == 0.0:
+        return True
+    return s * m / K + 0.5 * (a * a + s * a * abs(a)) > A * A
+
+
+@jit_raw
+def _cruise_hint(st0, lim, stage, sgn, m1, m2):
+    """The cruise shape (S2_NN..S2_AA) of the (stage, direction) pair that the
+    estimated cruise velocity predicts: which halves reach the acceleration
+    limit (tried first; the others follow)."""
+    if stage != STAGE_CRUISE and stage != STAGE_INFLECTION:
+        return S2_NN
+    A = min(lim[1], lim[3])
+    K = max(lim[2], lim[4])
+    s2 = -sgn if stage == STAGE_CRUISE else sgn
+    h1 = _peak_over(m1, st0[2], sgn, A, K)
+    h2 = _peak_over(m2, st0[5], s2, A, K)
+    return S2_NN + (1 if h1 else 0) + (2 if h2 else 0)
+
+
+@jit_raw
+def _step2_pair(k, m1, m2):
+    """The ``k``-th (stage, direction) pair searched by step 2 (``k`` in
+    ``range(STEP2_PAIRS)``; each pair exactly once).
+
+    With the margins ``(m1, m2)`` of :func:`_cruise_margins`: first the cruise
+    family their signs predict, then the one with the smaller margin's sign
+    flipped, the holds (both directions), the cruise with the other sign
+    flipped, with both flipped, and last the equal-jerk families (the most
+    expensive). The first valid profile ends the search, so the order
+    changes only the work, never whether a profile is found.
+    """
+    up1 = m1 > 0.0
+    up2 = m2 > 0.0
+    small1 = abs(m1) < abs(m2)
+    if k == 0:
+        return _cruise_pair(up1, up2)
+    if k == 1:
+        return _cruise_pair(up1 != small1, up2 == small1)
+    if k == 2:
+        return STAGE_HOLD, 1.0
+    if k == 3:
+        return STAGE_HOLD, -1.0
+    if k == 4:
+        return _cruise_pair(up1 == small1, up2 != small1)
+    if k == 5:
+        return _cruise_pair(not up1, not up2)
+    return STAGE_EQUAL, (1.0 if k == 6 else -1.0)
+
+
+@jit_raw
 def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     """Minimum time (``st0[6]`` NaN) or exactly ``st0[6]`` (step 2) from
     ``st0[:3]`` (inside the limits) to ``st0[3:6]``.
@@ -1707,12 +1959,13 @@ def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     rest_goal = st0[4] == 0.0 and st0[5] == 0.0 and st0[3] == st0[3] and st0[6] != st0[6]
     res[R_STOP] = -1.0 if (symmetric and rest_goal and res[R_ALL] == 0.0 and EARLY) else 0.0
     if st0[6] == st0[6] and st0[3] == st0[3]:
-        for stage in range(STAGE_EQUAL + 1):
+        # every (stage, direction) pair, the likeliest first (see _step2_pair)
+        m1, m2 = _cruise_margins(st0, lim)
+        for k in range(STEP2_PAIRS):
+            stage, sgn = _step2_pair(k, m1, m2)
             res[R_STAGE] = stage
-            direction(1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
-            if res[R_T] < math.inf:
-                break
-            direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
+            res[R_HINT] = _cruise_hint(st0, lim, stage, sgn, m1, m2)
+            direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st)
             if res[R_T] < math.inf:
                 break
         return

@@ -1,0 +1,157 @@
+"""Step 2 of the state-to-state planner (a profile of exactly ``T``): its search
+order and its speed-ups never change whether a profile is found.
+
+* the (stage, direction) pairs and the cruise shapes are searched in a
+  predicted order: every pair and every shape is still tried (a permutation);
+* the template's duration without integrating positions equals the walk's;
+* long durations, as time synchronisation asks for (``T`` up to 20 times the
+  minimum): exactly ``T``, every limit kept (independent exact check), and
+  every duration outside the blocked intervals of step 1 is filled (symmetric
+  limits; those intervals are checked against ruckig in test_state_sweep.py;
+  ruckig 0.19 itself crashes on some of these starts at the limits);
+  asymmetric limits stay within the known gap (docs/state-profiles.md).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from conftest import sweep_size
+from floatcmp import assert_ulp_close
+from state_reference import (
+    exact_check,
+    goal_error,
+    random_brake_case,
+    random_case,
+)
+
+from trajkit import AxisLimits
+from trajkit.errors import InfeasibleError
+from trajkit.profiles import _shapes as S
+from trajkit.profiles.state import BlockedDurationError, feasible_durations, plan_state_to_state
+
+#: Long durations of the sweep, in multiples of the minimum (sync asks for a
+#: median of about 8 between random 6-axis states).
+FACTORS = (1.02, 1.7, 4.0, 19.0)
+
+
+def _check(prof, lim):
+    why = exact_check(prof, lim)
+    assert why is None, why
+    err = goal_error(prof)
+    assert err < 1e-9, err
+
+
+def test_search_order_tries_every_pair_once():
+    all_pairs = {(stage, sgn) for stage in range(S.STAGE_EQUAL + 1) for sgn in (1.0, -1.0)}
+    margins = (0.0, -0.0, 1e-12, -1e-12, 0.3, -0.3, 2.0, -2.0, 1e300)
+    for m1, m2 in itertools.product(margins, repeat=2):
+        order = [tuple(S._step2_pair(k, m1, m2)) for k in range(S.STEP2_PAIRS)]
+        assert len(order) == len(all_pairs) and set(order) == all_pairs, (m1, m2, order)
+        # the equal-jerk families (the most expensive) come last
+        assert {p[0] for p in order[-2:]} == {S.STAGE_EQUAL}
+        # the first pair is a cruise, of the class the margins' signs give
+        stage, sgn = order[0]
+        if m1 > 0.0 and not m2 > 0.0:
+            assert (stage, sgn) == (S.STAGE_CRUISE, 1.0)
+        elif m2 > 0.0 and not m1 > 0.0:
+            assert (stage, sgn) == (S.STAGE_CRUISE, -1.0)
+        else:
+            assert stage == S.STAGE_INFLECTION and sgn == (1.0 if m1 > 0.0 else -1.0)
+
+
+def test_cruise_shapes_hint_first_then_every_other():
+    shapes = list(range(S.S2_NN, S.S2_AA + 1))
+    for hint in shapes:
+        order = [S._cruise_shape(i, hint) for i in range(4)]
+        assert order[0] == hint and sorted(order) == shapes
+
+
+def test_cruise_hint_from_the_peak_acceleration():
+    # a rest-to-rest half that changes the velocity by dv peaks at sqrt(dv / K):
+    # below A it is a plain ramp pair (N), above it holds at A
+    lim = np.array([10.0, 1.0, 1.0, 1.0, 1.0])
+    st0 = np.zeros(7)
+    for m1, m2, want in ((0.5, -0.5, S.S2_NN), (1.5, -0.5, S.S2_AN),
+                         (0.5, -1.5, S.S2_NA), (1.5, -1.5, S.S2_AA)):
+        assert S._cruise_hint(st0, lim, S.STAGE_CRUISE, 1.0, m1, m2) == want
+        # the mirrored problem: the same halves
+        assert S._cruise_hint(st0, lim, S.STAGE_CRUISE, -1.0, -m1, -m2) == want
+    # a start acceleration carried into the rise adds a^2 to the squared peak
+    st0[2] = 0.8
+    assert S._cruise_hint(st0, lim, S.STAGE_CRUISE, 1.0, 0.5, -0.5) == S.S2_AN
+    assert S._cruise_hint(st0, lim, S.STAGE_CRUISE, -1.0, -0.5, 0.5) == S.S2_NN
+
+
+def test_durations_equal_the_walk():
+    rng = np.random.default_rng(5)
+    for _ in range(2000):
+        cfg = np.zeros(2 * S.NCFG)
+        cfg[:S.NCFG] = rng.uniform(-2.0, 2.0, S.NCFG)
+        for k in (S.K1, S.K2P, S.K2N, S.K2Q, S.K4, S.K2R):
+            cfg[k] = 0.0 if rng.random() < 0.2 else rng.uniform(0.0, 3.0)
+        cfg[S.MODE] = rng.integers(0, 7)
+        cfg[S.SG2] = rng.choice((1.0, -1.0))
+        c1, t1, z, c3, t3 = rng.uniform(-2.0, 2.0, 5)
+        if rng.random() < 0.3:
+            t1 = 0.0
+        want = S.walk(cfg, c1, t1, z, c3, t3, 0.0)[1]
+        got = S._durations(cfg, cfg, c1, t1, z, c3, t3)
+        assert_ulp_close(got, want, 4, err_msg=str(cfg))
+
+
+N_LONG = sweep_size(250)
+
+
+def test_long_durations_symmetric():
+    """Every long duration outside the blocked intervals is filled, exactly, within
+    the limits (brake starts included)."""
+    rng = np.random.default_rng(21)
+    n_ok = n_blocked = 0
+    for i in range(N_LONG):
+        s, g, L = random_brake_case(rng, symmetric=True) if i % 5 == 4 else random_case(rng)
+        if s == g:
+            continue
+        lim = AxisLimits(*L)
+        fd = feasible_durations(s, g, lim)
+        for f in FACTORS:
+            T = fd.minimum * f
+            try:
+                q = plan_state_to_state(s, g, lim, duration=T)
+            except BlockedDurationError as err:
+                lo, hi = err.interval
+                assert lo <= T <= hi and (lo, hi) in [tuple(b) for b in fd.blocked]
+                n_blocked += 1
+                continue
+            assert q.duration == pytest.approx(T, rel=1e-12)
+            _check(q, lim)
+            n_ok += 1
+    assert n_ok >= 0.9 * len(FACTORS) * N_LONG
+
+
+def test_long_durations_asymmetric():
+    rng = np.random.default_rng(22)
+    n_req = n_none = 0
+    for _ in range(N_LONG):
+        s, g, L = random_case(rng, symmetric=False)
+        if s == g:
+            continue
+        lim = AxisLimits(*L)
+        t_min = plan_state_to_state(s, g, lim).duration
+        for f in FACTORS:
+            T = t_min * f
+            try:
+                q = plan_state_to_state(s, g, lim, duration=T)
+            except BlockedDurationError:
+                continue
+            except InfeasibleError as err:
+                assert "a longer duration may be feasible" in str(err)
+                n_req += 1
+                n_none += 1
+                continue
+            n_req += 1
+            assert q.duration == pytest.approx(T, rel=1e-12)
+            _check(q, lim)
+    assert n_none <= 0.01 * n_req
