@@ -139,6 +139,18 @@ def until(page, expr: str, timeout: int = WAIT_MS) -> None:
     page.wait_for_function(f"() => ({expr})", timeout=timeout)
 
 
+def _jog(page, joint: str, step: str, shows: str) -> None:
+    """Jog ``joint`` by ``step`` and wait until the run ended with the joints showing
+    ``shows``. The jog's reply ("jogging J3") may arrive after the run: wait for
+    both, so the page does not re-render under the next click."""
+    page.select_option("#jog-joint", joint)
+    page.fill("#jog-step", step)
+    page.click("#jog-plus")
+    until(page, "document.getElementById('state').textContent === 'idle'"
+                f" && document.querySelector('#joints').textContent.includes('{shows}')"
+                f" && document.getElementById('msg').textContent === 'jogging {joint}'")
+
+
 def _axis_value(page, axis: str, what: str) -> float:
     txt = page.locator(f'#axes tr[data-axis="{axis}"] .axis-{what}').inner_text()
     return float(re.match(r"\s*(-?[0-9.]+)", txt).group(1))
@@ -275,30 +287,14 @@ def test_jog_teach_build_save_load(hmi_server, page):
     assert "J3" in page.inner_text("#msg") and "range" in page.inner_text("#msg")
     assert (sess.q == q0).all()
 
-    page.fill("#jog-step", "50")
-    page.click("#jog-plus")
-    # the jog's reply ("jogging J3") may arrive after the run: wait for both, so the
-    # page does not re-render under the next click
-    until(page, "document.getElementById('state').textContent === 'idle'"
-                           " && document.querySelector('#joints').textContent.includes('50.000 mm')"
-                           " && document.getElementById('msg').textContent === 'jogging J3'")
+    _jog(page, "J3", "50", "50.000 mm")
     assert sess.q[2] == pytest.approx(0.05, abs=1e-12)
     # the elbow bent: a line between points with the arm stretched (a singularity)
     # cannot be followed
-    page.select_option("#jog-joint", "J2")
-    page.fill("#jog-step", "45")
-    page.click("#jog-plus")
-    until(page, "document.getElementById('state').textContent === 'idle'"
-                " && document.querySelector('#joints').textContent.includes('45.000 deg')"
-                " && document.getElementById('msg').textContent === 'jogging J2'")
+    _jog(page, "J2", "45", "45.000 deg")
     page.click("#btn-teach")  # p1
     until(page, "document.querySelectorAll('#step-point option').length === 1")
-    page.select_option("#jog-joint", "J1")
-    page.fill("#jog-step", "20")
-    page.click("#jog-plus")
-    until(page, "document.getElementById('state').textContent === 'idle'"
-                           " && document.querySelector('#joints').textContent.includes('20.000 deg')"
-                           " && document.getElementById('msg').textContent === 'jogging J1'")
+    _jog(page, "J1", "20", "20.000 deg")
     page.click("#btn-teach")  # p2
     until(page, "document.querySelectorAll('#step-point option').length === 2")
     # jog steps while the jog moves are taken as new targets of the same run

@@ -106,11 +106,11 @@ def leg_cuts(v, a, j, dt):
 
 
 @jit_raw
-def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
-    """True when the candidate keeps every limit and ends at the goal state."""
-    # scales (for slivers and the end-state tolerances)
-    # (round-off of the end state accumulates along the path: the velocity
-    # change and the distance travelled, summed over the phases)
+def _scales(ph, n, p0, v0, a0, vf, af):
+    """Scales of a candidate for its slivers and end-state tolerances: ``(duration,
+    largest |v|, largest |a|, summed |velocity change|, summed distance)`` (the
+    round-off of the end state accumulates along the path; each scale at least
+    1e-300)."""
     T = 0.0
     vsc = max(abs(v0), abs(vf))
     asc = max(abs(a0), abs(af))
@@ -131,10 +131,28 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
         dv_path += da
         dp_path += (max(vb, abs(v)) + da) * dt
         T += dt
+    return T, max(vsc, 1e-300), max(asc, 1e-300), dv_path, dp_path
+
+
+@jit_raw
+def _at_goal(p, v, a, p0, pf, vf, af, vsc, asc, dv_path, dp_path):
+    """Whether the end state ``(p, v, a)`` is the goal within the tolerances of the
+    scales (:func:`_scales`); a NaN goal position is free (velocity interface)."""
+    if pf == pf:
+        psc = max(abs(pf - p0), dp_path, 1e-300)
+        if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
+            return False
+    if abs(v - vf) > GOAL_RTOL * max(vsc, dv_path):
+        return False
+    return not (abs(a - af) > GOAL_RTOL * asc)
+
+
+@jit_raw
+def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
+    """True when the candidate keeps every limit and ends at the goal state."""
+    T, vsc, asc, dv_path, dp_path = _scales(ph, n, p0, v0, a0, vf, af)
     if not (T < 1e300):
         return False
-    vsc = max(vsc, 1e-300)
-    asc = max(asc, 1e-300)
     p = p0
     v = v0
     a_prev = a0
@@ -182,15 +200,7 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
             return False
         p, v, a_prev = phase_end(p, v, a, j, dt)
     # end state (an acceleration jump onto the goal is a zero-length phase)
-    if pf == pf:  # a NaN goal position: the position is free (velocity interface)
-        psc = max(abs(pf - p0), dp_path, 1e-300)
-        if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
-            return False
-    if abs(v - vf) > GOAL_RTOL * max(vsc, dv_path):
-        return False
-    if abs(a_prev - af) > GOAL_RTOL * asc:
-        return False
-    return True
+    return _at_goal(p, v, a_prev, p0, pf, vf, af, vsc, asc, dv_path, dp_path)
 
 
 @jit_raw
@@ -201,30 +211,9 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
     zero (the velocity extrema); the velocity is checked at the ends of the
     pieces, the acceleration (linear in a phase) and the jerk per phase, and
     no acceleration may jump (the jerk is finite)."""
-    T = 0.0
-    vsc = max(abs(v0), abs(vf))
-    asc = max(abs(a0), abs(af))
-    dv_path = 0.0
-    dp_path = 0.0
-    p = p0
-    v = v0
-    for k in range(n):
-        dt = ph[k, 0]
-        j = ph[k, 1]
-        a = ph[k, 2]
-        asc = max(asc, abs(a))
-        vb = abs(v)
-        p, v, ae = phase_end(p, v, a, j, dt)
-        vsc = max(vsc, abs(v))
-        asc = max(asc, abs(ae))
-        da = max(abs(a), abs(ae)) * dt
-        dv_path += da
-        dp_path += (max(vb, abs(v)) + da) * dt
-        T += dt
+    T, vsc, asc, dv_path, dp_path = _scales(ph, n, p0, v0, a0, vf, af)
     if not (T < 1e300):
         return False
-    vsc = max(vsc, 1e-300)
-    asc = max(asc, 1e-300)
     vlim = V * (1.0 + LIMIT_RTOL)
     alim = A * (1.0 + LIMIT_RTOL)
     p = p0
@@ -254,12 +243,4 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
             if abs(v) > vlim:
                 return False
             p, v, a_prev = phase_end(p, v, a, j, dt)
-    if pf == pf:
-        psc = max(abs(pf - p0), dp_path, 1e-300)
-        if abs(p - pf) > GOAL_RTOL * psc + 4.0 * 2.2e-16 * max(abs(pf), abs(p0)):
-            return False
-    if abs(v - vf) > GOAL_RTOL * max(vsc, dv_path):
-        return False
-    if abs(a_prev - af) > GOAL_RTOL * asc:
-        return False
-    return True
+    return _at_goal(p, v, a_prev, p0, pf, vf, af, vsc, asc, dv_path, dp_path)

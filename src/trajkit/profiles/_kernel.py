@@ -41,6 +41,7 @@ from ._brake import (
 from ._check import check
 from ._compile import jit_raw
 from ._phase import phase_end
+from ._roots import merge_equal, sort_ascending
 from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, integrate, step1
 from ._symfast import NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1
 
@@ -642,19 +643,8 @@ def _blocks(valid, nvalid, tmin, ws):
     pure cruise at ``v_max``, whose neighbours merged with it): the intervals
     are then ``(t_min, t1)``, ``(t2, t3)``.
     """
-    # sort, merge equal durations
-    for i in range(1, nvalid):
-        x = valid[i]
-        k = i - 1
-        while k >= 0 and valid[k] > x:
-            valid[k + 1] = valid[k]
-            k -= 1
-        valid[k + 1] = x
-    m = 0
-    for i in range(nvalid):
-        if m == 0 or valid[i] - valid[m - 1] > BLOCK_MERGE_RTOL * max(valid[i], 1e-300):
-            valid[m] = valid[i]
-            m += 1
+    sort_ascending(valid, nvalid)
+    m = merge_equal(valid, nvalid, BLOCK_MERGE_RTOL)
     nblk = 0
     i = 1 if m % 2 == 1 else 0
     while i + 1 < m and nblk < NBLK:

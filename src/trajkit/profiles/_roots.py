@@ -21,7 +21,8 @@ import numpy as np
 
 from ._compile import jit_raw
 
-__all__ = ["MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner", "no_root_certain",
+__all__ = ["sort_ascending", "merge_equal", "illinois",
+           "MAX_DEGREE", "cheb_nodes", "interp_unit", "real_roots_unit", "horner", "no_root_certain",
            "quartic_roots_unit"]
 
 #: Highest polynomial degree a shape equation reduces to.
@@ -144,6 +145,44 @@ def horner(c, deg, x):
 
 
 @jit_raw
+def sort_ascending(x, n):
+    """Sort ``x[:n]`` in place, ascending (insertion sort: a handful of values)."""
+    for i in range(1, n):
+        v = x[i]
+        k = i - 1
+        while k >= 0 and x[k] > v:
+            x[k + 1] = x[k]
+            k -= 1
+        x[k + 1] = v
+
+
+@jit_raw
+def merge_equal(x, n, rtol):
+    """Compact the ascending ``x[:n]`` in place, dropping every value within ``rtol``
+    (relative) of the last one kept; returns the count kept."""
+    m = 0
+    for i in range(n):
+        if m == 0 or x[i] - x[m - 1] > rtol * max(x[i], 1e-300):
+            x[m] = x[i]
+            m += 1
+    return m
+
+
+@jit_raw
+def illinois(x, fx, a, fa, b, fb, side):
+    """One bracket update of regula falsi, Illinois variant: ``[a, b]`` (``fa fb < 0``)
+    shrinks to the side of ``x`` where the sign still changes, and the value kept at
+    the end that stays twice in a row is halved. Returns ``(a, fa, b, fb, side)``."""
+    if (fx < 0.0) == (fa < 0.0):
+        if side == -1:
+            fb *= 0.5
+        return x, fx, b, fb, -1
+    if side == 1:
+        fa *= 0.5
+    return a, fa, x, fx, 1
+
+
+@jit_raw
 def _refine(D, m, deg, a, b, fa, fb):
     """Root of the monotone level-``m`` derivative in ``[a, b]`` (``fa fb < 0``):
     Newton steps kept inside the shrinking bracket; a step that leaves it is
@@ -156,18 +195,7 @@ def _refine(D, m, deg, a, b, fa, fb):
         fx = horner(D[m], deg, x)
         if fx == 0.0:
             return x
-        if (fx < 0.0) == (fa < 0.0):
-            a = x
-            fa = fx
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = x
-            fb = fx
-            if side == 1:
-                fa *= 0.5
-            side = 1
+        a, fa, b, fb, side = illinois(x, fx, a, fa, b, fb, side)
         d = horner(D[m + 1], deg - 1, x)
         xn = x - fx / d if d != 0.0 else a - 1.0
         if not (a < xn < b):
@@ -289,14 +317,7 @@ def real_roots_unit(c, deg, out, D):
                     if not dup:
                         roots[nr] = x
                         nr += 1
-            # ascending order
-            for i in range(1, nr):
-                x = roots[i]
-                k = i - 1
-                while k >= 0 and roots[k] > x:
-                    roots[k + 1] = roots[k]
-                    k -= 1
-                roots[k + 1] = x
+            sort_ascending(roots, nr)
             for i in range(nr):
                 out[i] = roots[i]
             return nr
@@ -329,18 +350,7 @@ def _bracket4(c0, c1, c2, c3, c4, a, b, fa, fb, tol):
         fx = _poly4(c0, c1, c2, c3, c4, x)
         if fx == 0.0:
             return x
-        if (fx < 0.0) == (fa < 0.0):
-            a = x
-            fa = fx
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = x
-            fb = fx
-            if side == 1:
-                fa *= 0.5
-            side = 1
+        a, fa, b, fb, side = illinois(x, fx, a, fa, b, fb, side)
         d = ((4.0 * c4 * x + 3.0 * c3) * x + 2.0 * c2) * x + c1
         xn = x - fx / d if d != 0.0 else a - 1.0
         if not (a < xn < b):
@@ -410,11 +420,5 @@ def quartic_roots_unit(c, out, tmp):
             if not dup:
                 out[n] = x
                 n += 1
-    for i in range(1, n):
-        x = out[i]
-        k = i - 1
-        while k >= 0 and out[k] > x:
-            out[k + 1] = out[k]
-            k -= 1
-        out[k + 1] = x
+    sort_ascending(out, n)
     return n

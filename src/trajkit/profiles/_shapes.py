@@ -59,7 +59,7 @@ import math
 from ._check import check, clean
 from ._compile import jit_raw
 from ._phase import phase_end
-from ._roots import NODES, interp_unit, real_roots_unit
+from ._roots import NODES, illinois, interp_unit, real_roots_unit, sort_ascending
 
 __all__ = ["NPH", "NVALID", "step1"]
 
@@ -818,14 +818,7 @@ def _intervals(cfg, work, shape, lo, hi, ivl, bp):
             nb += _quad_fit_roots(a0, a1, a2, lo, hi, bp[nb:])
         else:
             nb += _quad_fit_roots(b0, b1, b2, lo, hi, bp[nb:])
-    # sort the break points
-    for i in range(1, nb):
-        x = bp[i]
-        k = i - 1
-        while k >= 0 and bp[k] > x:
-            bp[k + 1] = bp[k]
-            k -= 1
-        bp[k + 1] = x
+    sort_ascending(bp, nb)  # the break points
     ni = 0
     a = lo
     for i in range(nb + 1):
@@ -934,18 +927,7 @@ def _branch_root(cfg, work, shape, a, b, s3):
         fx = _resid(cfg, work, shape, x, 1.0, s3)
         if abs(fx) <= tol or not (fx == fx):
             return x
-        if (fx < 0.0) == (fa < 0.0):
-            a = x
-            fa = fx
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = x
-            fb = fx
-            if side == 1:
-                fa *= 0.5
-            side = 1
+        a, fa, b, fb, side = illinois(x, fx, a, fa, b, fb, side)
     return x
 
 

@@ -63,7 +63,7 @@ import math
 
 from ._check import check_equal_legs, clean
 from ._compile import jit_raw
-from ._roots import no_root_certain, quartic_roots_unit
+from ._roots import merge_equal, no_root_certain, quartic_roots_unit, sort_ascending
 from ._shapes import NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, S_NONEW
 
 __all__ = ["NSF", "NCF", "SF_SCRATCH", "build_candidate", "coef_acc0", "coef_acc01", "coef_acc1",
@@ -513,19 +513,12 @@ def sym_step1(s1, lim, res, want_all, cand, scr, ph):
         res[R_NV] = nv
         if nv == 0:
             return -1
-        # distinct durations (sorted), their count must be odd
+        # distinct durations (sorted, merged as the blocked intervals merge them):
+        # their count must be odd
         v = res[R_V0:R_V0 + nv]
-        for i in range(1, nv):
-            x = v[i]
-            k = i - 1
-            while k >= 0 and v[k] > x:
-                v[k + 1] = v[k]
-                k -= 1
-            v[k + 1] = x
-        m = 1
-        for i in range(1, nv):
-            if v[i] - v[i - 1] > MERGE_RTOL * max(v[i], 1e-300):
-                m += 1
+        sort_ascending(v, nv)
+        m = merge_equal(v, nv, MERGE_RTOL)
+        res[R_NV] = m
         return ib if m % 2 == 1 else -1
     # the fastest first: the first that passes is the minimum
     for _ in range(nc):
