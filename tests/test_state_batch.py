@@ -72,6 +72,33 @@ def test_batch_fixed_durations():
         assert b.profile(i).phase_durations == p.phase_durations
 
 
+def test_batch_moves_of_many_phases():
+    """Brake starts with requested durations can need more phases than the table
+    the batch plans into (PHASES_MIN): those moves are planned again into a wider
+    one, and every move still equals the one-move planner's."""
+    from trajkit.profiles.state_batch import PHASES_MIN
+
+    rng = np.random.default_rng(12)
+    cs, T = [], []
+    while len(cs) < 400:
+        c = random_brake_case(rng) if len(cs) % 2 else random_case(rng)
+        if c[0] == c[1]:
+            continue
+        fd = feasible_durations(c[0], c[1], AxisLimits(*c[2]))
+        cs.append(c)
+        T.append(fd.next_feasible(fd.minimum * rng.uniform(1.0, 5.0)))
+    S, G, L = (np.array([c[k] for c in cs]) for k in range(3))
+    b = plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2], durations=np.array(T))
+    wide = np.flatnonzero(b.n_phases > PHASES_MIN)
+    assert wide.size > 0 and b.phases.shape == (len(cs), int(b.n_phases.max()), 3)
+    for i in range(len(cs)):
+        p = plan_state_to_state(cs[i][0], cs[i][1], AxisLimits(*cs[i][2]), duration=T[i])
+        assert_ulp_close(b.duration[i], p.duration, 4, err_msg=f"move {i}")
+        q = b.profile(i)
+        assert q.phase_durations == p.phase_durations and q.jerks == p.jerks
+        assert not b.phases[i, int(b.n_phases[i]):].any()
+
+
 def test_batch_errors_name_the_move():
     S = np.zeros((3, 3))
     G = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 5.0, 0.0]])  # |vf| > v_max

@@ -155,3 +155,43 @@ def test_long_durations_asymmetric():
             assert q.duration == pytest.approx(T, rel=1e-12)
             _check(q, lim)
     assert n_none <= 0.01 * n_req
+
+
+N_ENDS = sweep_size(400)
+
+
+def test_duration_at_the_end_of_a_blocked_interval():
+    """Both ends of a blocked interval are durations of valid step-1 profiles: a
+    request of exactly that duration (as time synchronisation makes, moving the
+    common duration onto an end) gets a profile, exact and within the limits,
+    even where step 2's families miss it by round-off (the case below)."""
+    s = (5.660906860336608, 7.394213336416643, -0.022783838984972427)
+    g = (219.3798951397145, 5.873891416520788, 0.02777760339156456)
+    lim = AxisLimits(8.283724118243203, 0.10683197825495558, 7.34973754695728)
+    (lo, hi), = feasible_durations(s, g, lim).blocked
+    for T in (lo, hi):
+        q = plan_state_to_state(s, g, lim, duration=T)
+        assert q.duration == pytest.approx(T, rel=1e-12)
+        _check(q, lim)
+    rng = np.random.default_rng(23)
+    n_ends = 0
+    for i in range(N_ENDS):
+        sym = i % 3 != 2
+        s, g, L = random_brake_case(rng, symmetric=sym) if i % 4 == 3 else random_case(rng, sym)
+        if s == g:
+            continue
+        lim = AxisLimits(*L)
+        for lo, hi in feasible_durations(s, g, lim).blocked:
+            for T in (lo, hi):
+                q = plan_state_to_state(s, g, lim, duration=T)
+                assert q.duration == pytest.approx(T, rel=1e-12)
+                _check(q, lim)
+                n_ends += 1
+            # inside, away from the ends: refused as blocked (symmetric limits;
+            # with separate legs step 2 may fill parts of step 1's intervals)
+            eps = max(1e-6 * (hi - lo), 1e-11 * hi)
+            if sym and hi - lo > 4.0 * eps:
+                for T in (lo + eps, 0.5 * (lo + hi), hi - eps):
+                    with pytest.raises(BlockedDurationError):
+                        plan_state_to_state(s, g, lim, duration=T)
+    assert n_ends >= 0.05 * N_ENDS

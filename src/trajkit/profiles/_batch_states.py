@@ -25,7 +25,7 @@ from ._compile import jit, jit_parallel, prange
 from ._range import DISTANCE_ABS_MIN
 from ._shapes import NPH
 
-__all__ = ["NIN", "NSYNC", "NBLK", "ST_GOAL", "solve_many", "sync_time", "NPH"]
+__all__ = ["NIN", "NSYNC", "NBLK", "ST_GOAL", "ST_WIDE", "solve_many", "sync_time", "NPH"]
 
 NBLK = K.NBLK
 
@@ -39,6 +39,10 @@ NSYNC = NIN + 6
 
 #: Status (beyond the kernel's): the goal state cannot be reached within the limits.
 ST_GOAL = 9
+
+#: Status of :func:`solve_many`: planned, but the phase table given is narrower
+#: than the move's phases (``nph`` says how many; plan it again with a wider one).
+ST_WIDE = 10
 
 #: Rounds of moving the common duration past blocked intervals.
 SYNC_MAX_ROUNDS = 16
@@ -90,6 +94,9 @@ def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
     tmin[i] = ws[K.OUT_TMIN]
     n = int(ws[K.OUT_N]) if st == K.ST_OK else 0
     nph[i] = n
+    if n > ph.shape[1]:
+        status[i] = ST_WIDE
+        return
     nbr[i] = int(ws[K.OUT_NB])
     shape[i] = ws[K.OUT_SHAPE]
     # the duration is the sum of the phases, compensated (as ``math.fsum`` in
@@ -113,7 +120,8 @@ def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
 @jit_parallel
 def solve_many(inp, T, status, dur, tmin, nph, nbr, shape, ph):
     """Plan every row of ``inp``: minimum time where ``T[i]`` is NaN, else exactly
-    ``T[i]``. Fills the output arrays (``ph``: ``(N, NPH, 3)`` phase tables)."""
+    ``T[i]``. Fills the output arrays (``ph``: ``(N, W, 3)`` phase tables, any
+    width ``W``; a move of more phases gets the status :data:`ST_WIDE`)."""
     n = inp.shape[0]
     nchunk = (n + CHUNK - 1) // CHUNK
     for c in prange(nchunk):

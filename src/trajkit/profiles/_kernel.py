@@ -42,7 +42,7 @@ from ._check import check
 from ._compile import jit_raw
 from ._phase import phase_end
 from ._roots import merge_equal, sort_ascending
-from ._shapes import NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_V0, integrate, step1
+from ._shapes import ALL_NEAREST, NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_TARGET, R_V0, integrate, step1
 from ._symfast import NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1
 
 __all__ = [
@@ -368,6 +368,14 @@ def _solve_sym(ws, task):
 def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl,
            cfg, st, keep, out, ts, js, as_):
     """Step 2: a profile of exactly ``T`` (normalised; brake included)."""
+    for b in range(nblk if lim[1] == lim[3] and lim[2] == lim[4] else 0):
+        # inside a blocked interval (away from its ends) with symmetric limits: no
+        # profile has this duration (ruckig's block scheme; with separate legs the
+        # intervals of step 1 may hold profiles of step 2: the search decides)
+        if (ws[OUT_BLK + 2 * b] / ts * (1.0 + DURATION_RTOL) < T
+                < ws[OUT_BLK + 2 * b + 1] / ts * (1.0 - DURATION_RTOL)):
+            ws[OUT_STATUS] = ST_BLOCKED
+            return
     for cand in range(NCAND):
         nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
         if nb < 0 or not (T - tb > 0.0):
@@ -401,10 +409,41 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
             _emit(ws, out, keep, nb + n, nb, total, tmin, ts, js, as_)
             ws[OUT_SHAPE] = SHAPE_CRUISE_FALLBACK + 32
             return
+    if _step1_at(ws, T, tmin, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl, cfg,
+                 st, keep, out, ts, js, as_):
+        return
     ws[OUT_STATUS] = ST_NONE
     for b in range(nblk):
         if ws[OUT_BLK + 2 * b] / ts < T < ws[OUT_BLK + 2 * b + 1] / ts:
             ws[OUT_STATUS] = ST_BLOCKED
+
+
+@jit_raw
+def _step1_at(ws, T, tmin, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl, cfg, st,
+              keep, out, ts, js, as_):
+    """Step 2 where its families found nothing: the valid step-1 profile (brake
+    included) whose duration lies within :data:`DURATION_RTOL` of ``T``, if
+    there is one. The ends of the blocked intervals are such durations (a
+    time-synchronised plan moves its common duration onto them), and step 2's
+    families can miss them by round-off. True when it emitted one."""
+    for cand in range(NCAND):
+        nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
+        if nb < 0 or not (T - tb > 0.0):
+            continue
+        s1[6] = math.nan
+        res[R_ALL] = ALL_NEAREST
+        res[R_TARGET] = T - tb
+        step1(s1, lim, best, res, W, vec, ivl, cfg, st)
+        res[R_ALL] = 0.0
+        n = int(res[R_N])
+        if not (abs(tb + res[R_T] - T) <= DURATION_RTOL * T) or nb + n > NPH:
+            continue
+        _copy_rows(keep, 0, brk, nb)
+        _copy_rows(keep, nb, best, n)
+        _emit(ws, out, keep, nb + n, nb, tb + res[R_T], tmin, ts, js, as_)
+        ws[OUT_SHAPE] = res[R_SHAPE]  # a step-1 shape, named as one
+        return True
+    return False
 
 
 @jit_raw

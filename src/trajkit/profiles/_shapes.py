@@ -123,10 +123,13 @@ S_NONEW = 15
 
 # result vector: best duration, best phase count, number of valid durations, the
 # shape of the best (code, see SHAPE_NAMES; +16 when mirrored), whether every valid
-# duration is wanted (else candidates that cannot win are not checked), whether the
-# search may stop at the first valid profile (set when it did), the stage of step 2
-# and its cruise shape tried first (see _cruise_hint), valid durations...
-R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_HINT, R_V0 = 0, 1, 2, 3, 4, 5, 6, 7, 8
+# duration is wanted (else candidates that cannot win are not checked; ALL_NEAREST:
+# every one, and the one kept is the nearest to R_TARGET instead of the fastest),
+# whether the search may stop at the first valid profile (set when it did), the
+# stage of step 2 and its cruise shape tried first (see _cruise_hint), the target
+# duration of ALL_NEAREST, valid durations...
+R_T, R_N, R_NV, R_SHAPE, R_ALL, R_STOP, R_STAGE, R_HINT, R_TARGET, R_V0 = range(10)
+ALL_NEAREST = 2.0
 
 # step 2 searches the shape families in stages, each in both directions (the
 # first profile of the duration found ends the search; the likeliest pair
@@ -659,7 +662,11 @@ def offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, 
     if nv < NVALID:
         res[R_V0 + nv] = T
         res[R_NV] = nv + 1
-    if T < res[R_T]:
+    if res[R_ALL] == ALL_NEAREST:
+        keep = abs(T - res[R_TARGET]) < abs(res[R_T] - res[R_TARGET])
+    else:
+        keep = T < res[R_T]
+    if keep:
         res[R_T] = T
         res[R_N] = n
         res[R_SHAPE] = code + (16 if sgn < 0.0 else 0)

@@ -24,7 +24,13 @@ from . import _range as R
 from .batch import _float_array, _limit_array
 from .state import StateProfile, _family, _from_table
 
-__all__ = ["StateMoveBatch", "plan_state_moves"]
+__all__ = ["StateMoveBatch", "plan_state_moves", "PHASES_MIN"]
+
+#: Width of the phase table the batch is planned into: a minimum-time profile
+#: between states inside the limits has at most 7 phases, a brake adds up to 3.
+#: A move of more phases (a requested duration with a cruise fallback) is planned
+#: again into a wider table.
+PHASES_MIN = 10
 
 
 @dataclass(frozen=True)
@@ -40,9 +46,10 @@ class StateMoveBatch:
         minimum.
     n_phases, n_brake_phases : ndarray of int, shape (N,)
         Phases of each move and how many of them are its brake pre-phase.
-    phases : ndarray, shape (N, NPH, 3)
-        ``(duration [s], jerk, start acceleration)`` of each phase; rows past
-        ``n_phases[i]`` are zero.
+    phases : ndarray, shape (N, P, 3)
+        ``(duration [s], jerk, start acceleration)`` of each phase, ``P`` the
+        largest phase count of the batch (at least :data:`PHASES_MIN`); rows
+        past ``n_phases[i]`` are zero.
     shape_codes : ndarray, shape (N,)
         The kernel's shape code of each move (see ``StateProfile.family``).
     v_max, a_max, j_max, a_max_decel, j_max_decel : ndarray, shape (N,)
@@ -209,9 +216,21 @@ def plan_state_moves(
     nph = np.zeros(n, dtype=np.int64)
     nbr = np.zeros(n, dtype=np.int64)
     shape = np.zeros(n)
-    ph = np.zeros((n, B.NPH, 3))
+    ph = np.zeros((n, PHASES_MIN, 3))
     with np.errstate(all="ignore"):
         B.solve_many(inp, Tin, status, dur, tmin, nph, nbr, shape, ph)
+        wide = np.flatnonzero(status == B.ST_WIDE)
+        if wide.size:
+            # the moves of more phases, planned again into a table wide enough for any
+            wph = np.zeros((wide.size, B.NPH, 3))
+            outs = (status[wide], dur[wide], tmin[wide], nph[wide], nbr[wide], shape[wide])
+            B.solve_many(inp[wide], Tin[wide], *outs, wph)
+            for arr, sub in zip((status, dur, tmin, nph, nbr, shape), outs):
+                arr[wide] = sub
+            ph2 = np.zeros((n, int(nph[wide].max()), 3))
+            ph2[:, :PHASES_MIN] = ph
+            ph2[wide] = wph[:, :ph2.shape[1]]
+            ph = ph2
     bad = np.flatnonzero(status != K.ST_OK)
     if bad.size:
         i = int(bad[0])
