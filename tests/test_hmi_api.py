@@ -232,9 +232,10 @@ def test_jog_teach_build_and_files(client, tmp_path):
     assert "jog step must not be zero" in error_of(client.post("/api/jog", json={"joint": "J1", "step": 0}), 422)
     np.testing.assert_array_equal(sess.q, q0)
 
-    # the elbow bent: a line between points with the arm stretched (a singularity)
-    # cannot be followed (tested below)
-    assert client.post("/api/jog", json={"joint": "J2", "step": 60}).status_code == 200
+    # home has the elbow bent (a line between points with the arm stretched, a
+    # singularity, cannot be followed: tested below)
+    assert math.degrees(sess.q[1]) == pytest.approx(90.0)
+    assert client.post("/api/jog", json={"joint": "J2", "step": -30}).status_code == 200
     wait_state(client, "idle")
     client.post("/api/teach", json={"name": "home"})
     assert client.post("/api/jog", json={"joint": "J3", "step": 40}).status_code == 200

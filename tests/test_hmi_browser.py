@@ -289,9 +289,9 @@ def test_jog_teach_build_save_load(hmi_server, page):
 
     _jog(page, "J3", "50", "50.000 mm")
     assert sess.q[2] == pytest.approx(0.05, abs=1e-12)
-    # the elbow bent: a line between points with the arm stretched (a singularity)
-    # cannot be followed
-    _jog(page, "J2", "45", "45.000 deg")
+    # home has the elbow bent (90 deg; a line between points with the arm
+    # stretched, a singularity, cannot be followed)
+    _jog(page, "J2", "-45", "45.000 deg")
     page.click("#btn-teach")  # p1
     until(page, "document.querySelectorAll('#step-point option').length === 1")
     _jog(page, "J1", "20", "20.000 deg")

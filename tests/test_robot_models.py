@@ -46,6 +46,33 @@ def test_robot_by_name():
     assert robot_by_name("palletizer").n_joints == 4
 
 
+@pytest.mark.parametrize("name", ["scara", "arm6", "palletizer"])
+def test_home_is_inside_the_ranges_and_lines_start_from_it(name):
+    """A robot's home (the HMI's start) lies inside every range, away from the
+    singularities at 0 of the SCARA (stretched arm) and the arm (straight wrist):
+    lines from it plan in every direction, also along the arm."""
+    from trajkit.kinematics._jets import jacobian
+
+    robot = robot_by_name(name)
+    q = robot.home
+    q.setflags(write=False)  # a fresh array per call: the caller may keep it
+    assert robot.home is not q and q.shape == (robot.n_joints,)
+    robot.check_joints(q)
+    if hasattr(robot, "fk_jet"):
+        J = jacobian(robot.fk_jet, q[None, :])[0]
+        assert np.linalg.cond(J) < 100.0
+    pose = robot.fk(q)
+    radial = np.array([pose.position[0], pose.position[1], 0.0])
+    radial /= np.linalg.norm(radial)
+    # (the palletizer's Z is at the bottom of its range at home)
+    down = np.array([0.0, 0.0, 1.0 if name == "palletizer" else -1.0])
+    for d in (radial, -radial, np.array([0.0, 1.0, 0.0]), down):
+        goal = Pose(pose.position + 0.05 * d, pose.rotation)
+        run = run_motions(robot, [Lin(CartesianTarget(goal), speed=0.2)], q)
+        dp, _ = robot.fk(run.sample(run.duration).q[-1]).distance(goal)
+        assert dp < 1e-9
+
+
 def test_urdf_program_matches_closed_form_arm():
     pytest.importorskip("pinocchio")
     text = textwrap.dedent("""\

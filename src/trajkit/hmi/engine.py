@@ -240,17 +240,14 @@ class Session:
 
     # ------------------------------------------------------------------ robot / teach
     def set_robot(self, name: str, log_event: bool = True) -> None:
-        """Choose the jog/teach robot; its joints go to the middle of their ranges (or 0)."""
+        """Choose the jog/teach robot; its joints go to its ready configuration
+        (``RobotModel.home``: away from singularities, inside the ranges)."""
         from ..robot.models import robot_by_name
 
         with self._lock:
             self._require_inactive("change the robot")
             robot = robot_by_name(name)
-            q = np.zeros(robot.n_joints)
-            for k, lim in enumerate(robot.limits):
-                if not lim.position_min <= 0.0 <= lim.position_max:
-                    q[k] = 0.5 * (lim.position_min + lim.position_max)
-            self.robot_name, self.robot, self.q = name, robot, q
+            self.robot_name, self.robot, self.q = name, robot, robot.home
             self.points = {}
         if log_event:
             self.event("info", f"robot {name}: joints at home, taught points cleared")

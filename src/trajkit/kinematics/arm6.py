@@ -129,6 +129,13 @@ class Arm6(RobotModel):
         self.cartesian_accel = 5.0
         self.cartesian_jerk = 50.0
 
+    @property
+    def home(self) -> np.ndarray:
+        """The ready configuration: the wrist (J5) bent 90 deg (clipped into its
+        range; the tool then points down), the rest as :attr:`RobotModel.home`;
+        a straight wrist (J5 = 0) is a singularity."""
+        return self._home_with(4, 0.5 * math.pi)
+
     def parse_config(self, config: Any) -> str:
         """Canonical ``"front-up-noflip"`` style string from a string or a flag mapping."""
         return parse_flags(config, ARM6_FLAGS, self.name)

@@ -231,6 +231,26 @@ class RobotModel(ABC):
         """Joint ranges, shape (n_joints, 2) [rad or m]."""
         return np.array([[lim.position_min, lim.position_max] for lim in self.limits])
 
+    @property
+    def home(self) -> np.ndarray:
+        """A ready configuration (n_joints,) [rad or m] inside the joint ranges:
+        every joint at 0, or at the middle of its range where 0 lies outside.
+        Models with a singularity at 0 (a stretched arm, a straight wrist)
+        bend away from it, so that Cartesian motions can start from home."""
+        q = np.zeros(self.n_joints)
+        for k, lim in enumerate(self.limits):
+            if not lim.position_min <= 0.0 <= lim.position_max:
+                q[k] = 0.5 * (lim.position_min + lim.position_max)
+        return q
+
+    def _home_with(self, k: int, value: float) -> np.ndarray:
+        """:attr:`home` of the base class with joint ``k`` at ``value`` (clipped
+        into its range)."""
+        q = RobotModel.home.fget(self)  # type: ignore[attr-defined]
+        lim = self.limits[k]
+        q[k] = min(max(value, lim.position_min), lim.position_max)
+        return q
+
     def joint_unit(self, k: int) -> tuple[str, float]:
         """Display unit of joint ``k`` and the factor from SI: ``("deg", 180/pi)`` or ``("mm", 1000)``."""
         return ("deg", 180.0 / math.pi) if self.joint_kinds[k] == REVOLUTE else ("mm", 1e3)

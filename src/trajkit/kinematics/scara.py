@@ -66,6 +66,13 @@ class Scara(RobotModel):
         self.limits = tuple(lim.with_name(n) for lim, n in zip(lims, self.joint_names))
         self.length_scale = self.a1 + self.a2
 
+    @property
+    def home(self) -> np.ndarray:
+        """The ready configuration: the elbow (J2) bent 90 deg (clipped into its
+        range), the rest as :attr:`RobotModel.home`; the arm stretched (J2 = 0) is
+        a singularity that a line cannot leave along the arm."""
+        return self._home_with(1, 0.5 * math.pi)
+
     def fk(self, q: Any) -> Pose:
         """Tool pose of joints ``q`` (4,) [rad, rad, m, rad]."""
         q1, q2, d3, q4 = check_array(q, "joints", ndim=1, size=4).tolist()
