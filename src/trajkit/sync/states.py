@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
+import struct
 import threading
 from collections.abc import Sequence
 from typing import Any
@@ -200,8 +201,8 @@ def _sync_time_compiled(S, G, lims, duration):
         row += S[k]
         row += G[k]
         row += tail
-    inp = np.fromiter(row, np.float64, n * B.NSYNC).reshape(n, B.NSYNC)
-    out = _sync_outputs(n)
+    inp, pack, out = _sync_buffers(n)
+    pack.pack_into(inp, 0, *row)
     status, dur, tmin, nph, nbr, shape, ph, blk, nblk = out
     code, T = B.sync_time(inp, math.nan if duration is None else float(duration), *out)
     if code != 0:
@@ -223,20 +224,23 @@ def _sync_time_compiled(S, G, lims, duration):
 _tls = threading.local()
 
 
-def _sync_outputs(n):
-    """The output arrays of :func:`._batch_states.sync_time` for ``n`` axes (one set
-    per thread and axis count, reused: the kernel writes every entry read back)."""
-    cache = getattr(_tls, "out", None)
+def _sync_buffers(n):
+    """The input array of :func:`._batch_states.sync_time` for ``n`` axes, the
+    struct that fills it from one flat sequence, and its output arrays (one set
+    per thread and axis count, reused: every input entry is written and the
+    kernel writes every output entry read back)."""
+    cache = getattr(_tls, "buf", None)
     if cache is None:
-        cache = _tls.out = {}
-    out = cache.get(n)
-    if out is None:
+        cache = _tls.buf = {}
+    bufs = cache.get(n)
+    if bufs is None:
         out = (np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.int64),
                np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros((n, B.NPH, 3)),
                np.zeros((n, B.NBLK, 2)), np.zeros(n, dtype=np.int64))
+        bufs = (np.zeros((n, B.NSYNC)), struct.Struct(f"={n * B.NSYNC}d"), out)
         if n <= 64:
-            cache[n] = out
-    return out
+            cache[n] = bufs
+    return bufs
 
 
 def _phase_sync(s, g, lims, duration):
