@@ -42,8 +42,22 @@ from ._check import check
 from ._compile import jit_raw
 from ._phase import phase_end
 from ._roots import merge_equal, sort_ascending
-from ._shapes import ALL_NEAREST, NCFG, NPH, NVALID, R_ALL, R_N, R_NV, R_SHAPE, R_T, R_TARGET, R_V0, integrate, step1
-from ._symfast import NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1
+from ._shapes import (
+    ALL_NEAREST,
+    NCFG,
+    NPH,
+    NVALID,
+    R_ALL,
+    R_N,
+    R_NV,
+    R_SHAPE,
+    R_T,
+    R_TARGET,
+    R_V0,
+    integrate,
+    step1,
+)
+from ._symfast import NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1, sym_step2
 
 __all__ = [
     "NWS", "workspace", "solve",
@@ -381,6 +395,16 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
         if nb < 0 or not (T - tb > 0.0):
             continue
         s1[6] = T - tb
+        if nb == 0:
+            # symmetric limits, a cruise at a free velocity: closed form first
+            n, code = sym_step2(s1, T - tb, lim, best, ws[_SFS:_SFS + SF_SCRATCH])
+            if n > 0:
+                total = 0.0
+                for k in range(n):
+                    total += best[k, 0]
+                _emit(ws, out, best, n, 0, total, tmin, ts, js, as_)
+                ws[OUT_SHAPE] = code + 32
+                return
         res[R_ALL] = 0.0
         step1(s1, lim, best, res, W, vec, ivl, cfg, st)
         if not (res[R_T] < math.inf):

@@ -63,11 +63,11 @@ import math
 
 from ._check import check_equal_legs, clean
 from ._compile import jit_raw
-from ._roots import merge_equal, no_root_certain, quartic_roots_unit, sort_ascending
-from ._shapes import NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, S_NONEW
+from ._roots import illinois, merge_equal, no_root_certain, quartic_roots_unit, sort_ascending
+from ._shapes import NVALID, R_N, R_NV, R_SHAPE, R_T, R_V0, S2_NN, S_NONEW
 
 __all__ = ["NSF", "NCF", "SF_SCRATCH", "build_candidate", "coef_acc0", "coef_acc01", "coef_acc1",
-           "coef_none", "invariants", "sym_applies", "sym_step1"]
+           "coef_none", "invariants", "sym_applies", "sym_step1", "sym_step2", "STEP2_SCRATCH"]
 
 #: Largest number of candidates of both directions (4 roots of each quartic,
 #: 2 of the quadratic, 1 cruise profile).
@@ -89,6 +89,14 @@ NEWTON_STEPS = 2
 
 #: Valid durations closer than this (relative) are one profile (as the blocks).
 MERGE_RTOL = 1e-10
+
+#: Most bracket updates of the cruise velocity of :func:`sym_step2` (each root
+#: is found to round-off in far fewer).
+STEP2_MAX_ITER = 200
+
+#: Scratch floats of :func:`sym_step2` (8 break points, their cruise durations
+#: and residuals).
+STEP2_SCRATCH = 24
 
 # candidate columns
 C_SG, C_CODE, C_C1, C_T1, C_C3, C_T3, C_TC, C_T = range(NSF)
@@ -546,3 +554,173 @@ def _keep(cand, i, n, T, res):
     res[R_T] = T
     res[R_N] = n
     res[R_SHAPE] = cand[i * NSF + C_CODE] + (16.0 if cand[i * NSF + C_SG] < 0.0 else 0.0)
+
+
+# ------------------------------------------------------------------ step 2
+@jit_raw
+def _half(dv, a, A, K):
+    """A velocity change by ``dv`` from acceleration ``a`` to 0 with one corner
+    (at jerk ``1/K``, held at ``+-A`` where it would exceed it): on the side of
+    the change that ramping ``a`` straight to 0 gives, ``a -> c -> 0``.
+
+    Returns ``(side, c, hold, duration, deficit)``: the corner's side (+1: the
+    acceleration goes up first), the corner, its hold [s], the duration and
+    ``int (v_end - v) dt`` over the change (velocities relative to its start)."""
+    sd = 1.0 if dv >= 0.5 * a * abs(a) * K else -1.0
+    a1 = sd * a
+    c, h = _cruise_half(max(dv * sd / K + 0.5 * a1 * a1, 0.0), A, 1.0 / K)
+    J = 1.0 / K
+    # in the side's frame: ramp a1 -> c (+J), hold c, ramp c -> 0 (-J)
+    d1 = (c - a1) * K
+    d3 = c * K
+    p = d1 * d1 * (0.5 * a1 + d1 * J / 6.0)
+    v = d1 * (a1 + 0.5 * d1 * J)
+    p = p + h * (v + 0.5 * h * c)
+    v = v + h * c
+    p = p + d3 * (v + d3 * (0.5 * c - d3 * J / 6.0))
+    v = v + d3 * (c - 0.5 * d3 * J)
+    dur = d1 + h + d3
+    return sd, c, h, dur, sd * (v * dur - p)
+
+
+@jit_raw
+def _cruise_eval(vc, T, v0, a0, D, vf, af, A, K):
+    """The profile of duration ``T`` with a cruise at ``vc`` (both halves by
+    :func:`_half`; the second one as the reverse of a change from the goal):
+    (cruise duration, position residual)."""
+    _, _, _, t1, e1 = _half(vc - v0, a0, A, K)
+    _, _, _, t3, e3 = _half(vc - vf, -af, A, K)
+    return T - t1 - t3, vc * T - e1 - e3 - D
+
+
+@jit_raw
+def _cruise_table(vc, T, v0, a0, vf, af, A, K, ph):
+    """The phase table of :func:`_cruise_eval`'s profile into ``ph``: (phase
+    count, shape code)."""
+    J = 1.0 / K
+    s1, c1, h1, t1, _ = _half(vc - v0, a0, A, K)
+    s3, c3, h3, t3, _ = _half(vc - vf, -af, A, K)
+    n = 0
+    # first half: a0 -> s1 c1 (jerk s1 J), hold, -> 0 (jerk -s1 J)
+    for dt, jk, ak in (((c1 - s1 * a0) * K, s1 * J, a0), (h1, 0.0, s1 * c1),
+                       (c1 * K, -s1 * J, s1 * c1), (T - t1 - t3, 0.0, 0.0),
+                       # second half, the reverse of -af -> s3 c3 -> 0: 0 -> -s3 c3 -> af
+                       (c3 * K, -s3 * J, 0.0), (h3, 0.0, -s3 * c3),
+                       ((c3 + s3 * af) * K, s3 * J, -s3 * c3)):
+        if dt != 0.0:
+            ph[n, 0] = dt
+            ph[n, 1] = jk
+            ph[n, 2] = ak
+            n += 1
+    code = S2_NN + (1 if h1 > 0.0 else 0) + (2 if h3 > 0.0 else 0) + (16 if s1 < 0.0 else 0)
+    return n, code
+
+
+@jit_raw
+def _vc_root(what, a, fa, b, fb, T, v0, a0, D, vf, af, A, K):
+    """Regula falsi (Illinois) over the cruise velocity in ``[a, b]`` (``fa``,
+    ``fb`` of opposite signs, or one zero) on the cruise duration (``what`` 0)
+    or the position residual (1): (the final bracket's ends, on ``a``'s side
+    and on ``b``'s, the velocity of the least |value| met, that value)."""
+    xb, fxb = (a, abs(fa)) if abs(fa) <= abs(fb) else (b, abs(fb))
+    side = 0
+    for _ in range(STEP2_MAX_ITER):
+        if fxb == 0.0:
+            break
+        x = b - fb * (b - a) / (fb - fa)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+            if not (a < x < b):
+                break
+        tx, rx = _cruise_eval(x, T, v0, a0, D, vf, af, A, K)
+        fx = tx if what == 0 else rx
+        if abs(fx) < fxb:
+            xb, fxb = x, abs(fx)
+        a, fa, b, fb, side = illinois(x, fx, a, fa, b, fb, side)
+    return a, b, xb, fxb
+
+
+@jit_raw
+def _try_vc(vc, T, s1, lim, ph):
+    """Build the profile of cruise velocity ``vc`` and check it exactly:
+    (phase count, 0 when it fails; shape code)."""
+    n, code = _cruise_table(vc, T, s1[1], s1[2], s1[4], s1[5], lim[1], lim[2], ph)
+    if not clean(ph, n):
+        return 0, 0
+    if not check_equal_legs(ph, n, 0.0, s1[1], s1[2], s1[3] - s1[0], s1[4], s1[5], lim[0],
+                            lim[1], lim[2]):
+        return 0, 0
+    return n, code
+
+
+@jit_raw
+def sym_step2(s1, T, lim, ph, scr):
+    """Step 2 (a profile of exactly ``T``) in closed form where it applies:
+    symmetric limits (:func:`sym_applies`), a start inside them, and a profile
+    with a cruise at a free velocity ``vc`` in ``[-v_max, v_max]`` (the family
+    of almost every axis that time synchronisation stretches).
+
+    Each half is the one-corner velocity change of :func:`_half` (its corner's
+    side, its hold, its duration and its area are closed forms of ``vc``), so
+    the cruise duration and the position residual are functions of ``vc``
+    alone, smooth between the break points where a corner changes side or
+    starts a hold. Each piece whose residual changes sign where the cruise
+    lasts no less than nothing is solved by regula falsi (Illinois), its
+    profile built and checked exactly; the first that passes is returned.
+    ``scr``: scratch of :data:`STEP2_SCRATCH` floats.
+
+    Returns ``(phase count, shape code)`` with the phases in ``ph``; count 0
+    when it found nothing (the general step 2 decides).
+    """
+    if not sym_applies(lim):
+        return 0, 0
+    v0 = s1[1]
+    a0 = s1[2]
+    D = s1[3] - s1[0]
+    vf = s1[4]
+    af = s1[5]
+    V = lim[0]
+    A = lim[1]
+    K = lim[2]
+    # break points: the natural velocities (a corner changes side) and the
+    # holds' starts of both halves, within [-V, V]
+    pts = scr[0:8]
+    pts[0] = -V
+    pts[1] = V
+    m = 2
+    for vb, ab in ((v0, a0), (vf, -af)):
+        for x in (vb + 0.5 * ab * abs(ab) * K, vb + (A * A - 0.5 * ab * ab) * K,
+                  vb - (A * A - 0.5 * ab * ab) * K):
+            if -V < x < V:
+                pts[m] = x
+                m += 1
+    sort_ascending(pts, m)
+    tcs = scr[8:16]
+    res = scr[16:24]
+    for i in range(m):
+        tcs[i], res[i] = _cruise_eval(pts[i], T, v0, a0, D, vf, af, A, K)
+    for i in range(m - 1):
+        a = pts[i]
+        b = pts[i + 1]
+        ta = tcs[i]
+        tb = tcs[i + 1]
+        ra = res[i]
+        rb = res[i + 1]
+        if not (b > a) or (ta < 0.0 and tb < 0.0):
+            continue
+        if ta < 0.0 or tb < 0.0:
+            # the cruise ends within the piece: cut it where it lasts nothing
+            ea, eb, x, fx = _vc_root(0, a, ta, b, tb, T, v0, a0, D, vf, af, A, K)
+            if ta < 0.0:
+                a = x if fx == 0.0 else eb
+                ra = _cruise_eval(a, T, v0, a0, D, vf, af, A, K)[1]
+            else:
+                b = x if fx == 0.0 else ea
+                rb = _cruise_eval(b, T, v0, a0, D, vf, af, A, K)[1]
+        if not (ra == 0.0 or rb == 0.0 or (ra < 0.0) != (rb < 0.0)):
+            continue
+        _, _, vc, _ = _vc_root(1, a, ra, b, rb, T, v0, a0, D, vf, af, A, K)
+        n, code = _try_vc(vc, T, s1, lim, ph)
+        if n > 0:
+            return n, code
+    return 0, 0
