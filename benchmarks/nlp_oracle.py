@@ -72,8 +72,11 @@ K_DEFAULT = 1500
 #: Time step of the independent finite-difference check [s].
 VERIFY_DT = 2.5e-4
 
-#: Time intervals of the first solve from TOPP-RA's timing (then refined to K).
+#: Time intervals of the first solves from TOPP-RA's timing (then refined to K).
 K_COARSE = 300
+
+#: The jerk limits' factors of the continuation from TOPP-RA's (jerk-free) timing.
+JERK_HOMOTOPY = (100.0, 30.0, 10.0, 4.0, 2.0, 1.4, 1.0)
 
 #: IPOPT's tolerance and most iterations.
 IPOPT_TOL = 1e-9
@@ -222,9 +225,11 @@ def start_from_toppra(data: PathData, K: int, grid: int = 2000):
 
 
 # --------------------------------------------------------------------------- NLP
-def solve_nlp(data: PathData, start, K: int, verbose: bool = False, options: dict | None = None):
+def solve_nlp(data: PathData, start, K: int, verbose: bool = False, options: dict | None = None,
+              jerk_factor: float = 1.0):
     """Minimum time on a uniform time grid of K constant-jerk intervals from ``start``
-    (T, s, v, a, J). Returns (T, s, v, a, J, status, seconds)."""
+    (T, s, v, a, J), the joint jerk limits multiplied by ``jerk_factor``.
+    Returns (T, s, v, a, J, status, seconds)."""
     import casadi as ca
 
     m = data.m
@@ -240,7 +245,7 @@ def solve_nlp(data: PathData, start, K: int, verbose: bool = False, options: dic
     # per-point limit uses (normalised): joint v, a, jerk (with two jerks), path limits
     ps, pv, pa, pJ1, pJ2 = (ca.MX.sym(nm) for nm in ("s", "v", "a", "J1", "J2"))
     d1, d2, d3 = q1(ps), q2(ps), q3(ps)
-    vlim, alim, jlim = (ca.DM(x) for x in (data.v, data.a, data.j))
+    vlim, alim, jlim = (ca.DM(x) for x in (data.v, data.a, data.j * jerk_factor))
     g_v = d1 * pv / vlim
     g_a = (d2 * pv**2 + d1 * pa) / alim
     base = d3 * pv**3 + 3 * d2 * pv * pa
@@ -323,7 +328,7 @@ WARM = {"ipopt.mu_init": 1e-5, "ipopt.warm_start_init_point": "yes", "ipopt.boun
 
 #: Wall-clock limit of the solve from TOPP-RA's timing [s] (it violates the jerk limits
 #: by far and takes IPOPT's default path: tens to hundreds of iterations).
-COLD_SECONDS = 300.0
+COLD_SECONDS = 150.0
 
 
 def oracle(data: PathData, tm, K: int, starts=("trajkit", "toppra"), verbose: bool = False) -> dict:
@@ -336,17 +341,34 @@ def oracle(data: PathData, tm, K: int, starts=("trajkit", "toppra"), verbose: bo
             start, opts = start_from_timing(tm, K), WARM
             T, s, v, a, J, status, secs = solve_nlp(data, start, K, verbose, opts)
         else:
-            # from TOPP-RA's jerk-free timing: first on a coarse grid (IPOPT's default
-            # start, far from feasible), then its solution on the fine grid
+            # from TOPP-RA's jerk-free timing, by continuation in the jerk limits: on a
+            # coarse grid with the jerk limits JERK_HOMOTOPY[0] times the true ones
+            # (TOPP-RA's timing is close to that problem's solution), then each solution,
+            # slowed down uniformly until it keeps the next factor's jerk limits (a
+            # feasible start, as trajkit's), the start of the next; then the fine grid
             Kc = min(K, K_COARSE)
-            T_tr, *rest_tr = start_from_toppra(data, Kc)[:5]
-            T, s, v, a, J, status, secs = solve_nlp(data, (T_tr, *rest_tr), Kc, verbose,
-                                                    {"ipopt.max_wall_time": COLD_SECONDS})
+            cur = start_from_toppra(data, Kc)[:5]
+            secs = 0.0
+            prev = None
+            for f in JERK_HOMOTOPY:
+                if prev is None:
+                    opts = {"ipopt.max_wall_time": COLD_SECONDS, "ipopt.bound_push": 1e-8,
+                            "ipopt.bound_frac": 1e-8, "ipopt.mu_init": 1e-3}
+                else:
+                    k = (prev / f) ** (1.0 / 3.0)
+                    T0, s0, v0, a0, J0 = cur
+                    cur = (T0 * k, s0, v0 / k, a0 / k**2, J0 / k**3)
+                    opts = {**WARM, "ipopt.max_wall_time": COLD_SECONDS}
+                T, s, v, a, J, status, dt = solve_nlp(data, cur, Kc, verbose, opts, f)
+                secs += dt
+                cur = (T, s, v, a, J)
+                prev = f
             if Kc < K:
                 t = np.linspace(0.0, T, K + 1)
                 s1, v1, a1 = sample_pieces(T, s, v, a, J, t)
                 fine = (T, s1, v1, a1, np.diff(a1) / (T / K))
-                T, s, v, a, J, status, secs2 = solve_nlp(data, fine, K, verbose, WARM)
+                T, s, v, a, J, status, secs2 = solve_nlp(data, fine, K, verbose,
+                                                         {**WARM, "ipopt.max_wall_time": COLD_SECONDS})
                 secs += secs2
         use = fd_check(data, T, lambda t, T=T, s=s, v=v, a=a, J=J: sample_pieces(T, s, v, a, J, t))
         k = feasible_scale(use)
