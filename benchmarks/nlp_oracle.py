@@ -433,7 +433,7 @@ def main(argv=None) -> int:
         u, w = res["use"], tk_use
         ratio = tm.duration / res["T"]
         ratios.append(ratio)
-        print(f"{label:34s} {res['toppra']:8.4f} {tm.duration:8.4f} {res['T']:8.4f} {ratio:7.3f} "
+        print(f"{label:34s} {res['toppra']:8.4f} {tm.duration:8.5f} {res['T']:8.5f} {ratio:7.4f} "
               f"{res['T_raw']:8.4f} {u['v']:5.3f}/{u['a']:5.3f}/{u['j']:5.3f} "
               f"{w['v']:5.3f}/{w['a']:5.3f}/{w['j']:5.3f} {res['start']:>8s} "
               f"{sum(r['secs'] for r in res['all']):9.1f}", flush=True)
