@@ -7,8 +7,9 @@ same inverse kinematics and derivatives the engine gets) is timed again by a
 direct transcription in *time*, with the jerk constraints exact (not
 linearised):
 
-- unknowns: the duration ``T`` and, on a uniform time grid of ``K`` intervals
-  (``h = T / K``), the path state ``s, sdot, sddot`` at every node and one
+- unknowns: on a time grid of ``K`` intervals of equal duration ``h`` (one
+  unknown per interval, tied by equalities, which keeps the KKT matrix
+  banded; ``T = K h``), the path state ``s, sdot, sddot`` at every node and one
   constant path jerk ``J`` per interval; the nodes are tied by the exact
   constant-jerk integration (``s+ = s + sdot h + sddot h^2/2 + J h^3/6`` ...);
 - constraints at every node (the jerk with the jerks of both intervals
@@ -21,8 +22,13 @@ linearised):
   interpolation of the path's own derivatives tabulated at
   :data:`TABLE_POINTS` values of ``s`` (plus both sides of every
   breakpoint);
-- objective ``T``; IPOPT (MUMPS), started twice: from trajkit's timing and
-  from TOPP-RA's jerk-free one; the faster verified result is kept.
+- objective ``T``; IPOPT (MUMPS), started from trajkit's timing (a feasible
+  point: IPOPT's warm-start options) and from TOPP-RA's jerk-free timing
+  by continuation in the jerk limits (on a coarse grid with the jerk limits
+  100x the true ones, then 30x, 10x, ... 1x, each solution slowed down
+  uniformly until it keeps the next limits and used as the next start;
+  then the fine grid); the faster verified result of a successful solve is
+  kept.
 
 Every result is verified independently of the NLP: ``s(t)`` is integrated in
 closed form from the pieces, sampled every :data:`VERIFY_DT` s, the joint
@@ -37,9 +43,12 @@ not a lower bound). trajkit's timing gets the same finite-difference check
 
 Run (CasADi is in the ``bench`` extra: ``pip install -e .[bench]``)::
 
-    python benchmarks/nlp_oracle.py                 # every arm row (about 10-20 min)
-    python benchmarks/nlp_oracle.py --rows ur5:LIN  # rows whose "arm: label" contains this
-    python benchmarks/nlp_oracle.py --K 3000        # a finer time grid
+    python benchmarks/nlp_oracle.py                     # every arm row, both starts (~40 min)
+    python benchmarks/nlp_oracle.py --starts trajkit    # from trajkit's timing only (~5 min)
+    python benchmarks/nlp_oracle.py --rows "ur5: CIRC"  # rows whose "arm: label" contains this
+    python benchmarks/nlp_oracle.py --K 1600            # a finer time grid
+
+(one core; ``K`` is raised to twice trajkit's grid nodes where that is more)
 
 Columns: TOPP-RA (no jerk limit, a lower bound), trajkit, the NLP's verified
 time, trajkit / NLP, the NLP's time before the verification scaled it, the
@@ -67,7 +76,7 @@ from trajkit.robot import run_motions  # noqa: E402
 TABLE_POINTS = 20001
 
 #: Time intervals of the transcription (at least twice trajkit's grid nodes).
-K_DEFAULT = 1500
+K_DEFAULT = 800
 
 #: Time step of the independent finite-difference check [s].
 VERIFY_DT = 2.5e-4
@@ -429,7 +438,7 @@ def main(argv=None) -> int:
         data = chain_data(rob, chain)
         K = max(args.K, 2 * tm.grid.size)
         res = oracle(data, tm, K, tuple(args.starts.split(",")), args.verbose)
-        tk_use = fd_check(data, tm.duration, lambda t: tm.sample(t)[:3])
+        tk_use = fd_check(data, tm.duration, lambda t, tm=tm: tm.sample(t)[:3])
         u, w = res["use"], tk_use
         ratio = tm.duration / res["T"]
         ratios.append(ratio)
