@@ -237,16 +237,17 @@ class RobotModel(ABC):
         every joint at 0, or at the middle of its range where 0 lies outside.
         Models with a singularity at 0 (a stretched arm, a straight wrist)
         bend away from it, so that Cartesian motions can start from home."""
-        q = np.zeros(self.n_joints)
-        for k, lim in enumerate(self.limits):
-            if not lim.position_min <= 0.0 <= lim.position_max:
-                q[k] = 0.5 * (lim.position_min + lim.position_max)
-        return q
+        return self._home_with(-1, 0.0)
 
     def _home_with(self, k: int, value: float) -> np.ndarray:
-        """:attr:`home` of the base class with joint ``k`` at ``value`` (clipped
-        into its range)."""
-        q = RobotModel.home.fget(self)  # type: ignore[attr-defined]
+        """Every joint at 0 (or mid-range), joint ``k`` (if >= 0) at ``value``
+        clipped into its range."""
+        q = np.zeros(self.n_joints)
+        for i, lim in enumerate(self.limits):
+            if not lim.position_min <= 0.0 <= lim.position_max:
+                q[i] = 0.5 * (lim.position_min + lim.position_max)
+        if k < 0:
+            return q
         lim = self.limits[k]
         q[k] = min(max(value, lim.position_min), lim.position_max)
         return q

@@ -310,13 +310,7 @@ def real_roots_unit(c, deg, out, D):
             for i in range(nc):
                 x = crit[i]
                 if abs(horner(D[0], deg, x)) <= TOUCH_RTOL * scale:
-                    dup = False
-                    for r in range(n0):
-                        if abs(roots[r] - x) <= 1e-9:
-                            dup = True
-                    if not dup:
-                        roots[nr] = x
-                        nr += 1
+                    nr = _add_touching(roots, nr, n0, x)
             sort_ascending(roots, nr)
             for i in range(nr):
                 out[i] = roots[i]
@@ -331,6 +325,17 @@ def real_roots_unit(c, deg, out, D):
 # The same derivative recursion as :func:`real_roots_unit`, specialised to
 # degree 4 with the coefficients in scalars (the closed-form step 1 of
 # symmetric limits solves a few quartics per plan).
+
+@jit_raw
+def _add_touching(out, n, n0, x):
+    """Append the touching root ``x`` to ``out[:n]`` unless one of the first ``n0``
+    roots (the sign changes) lies within 1e-9 of it: the new count."""
+    for r in range(n0):
+        if abs(out[r] - x) <= 1e-9:
+            return n
+    out[n] = x
+    return n + 1
+
 
 @jit_raw
 def _poly4(c0, c1, c2, c3, c4, x):
@@ -413,12 +418,6 @@ def quartic_roots_unit(c, out, tmp):
     for i in range(nc):
         x = crit[i]
         if abs(_poly4(c0, c1, c2, c3, c4, x)) <= TOUCH_RTOL * scale:
-            dup = False
-            for r in range(n0):
-                if abs(out[r] - x) <= 1e-9:
-                    dup = True
-            if not dup:
-                out[n] = x
-                n += 1
+            n = _add_touching(out, n, n0, x)
     sort_ascending(out, n)
     return n
