@@ -156,7 +156,7 @@ def main(argv=None):
     S = np.array([c[0] for c in cs])
     G = np.array([c[1] for c in cs])
     L = np.array([c[2] for c in cs])
-    t = _best(lambda: plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2]), max(1, args.repeat // 2))
+    t = _best(lambda: plan_state_moves(S, G, L[:, 0], L[:, 1], L[:, 2]), args.repeat)
     per = t / len(cs)
     print(f"| batch: `plan_state_moves` ({len(cs)} moves, one call) vs the ruckig loop, per move "
           f"| {per * 1e6:.2f} us | {rk_move * 1e6:.2f} us | throughput "

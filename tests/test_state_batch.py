@@ -115,6 +115,57 @@ def test_batch_errors_name_the_move():
         plan_state_moves(S, G, 1.0, 1.0, 1.0, durations=[5.0, 0.1, 5.0])
 
 
+def test_compiled_range_check_is_the_vectorised_one():
+    """The compiled loop's range check (``_batch_states._in_range``) flags exactly the
+    moves the vectorised check (``state_batch._check``) names, on moves with one
+    value pushed to or past each bound of the supported range; the error of the
+    batch names the field as the vectorised check does."""
+    from trajkit.profiles import _batch_states as B
+    from trajkit.profiles import _range as R
+    from trajkit.profiles.state_batch import _check
+
+    rng = np.random.default_rng(5)
+    pushes = [R.MAGNITUDE_MIN * 0.5, R.MAGNITUDE_MIN, R.MAGNITUDE_MAX * 2.0, np.inf, 1e-7, 1e7,
+              R.POSITION_MAX * 1.5, -R.POSITION_MAX, 2e6, -3e6, 1e-101, 0.0]
+    rows, Ts = [], []
+    for k in range(600):
+        s, g, L = random_case(rng, symmetric=bool(k % 2))
+        row = np.array([*s, *g, *L])
+        col = int(rng.integers(12))
+        if col < 11:
+            val = float(rng.choice(pushes))
+            if col >= 6 and not val > 0.0:
+                val = 1.0  # (limits <= 0 are refused before the range check)
+            if col in (1, 2, 4, 5) and abs(val) > 1.0:
+                val = float(np.sign(val) * rng.choice([0.999e6, 1.001e6, 2e6]) * row[6 if col in (1, 4) else 7])
+            if col == 3:
+                val = row[0] + float(rng.choice([1e-101, 1e-99, -1e-120, 0.0, R.POSITION_MAX * 2]))
+            row[col] = val
+        rows.append(row)
+        Ts.append(float(rng.choice([np.nan, 1.0, R.DURATION_MAX * 2.0])) if col == 11 else np.nan)
+    inp = np.array(rows)
+    T = np.array(Ts)
+    flagged = 0
+    for i in range(len(inp)):
+        r = inp[i:i + 1]
+        try:
+            _check(r[:, 0:3], r[:, 3:6], r[:, 6], r[:, 7], r[:, 8], r[:, 9], r[:, 10],
+                   None if np.isnan(T[i]) else T[i:i + 1])
+            ok = True
+        except InvalidInputError:
+            ok = False
+        assert bool(B._in_range(inp, T, i)) == ok, (i, inp[i].tolist(), T[i])
+        flagged += not ok
+    assert 100 < flagged < len(inp) - 100, flagged
+    # the batch error names the field of the vectorised check
+    S = np.zeros((3, 3))
+    G = np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    with pytest.raises(InvalidInputError, match=r"goals position\[1\]"):
+        plan_state_moves(S, np.where(np.arange(3)[:, None] == 1, [[2e15, 0.0, 0.0]], G), 1.0, 1.0, 1.0)
+    with pytest.raises(InvalidInputError, match=r"durations\[2\]"):
+        plan_state_moves(S, G, 1.0, 1.0, 1.0, durations=[np.nan, np.nan, 1e51])
+
+
 def test_compiled_sync_equals_the_python_path(monkeypatch):
     rng = np.random.default_rng(10)
     trajs = []

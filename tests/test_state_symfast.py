@@ -29,7 +29,7 @@ from state_reference import exact_check, goal_error, random_case
 from trajkit import AxisLimits
 from trajkit.profiles import _kernel as K
 from trajkit.profiles import _roots, _symfast
-from trajkit.profiles._shapes import NVALID, R_V0
+from trajkit.profiles._shapes import NVALID, R_SHAPE, R_T, R_V0
 from trajkit.profiles.state import feasible_durations, plan_state_to_state
 
 #: Durations of both step-1 paths agree to this (relative).
@@ -179,6 +179,69 @@ def test_closed_form_equals_general_step1(task):
     assert taken >= 0.99 * n
     if task == K.TASK_BLOCK:
         assert blocked >= 0.003 * n  # the block computation is exercised
+
+
+def _norm(row):
+    ws = _ws(row, K.TASK_MIN, general=False)
+    K._normalise(ws, K.TASK_MIN)
+    return ws[K._LIM:K._LIM + 5].copy(), ws[K._ST0:K._ST0 + 7].copy()
+
+
+def test_first_direction_is_the_side_of_the_velocity_change():
+    """``first_direction`` is +1 exactly where the distance exceeds the displacement
+    of the minimum-time velocity change, planned independently by the kernel's
+    velocity task (position free) and integrated here."""
+    rows = _rows(61, 3000)
+    checked = 0
+    for row in rows:
+        lim, st0 = _norm(row)
+        if not _symfast.sym_applies(lim):
+            continue
+        wv = _ws(row, K.TASK_VELOCITY, general=True)
+        wv[K.IN_PF] = math.nan
+        K.solve(wv)
+        if wv[K.OUT_STATUS] != K.ST_OK or wv[K.OUT_NB] != 0:
+            continue
+        p, v, a = 0.0, row[1], row[2]
+        for k in range(int(wv[K.OUT_N])):
+            dt, j, a = wv[K.OUT_PH + 3 * k:K.OUT_PH + 3 * k + 3]
+            p, v, a = p + dt * (v + dt * (0.5 * a + dt * j / 6.0)), v + dt * (a + 0.5 * dt * j), a + dt * j
+        D = row[3] - row[0]
+        if abs(D - p) <= 1e-9 * max(abs(D), abs(p), abs(row[0])):
+            continue  # (on the boundary: either side)
+        assert _symfast.first_direction(st0, lim) == (1.0 if D > p else -1.0), row.tolist()
+        checked += 1
+    assert checked >= 0.9 * len(rows)
+
+
+def test_first_direction_search_finds_the_minimum_of_both_directions():
+    """The minimum-time search of one direction first (the other only when the first
+    has no valid profile) returns the fastest valid profile of both directions'
+    search, and the fallback to the other direction is exercised."""
+    n = sweep_size(20_000)
+    rows = _rows(67, n)
+    cand = np.zeros(_symfast.NCF * _symfast.NSF)
+    scr = np.zeros(_symfast.SF_SCRATCH)
+    ph = np.zeros((K.NPH, 3))
+    res = np.zeros(R_V0 + NVALID)
+    compared = 0
+    other = 0
+    for row in rows:
+        lim, st0 = _norm(row)
+        if not _symfast.sym_applies(lim):
+            continue
+        if _symfast.sym_step1(st0, lim, res, True, cand, scr, ph) < 0:
+            continue  # (the general step 1 decides these)
+        t_both = res[R_T]
+        ib = _symfast.sym_step1(st0, lim, res, False, cand, scr, ph)
+        assert ib >= 0, row.tolist()
+        assert abs(res[R_T] - t_both) <= 1e-12 * t_both, (row.tolist(), res[R_T], t_both)
+        mirrored = res[R_SHAPE] >= 16.0
+        other += mirrored != (_symfast.first_direction(st0, lim) < 0.0)
+        compared += 1
+    print(f"\n{compared} compared, {other} found in the second direction")
+    assert compared >= 0.95 * n
+    assert other >= 1
 
 
 def test_closed_form_profiles_reach_the_goal_within_the_limits():

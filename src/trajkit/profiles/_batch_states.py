@@ -20,12 +20,14 @@ import math
 import numpy as np
 
 from . import _kernel as K
+from . import _range as R
 from ._brake import inside
-from ._compile import jit, jit_parallel, prange
+from ._compile import jit, jit_parallel, jit_raw, prange
 from ._range import DISTANCE_ABS_MIN
 from ._shapes import NPH
 
-__all__ = ["NIN", "NSYNC", "NBLK", "ST_GOAL", "ST_WIDE", "solve_many", "sync_time", "NPH"]
+__all__ = ["NIN", "NSYNC", "NBLK", "ST_GOAL", "ST_WIDE", "ST_RANGE", "solve_many", "sync_time",
+           "NPH"]
 
 NBLK = K.NBLK
 
@@ -44,6 +46,10 @@ ST_GOAL = 9
 #: than the move's phases (``nph`` says how many; plan it again with a wider one).
 ST_WIDE = 10
 
+#: Status of :func:`solve_many`: a value of the row lies outside the supported
+#: range of the state planners (see :func:`_in_range`; not planned).
+ST_RANGE = 11
+
 #: Rounds of moving the common duration past blocked intervals.
 SYNC_MAX_ROUNDS = 16
 
@@ -51,7 +57,7 @@ SYNC_MAX_ROUNDS = 16
 CHUNK = 64
 
 
-@jit
+@jit_raw
 def _goal_ok(vf, af, V, A1, J1, A2, J2):
     """Whether the goal (v, a) can be reached: leaving (v, -a) backwards in time,
     legs swapped, is inside the limits."""
@@ -79,15 +85,61 @@ def _state_ok(row):
     return d == 0.0 or d >= DISTANCE_ABS_MIN
 
 
-@jit
-def _load(ws, row, task, T):
+@jit_raw
+def _ratio_out(r, rmax):
+    """Whether the ratio ``r`` is finite and outside ``[1 / rmax, rmax]``."""
+    return abs(r) < math.inf and (r < 1.0 / rmax or r > rmax)
+
+
+@jit_raw
+def _in_range(inp, T, i):
+    """Whether row ``i`` (and its requested duration ``T[i]``) lies in the
+    supported range of the state planners (:mod:`._range`): the checks of
+    ``state_batch._check``, which names the first bad move, with its
+    arithmetic; the limits are positive and not NaN (checked before)."""
+    vm = inp[i, 6]
+    a1 = inp[i, 7]
+    j1 = inp[i, 8]
+    a2 = inp[i, 9]
+    j2 = inp[i, 10]
+    for x in (vm, a1, j1, a2, j2):
+        if x < math.inf and (x < R.MAGNITUDE_MIN or x > R.MAGNITUDE_MAX):
+            return False
+    if vm == math.inf and a1 == math.inf and a2 == math.inf:
+        return False
+    if _ratio_out(a2 / a1, R.LEG_RATIO_MAX) or _ratio_out(j2 / j1, R.LEG_RATIO_MAX):
+        return False
+    if (_ratio_out(vm * j1 / (a1 * a1), R.SHAPE_RATIO_MAX)
+            or _ratio_out(vm * j2 / (a2 * a2), R.SHAPE_RATIO_MAX)):
+        return False
+    am = max(a1, a2)
+    jm = min(j1, j2)
+    for o in (0, 3):
+        v = inp[i, o + 1]
+        a = inp[i, o + 2]
+        if abs(inp[i, o]) > R.POSITION_MAX or abs(v) > R.STATE_RATIO_MAX * vm:
+            return False
+        if abs(a) > R.STATE_RATIO_MAX * am:
+            return False
+        if vm < math.inf and abs(v) + 0.5 * (a * a) / jm > R.STATE_RATIO_MAX * vm:
+            return False
+    d = abs(inp[i, 3] - inp[i, 0])
+    if d != 0.0 and d < R.DISTANCE_ABS_MIN:
+        return False
+    return not (T[i] > R.DURATION_MAX)
+
+
+@jit_raw
+def _load(ws, inp, i, task, T):
+    """Row ``i`` of ``inp`` and the task into the workspace (element by element: no
+    view of ``inp``, whose reference count the threads would share)."""
     for k in range(NIN):
-        ws[k] = row[k]
+        ws[k] = inp[i, k]
     ws[K.IN_TASK] = task
     ws[K.IN_T] = T
 
 
-@jit
+@jit_raw
 def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
     st = int(ws[K.OUT_STATUS])
     status[i] = st
@@ -117,30 +169,46 @@ def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
     dur[i] = tot + comp if st == K.ST_OK else ws[K.OUT_T]
 
 
+@jit_raw
+def _solve_rows(inp, T, status, dur, tmin, nph, nbr, shape, ph, ws, i0, i1):
+    """Rows ``i0 .. i1 - 1`` of :func:`solve_many` with the workspace ``ws`` (no
+    reference counting: the threads share the arrays' counts, and counting
+    them per row would make the threads wait on each other)."""
+    for i in range(i0, i1):
+        if not _in_range(inp, T, i):
+            status[i] = ST_RANGE
+            nph[i] = 0
+            dur[i] = math.nan
+            tmin[i] = math.nan
+            continue
+        if not _goal_ok(inp[i, 4], inp[i, 5], inp[i, 6], inp[i, 7], inp[i, 8], inp[i, 9],
+                        inp[i, 10]):
+            status[i] = ST_GOAL
+            nph[i] = 0
+            dur[i] = math.nan
+            tmin[i] = math.nan
+            continue
+        Ti = T[i]
+        if Ti == Ti:
+            _load(ws, inp, i, K.TASK_FIXED, Ti)
+        else:
+            _load(ws, inp, i, K.TASK_MIN, 0.0)
+        K.solve(ws)
+        _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
+
+
 @jit_parallel
 def solve_many(inp, T, status, dur, tmin, nph, nbr, shape, ph):
     """Plan every row of ``inp``: minimum time where ``T[i]`` is NaN, else exactly
     ``T[i]``. Fills the output arrays (``ph``: ``(N, W, 3)`` phase tables, any
-    width ``W``; a move of more phases gets the status :data:`ST_WIDE`)."""
+    width ``W``; a move of more phases gets the status :data:`ST_WIDE`, a row
+    outside the supported range :data:`ST_RANGE`)."""
     n = inp.shape[0]
     nchunk = (n + CHUNK - 1) // CHUNK
     for c in prange(nchunk):
         ws = np.zeros(K.NWS)
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            row = inp[i]
-            if not _goal_ok(row[4], row[5], row[6], row[7], row[8], row[9], row[10]):
-                status[i] = ST_GOAL
-                nph[i] = 0
-                dur[i] = math.nan
-                tmin[i] = math.nan
-                continue
-            Ti = T[i]
-            if Ti == Ti:
-                _load(ws, row, K.TASK_FIXED, Ti)
-            else:
-                _load(ws, row, K.TASK_MIN, 0.0)
-            K.solve(ws)
-            _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
+        _solve_rows(inp, T, status, dur, tmin, nph, nbr, shape, ph, ws, c * CHUNK,
+                    min(n, (c + 1) * CHUNK))
 
 
 @jit
@@ -167,7 +235,7 @@ def sync_time(inp, Treq, status, dur, tmin, nph, nbr, shape, ph, blk, nblk):
         if not _goal_ok(row[4], row[5], row[6], row[7], row[8], row[9], row[10]):
             status[i] = ST_GOAL
             return -1, float(i)
-        _load(ws, row, K.TASK_BLOCK, 0.0)
+        _load(ws, inp, i, K.TASK_BLOCK, 0.0)
         K.solve(ws)
         _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
         if status[i] != K.ST_OK:
@@ -203,8 +271,7 @@ def sync_time(inp, Treq, status, dur, tmin, nph, nbr, shape, ph, blk, nblk):
     for i in range(n):
         if T <= tmin[i] * (1.0 + K.DURATION_RTOL):
             continue
-        row = inp[i]
-        _load(ws, row, K.TASK_STEP2, T)
+        _load(ws, inp, i, K.TASK_STEP2, T)
         ws[K.OUT_TMIN] = tmin[i]
         K.solve(ws)
         _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)

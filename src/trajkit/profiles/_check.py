@@ -210,12 +210,17 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
     matter, so the pieces are the phases cut where the acceleration crosses
     zero (the velocity extrema); the velocity is checked at the ends of the
     pieces, the acceleration (linear in a phase) and the jerk per phase, and
-    no acceleration may jump (the jerk is finite)."""
-    T, vsc, asc, dv_path, dp_path = _scales(ph, n, p0, v0, a0, vf, af)
-    if not (T < 1e300):
-        return False
+    no acceleration may jump (the jerk is finite). One pass: the scales of
+    :func:`_scales` are gathered on the way (the same integration) and the
+    tolerances that need them applied at the end."""
     vlim = V * (1.0 + LIMIT_RTOL)
     alim = A * (1.0 + LIMIT_RTOL)
+    T = 0.0
+    vsc = max(abs(v0), abs(vf))
+    asc = max(abs(a0), abs(af))
+    dv_path = 0.0
+    dp_path = 0.0
+    jump = 0.0
     p = p0
     v = v0
     a_prev = a0
@@ -223,8 +228,9 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
         dt = ph[k, 0]
         j = ph[k, 1]
         a = ph[k, 2]
-        if a != a_prev and abs(a - a_prev) > 1e-12 * asc:
-            return False
+        jump = max(jump, abs(a - a_prev))
+        asc = max(asc, abs(a))
+        vb = abs(v)
         if dt > 0.0:
             if j != 0.0:
                 if abs(j) * K > 1.0 + LIMIT_RTOL:
@@ -243,4 +249,14 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
             if abs(v) > vlim:
                 return False
             p, v, a_prev = phase_end(p, v, a, j, dt)
+        vsc = max(vsc, abs(v))
+        asc = max(asc, abs(a_prev))
+        da = max(abs(a), abs(a_prev)) * dt
+        dv_path += da
+        dp_path += (max(vb, abs(v)) + da) * dt
+        T += dt
+    vsc = max(vsc, 1e-300)
+    asc = max(asc, 1e-300)
+    if not (T < 1e300) or jump > 1e-12 * asc:
+        return False
     return _at_goal(p, v, a_prev, p0, pf, vf, af, vsc, asc, dv_path, dp_path)

@@ -96,7 +96,9 @@ def _states(x: Any, field: str) -> np.ndarray:
 
 
 def _check(s, g, vm, a1, j1, a2, j2, T) -> None:
-    """The supported range of the state planners (:mod:`._range`), vectorised."""
+    """The supported range of the state planners (:mod:`._range`), vectorised: raises
+    for the first bad move (the compiled loop checks the same per move, see
+    ``_batch_states._in_range``, and this names the field)."""
     def first(mask, field, vals, why):
         if mask.any():
             i = int(np.flatnonzero(mask)[0])
@@ -200,7 +202,6 @@ def plan_state_moves(
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s (or NaN), got {float(T[i])!r}")
-    _check(s, g, vm, a1, j1, a2, j2, T)
     inp = np.empty((n, B.NIN))
     inp[:, 0:3] = s
     inp[:, 3:6] = g
@@ -233,6 +234,12 @@ def plan_state_moves(
             ph = ph2
     bad = np.flatnonzero(status != K.ST_OK)
     if bad.size:
+        out = np.flatnonzero(status == B.ST_RANGE)
+        if out.size:
+            # (the compiled loop found it; the vectorised check names the field)
+            _check(s, g, vm, a1, j1, a2, j2, T)
+            raise InvalidInputError(f"move {int(out[0])} is outside the supported range of the "
+                                    "state planners")
         i = int(bad[0])
         st = int(status[i])
         if st == B.ST_GOAL:
