@@ -138,14 +138,20 @@ def workspace() -> np.ndarray:
     return np.zeros(NWS)
 
 
+#: sqrt(1/2): the mantissa where the nearest power of two (in log scale) changes.
+_SQRT_HALF = math.sqrt(0.5)
+
+
 @jit_raw
 def _pow2(x):
     """The power of two nearest to ``x > 0`` (in log scale)."""
     if not (x > 0.0) or not (x < math.inf):
         return 1.0
-    e = math.floor(math.log2(x) + 0.5)
-    e = min(max(e, -1000.0), 1000.0)
-    return 2.0 ** e
+    # x = m 2^e with m in [0.5, 1): the nearer of 2^(e - 1) and 2^e in log scale
+    m, e = math.frexp(x)
+    if m < _SQRT_HALF:
+        e -= 1
+    return math.ldexp(1.0, min(max(e, -1000), 1000))
 
 
 @jit_raw
@@ -342,10 +348,13 @@ def _solve_sym(ws, task):
     if st0[3] == 0.0 and st0[1] == st0[4] and st0[2] == st0[5]:
         return False  # the goal is the start (see solve)
     # (as a brake candidate of no phases: a start within round-off of the
-    # boundary put onto it)
-    v, a, ok = _onto_boundary(st0[1], st0[2], lim, abs(st0[1]), abs(st0[2]))
-    if not ok:
-        return False
+    # boundary put onto it; within the bounds it is inside, as checked)
+    v = st0[1]
+    a = st0[2]
+    if abs(v) > lim[0] or abs(a) > lim[1]:
+        v, a, ok = _onto_boundary(v, a, lim, abs(v), abs(a))
+        if not ok:
+            return False
     s1 = ws[_S1:_S1 + 7]
     s1[0] = 0.0
     s1[1] = v

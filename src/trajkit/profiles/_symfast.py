@@ -102,6 +102,9 @@ PRE_RTOL = 1e-9
 #: at most the fastest valid closed-form duration times ``1 + CUT_RTOL``.
 CUT_RTOL = 1e-9
 
+#: 1/6 (the direction's estimate needs no exact division).
+SIXTH = 1.0 / 6.0
+
 #: Newton steps polishing a root on the shape's polynomial.
 NEWTON_STEPS = 2
 
@@ -654,12 +657,12 @@ def first_direction(s1, lim):
     v = v0
     t1 = abs(c - a0) * K
     j1 = J if up else -J
-    p = p + t1 * (v + t1 * (0.5 * a0 + t1 * j1 / 6.0))
+    p = p + t1 * (v + t1 * (0.5 * a0 + t1 * j1 * SIXTH))
     v = v + t1 * (a0 + 0.5 * t1 * j1)
     p = p + th * (v + 0.5 * th * c)
     v = v + th * c
     t3 = abs(af - c) * K
-    p = p + t3 * (v + t3 * (0.5 * c - t3 * j1 / 6.0))
+    p = p + t3 * (v + t3 * (0.5 * c - t3 * j1 * SIXTH))
     return 1.0 if s1[3] - s1[0] > p else -1.0
 
 
