@@ -122,16 +122,21 @@ def _scales(ph, n, p0, v0, a0, vf, af):
         dt = ph[k, 0]
         j = ph[k, 1]
         a = ph[k, 2]
-        asc = max(asc, abs(a))
         vb = abs(v)
         p, v, ae = phase_end(p, v, a, j, dt)
-        vsc = max(vsc, abs(v))
-        asc = max(asc, abs(ae))
-        da = max(abs(a), abs(ae)) * dt
-        dv_path += da
-        dp_path += (max(vb, abs(v)) + da) * dt
-        T += dt
+        T, vsc, asc, dv_path, dp_path = _gather(T, vsc, asc, dv_path, dp_path, dt, a, ae, vb, v)
     return T, max(vsc, 1e-300), max(asc, 1e-300), dv_path, dp_path
+
+
+@jit_raw
+def _gather(T, vsc, asc, dv_path, dp_path, dt, a, ae, vb, v):
+    """The scales of :func:`_scales` after one more phase of duration ``dt`` from
+    acceleration ``a`` (``ae`` at its end), speed ``vb`` at its start and
+    velocity ``v`` at its end."""
+    asc = max(asc, abs(a), abs(ae))
+    da = max(abs(a), abs(ae)) * dt
+    return (T + dt, max(vsc, abs(v)), asc, dv_path + da,
+            dp_path + (max(vb, abs(v)) + da) * dt)
 
 
 @jit_raw
@@ -229,7 +234,6 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
         j = ph[k, 1]
         a = ph[k, 2]
         jump = max(jump, abs(a - a_prev))
-        asc = max(asc, abs(a))
         vb = abs(v)
         if dt > 0.0:
             if j != 0.0:
@@ -249,12 +253,7 @@ def check_equal_legs(ph, n, p0, v0, a0, pf, vf, af, V, A, K):
             if abs(v) > vlim:
                 return False
             p, v, a_prev = phase_end(p, v, a, j, dt)
-        vsc = max(vsc, abs(v))
-        asc = max(asc, abs(a_prev))
-        da = max(abs(a), abs(a_prev)) * dt
-        dv_path += da
-        dp_path += (max(vb, abs(v)) + da) * dt
-        T += dt
+        T, vsc, asc, dv_path, dp_path = _gather(T, vsc, asc, dv_path, dp_path, dt, a, a_prev, vb, v)
     vsc = max(vsc, 1e-300)
     asc = max(asc, 1e-300)
     if not (T < 1e300) or jump > 1e-12 * asc:
