@@ -154,7 +154,7 @@ def test_compiled_range_check_is_the_vectorised_one():
             ok = True
         except InvalidInputError:
             ok = False
-        assert bool(B._in_range(inp, T, i)) == ok, (i, inp[i].tolist(), T[i])
+        assert bool(B._in_range(*inp[i], T[i])) == ok, (i, inp[i].tolist(), T[i])
         flagged += not ok
     assert 100 < flagged < len(inp) - 100, flagged
     # the batch error names the field of the vectorised check

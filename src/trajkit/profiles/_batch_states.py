@@ -8,9 +8,10 @@
   every axis, the common duration (the largest minimum, moved past every
   blocked interval), step 2 on every axis that is not at its own minimum.
 
-Both run the same :func:`._kernel.solve` as the one-axis planner; inputs are
-rows ``(p0, v0, a0, pf, vf, af, v_max, a_max, j_max, a_max_decel,
-j_max_decel)``, validated by the caller.
+Both run the same :func:`._kernel.solve` as the one-axis planner, on inputs
+validated by the caller: :func:`solve_many` on the arrays of starts, goals
+and limits, :func:`sync_time` on rows ``(p0, v0, a0, pf, vf, af, v_max,
+a_max, j_max, a_max_decel, j_max_decel)`` and bounds (:data:`NSYNC`).
 """
 
 from __future__ import annotations
@@ -92,16 +93,11 @@ def _ratio_out(r, rmax):
 
 
 @jit_raw
-def _in_range(inp, T, i):
-    """Whether row ``i`` (and its requested duration ``T[i]``) lies in the
-    supported range of the state planners (:mod:`._range`): the checks of
-    ``state_batch._check``, which names the first bad move, with its
+def _in_range(p0, v0, a0, pf, vf, af, vm, a1, j1, a2, j2, T):
+    """Whether a move (start, goal, limits, requested duration ``T`` or NaN) lies
+    in the supported range of the state planners (:mod:`._range`): the checks
+    of ``state_batch._check``, which names the first bad move, with its
     arithmetic; the limits are positive and not NaN (checked before)."""
-    vm = inp[i, 6]
-    a1 = inp[i, 7]
-    j1 = inp[i, 8]
-    a2 = inp[i, 9]
-    j2 = inp[i, 10]
     for x in (vm, a1, j1, a2, j2):
         if x < math.inf and (x < R.MAGNITUDE_MIN or x > R.MAGNITUDE_MAX):
             return False
@@ -114,27 +110,43 @@ def _in_range(inp, T, i):
         return False
     am = max(a1, a2)
     jm = min(j1, j2)
-    for o in (0, 3):
-        v = inp[i, o + 1]
-        a = inp[i, o + 2]
-        if abs(inp[i, o]) > R.POSITION_MAX or abs(v) > R.STATE_RATIO_MAX * vm:
+    for p, v, a in ((p0, v0, a0), (pf, vf, af)):
+        if abs(p) > R.POSITION_MAX or abs(v) > R.STATE_RATIO_MAX * vm:
             return False
         if abs(a) > R.STATE_RATIO_MAX * am:
             return False
         if vm < math.inf and abs(v) + 0.5 * (a * a) / jm > R.STATE_RATIO_MAX * vm:
             return False
-    d = abs(inp[i, 3] - inp[i, 0])
+    d = abs(pf - p0)
     if d != 0.0 and d < R.DISTANCE_ABS_MIN:
         return False
-    return not (T[i] > R.DURATION_MAX)
+    return not (T > R.DURATION_MAX)
 
 
 @jit_raw
 def _load(ws, inp, i, task, T):
-    """Row ``i`` of ``inp`` and the task into the workspace (element by element: no
-    view of ``inp``, whose reference count the threads would share)."""
+    """Row ``i`` of ``inp`` (rows of :data:`NIN` or more) and the task into the
+    workspace."""
     for k in range(NIN):
         ws[k] = inp[i, k]
+    ws[K.IN_TASK] = task
+    ws[K.IN_T] = T
+
+
+@jit_raw
+def _load_move(ws, s, g, vm, a1, j1, a2, j2, i, task, T):
+    """Move ``i`` of :func:`solve_many`'s arrays and the task into the workspace."""
+    ws[0] = s[i, 0]
+    ws[1] = s[i, 1]
+    ws[2] = s[i, 2]
+    ws[3] = g[i, 0]
+    ws[4] = g[i, 1]
+    ws[5] = g[i, 2]
+    ws[6] = vm[i]
+    ws[7] = a1[i]
+    ws[8] = j1[i]
+    ws[9] = a2[i]
+    ws[10] = j2[i]
     ws[K.IN_TASK] = task
     ws[K.IN_T] = T
 
@@ -170,45 +182,41 @@ def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
 
 
 @jit_raw
-def _solve_rows(inp, T, status, dur, tmin, nph, nbr, shape, ph, ws, i0, i1):
-    """Rows ``i0 .. i1 - 1`` of :func:`solve_many` with the workspace ``ws`` (no
+def _solve_rows(s, g, vm, a1, j1, a2, j2, T, status, dur, tmin, nph, nbr, shape, ph, ws, i0, i1):
+    """Moves ``i0 .. i1 - 1`` of :func:`solve_many` with the workspace ``ws`` (no
     reference counting: the threads share the arrays' counts, and counting
-    them per row would make the threads wait on each other)."""
+    them per move would make the threads wait on each other)."""
     for i in range(i0, i1):
-        if not _in_range(inp, T, i):
-            status[i] = ST_RANGE
-            nph[i] = 0
-            dur[i] = math.nan
-            tmin[i] = math.nan
-            continue
-        if not _goal_ok(inp[i, 4], inp[i, 5], inp[i, 6], inp[i, 7], inp[i, 8], inp[i, 9],
-                        inp[i, 10]):
-            status[i] = ST_GOAL
+        ok = _in_range(s[i, 0], s[i, 1], s[i, 2], g[i, 0], g[i, 1], g[i, 2], vm[i], a1[i], j1[i],
+                       a2[i], j2[i], T[i])
+        if not ok or not _goal_ok(g[i, 1], g[i, 2], vm[i], a1[i], j1[i], a2[i], j2[i]):
+            status[i] = ST_GOAL if ok else ST_RANGE
             nph[i] = 0
             dur[i] = math.nan
             tmin[i] = math.nan
             continue
         Ti = T[i]
         if Ti == Ti:
-            _load(ws, inp, i, K.TASK_FIXED, Ti)
+            _load_move(ws, s, g, vm, a1, j1, a2, j2, i, K.TASK_FIXED, Ti)
         else:
-            _load(ws, inp, i, K.TASK_MIN, 0.0)
+            _load_move(ws, s, g, vm, a1, j1, a2, j2, i, K.TASK_MIN, 0.0)
         K.solve(ws)
         _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
 
 
 @jit_parallel
-def solve_many(inp, T, status, dur, tmin, nph, nbr, shape, ph):
-    """Plan every row of ``inp``: minimum time where ``T[i]`` is NaN, else exactly
-    ``T[i]``. Fills the output arrays (``ph``: ``(N, W, 3)`` phase tables, any
-    width ``W``; a move of more phases gets the status :data:`ST_WIDE`, a row
-    outside the supported range :data:`ST_RANGE`)."""
-    n = inp.shape[0]
+def solve_many(s, g, vm, a1, j1, a2, j2, T, status, dur, tmin, nph, nbr, shape, ph):
+    """Plan every move: from ``s[i]`` to ``g[i]`` (``(N, 3)`` states) within the
+    limits ``vm[i] .. j2[i]`` (``(N,)`` each, C-contiguous), minimum time where
+    ``T[i]`` is NaN, else exactly ``T[i]``. Fills the output arrays (``ph``:
+    ``(N, W, 3)`` phase tables, any width ``W``; a move of more phases gets the
+    status :data:`ST_WIDE`, one outside the supported range :data:`ST_RANGE`)."""
+    n = s.shape[0]
     nchunk = (n + CHUNK - 1) // CHUNK
     for c in prange(nchunk):
         ws = np.zeros(K.NWS)
-        _solve_rows(inp, T, status, dur, tmin, nph, nbr, shape, ph, ws, c * CHUNK,
-                    min(n, (c + 1) * CHUNK))
+        _solve_rows(s, g, vm, a1, j1, a2, j2, T, status, dur, tmin, nph, nbr, shape, ph, ws,
+                    c * CHUNK, min(n, (c + 1) * CHUNK))
 
 
 @jit

@@ -202,14 +202,13 @@ def plan_state_moves(
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise InvalidInputError(f"durations[{i}] must be finite and >= 0 s (or NaN), got {float(T[i])!r}")
-    inp = np.empty((n, B.NIN))
-    inp[:, 0:3] = s
-    inp[:, 3:6] = g
-    inp[:, 6] = vm
-    inp[:, 7] = a1
-    inp[:, 8] = j1
-    inp[:, 9] = a2
-    inp[:, 10] = j2
+    # one writable C-contiguous array per input (one compiled signature for any input)
+    lim5 = np.empty((5, n))
+    for k, x in enumerate((vm, a1, j1, a2, j2)):
+        lim5[k] = x
+    lims = tuple(lim5)
+    s_in = np.require(s, requirements=("C", "W"))
+    g_in = np.require(g, requirements=("C", "W"))
     Tin = np.full(n, math.nan) if T is None else T.astype(float)
     status = np.zeros(n, dtype=np.int64)
     dur = np.zeros(n)
@@ -219,13 +218,13 @@ def plan_state_moves(
     shape = np.zeros(n)
     ph = np.zeros((n, PHASES_MIN, 3))
     with np.errstate(all="ignore"):
-        B.solve_many(inp, Tin, status, dur, tmin, nph, nbr, shape, ph)
+        B.solve_many(s_in, g_in, *lims, Tin, status, dur, tmin, nph, nbr, shape, ph)
         wide = np.flatnonzero(status == B.ST_WIDE)
         if wide.size:
             # the moves of more phases, planned again into a table wide enough for any
             wph = np.zeros((wide.size, B.NPH, 3))
             outs = (status[wide], dur[wide], tmin[wide], nph[wide], nbr[wide], shape[wide])
-            B.solve_many(inp[wide], Tin[wide], *outs, wph)
+            B.solve_many(s_in[wide], g_in[wide], *(x[wide] for x in lims), Tin[wide], *outs, wph)
             for arr, sub in zip((status, dur, tmin, nph, nbr, shape), outs):
                 arr[wide] = sub
             ph2 = np.zeros((n, int(nph[wide].max()), 3))
