@@ -53,6 +53,19 @@ def _ruckig(n_dof):
     return Ruckig(n_dof), InputParameter(n_dof), Trajectory(n_dof)
 
 
+def _set_inputs(inp, s, g, L):
+    """A 1-axis ruckig input from Python lists, as a controller sets it each call."""
+    inp.current_position = [s[0]]
+    inp.current_velocity = [s[1]]
+    inp.current_acceleration = [s[2]]
+    inp.target_position = [g[0]]
+    inp.target_velocity = [g[1]]
+    inp.target_acceleration = [g[2]]
+    inp.max_velocity = [L[0]]
+    inp.max_acceleration = [L[1]]
+    inp.max_jerk = [L[2]]
+
+
 def _best(fn, repeat):
     b = float("inf")
     for _ in range(repeat):
@@ -107,15 +120,7 @@ def main(argv=None):
         lim = AxisLimits(*L)
 
         def one_rk(s=s, g=g, L=L):
-            inp.current_position = [s[0]]
-            inp.current_velocity = [s[1]]
-            inp.current_acceleration = [s[2]]
-            inp.target_position = [g[0]]
-            inp.target_velocity = [g[1]]
-            inp.target_acceleration = [g[2]]
-            inp.max_velocity = [L[0]]
-            inp.max_acceleration = [L[1]]
-            inp.max_jerk = [L[2]]
+            _set_inputs(inp, s, g, L)
             r.calculate(inp, traj)
 
         tk.append(_best(lambda s=s, g=g, lim=lim: plan_state_to_state(s, g, lim), args.repeat))
@@ -163,15 +168,7 @@ def main(argv=None):
 
     def loop_rk():
         for i, (s, g, L1) in enumerate(cs):
-            inp.current_position = [s[0]]
-            inp.current_velocity = [s[1]]
-            inp.current_acceleration = [s[2]]
-            inp.target_position = [g[0]]
-            inp.target_velocity = [g[1]]
-            inp.target_acceleration = [g[2]]
-            inp.max_velocity = [L1[0]]
-            inp.max_acceleration = [L1[1]]
-            inp.max_jerk = [L1[2]]
+            _set_inputs(inp, s, g, L1)
             try:
                 r.calculate(inp, traj)
                 durs[i] = traj.duration
