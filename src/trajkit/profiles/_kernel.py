@@ -57,7 +57,7 @@ from ._shapes import (
     integrate,
     step1,
 )
-from ._symfast import NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1, sym_step2
+from ._symfast import C_SG, NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1, sym_step2
 
 __all__ = [
     "NWS", "workspace", "solve",
@@ -194,22 +194,29 @@ def _normalise(ws, task):
     vs = ls / ts
     as_ = vs / ts
     js = as_ / ts
+    # (the scales are powers of two: multiplying by their reciprocals is
+    # division, exactly)
+    ivs = 1.0 / vs
+    ias = 1.0 / as_
     lim = ws[_LIM:_LIM + 5]
-    lim[0] = ws[IN_V] / vs
-    lim[1] = ws[IN_A1] / as_
+    lim[0] = ws[IN_V] * ivs
+    lim[1] = ws[IN_A1] * ias
     lim[2] = js / ws[IN_J1] if ws[IN_J1] < math.inf else 0.0
-    lim[3] = ws[IN_A2] / as_
-    lim[4] = js / ws[IN_J2] if ws[IN_J2] < math.inf else 0.0
+    lim[3] = ws[IN_A2] * ias
+    if ws[IN_J2] == ws[IN_J1]:
+        lim[4] = lim[2]
+    else:
+        lim[4] = js / ws[IN_J2] if ws[IN_J2] < math.inf else 0.0
     st0 = ws[_ST0:_ST0 + 7]
     st0[0] = 0.0
-    st0[1] = ws[IN_V0] / vs
-    st0[2] = ws[IN_A0] / as_
+    st0[1] = ws[IN_V0] * ivs
+    st0[2] = ws[IN_A0] * ias
     if task == TASK_VELOCITY:
         st0[3] = math.nan
     else:
-        st0[3] = (ws[IN_PF] - ws[IN_P0]) / ls
-    st0[4] = ws[IN_VF] / vs
-    st0[5] = ws[IN_AF] / as_
+        st0[3] = (ws[IN_PF] - ws[IN_P0]) * (1.0 / ls)
+    st0[4] = ws[IN_VF] * ivs
+    st0[5] = ws[IN_AF] * ias
     st0[6] = math.nan
     if not (lim[0] < math.inf):
         # no velocity limit: a finite one far above any velocity the motion can use
@@ -369,7 +376,12 @@ def _solve_sym(ws, task):
     ib = sym_step1(s1, lim, res, task == TASK_BLOCK, cand, ws[_SFS:_SFS + SF_SCRATCH], ph)
     if ib < 0:
         return False
-    n, total, sg = build_candidate(cand, ib, s1, lim, ph)
+    if task == TASK_BLOCK:
+        n, total, sg = build_candidate(cand, ib, s1, lim, ph)
+    else:  # (the minimum alone: left built in ph)
+        n = int(res[R_N])
+        total = res[R_T]
+        sg = cand[ib * NSF + C_SG]
     ws[OUT_STATUS] = ST_OK
     ws[OUT_NB] = 0.0
     ws[OUT_NBLK] = 0.0

@@ -542,8 +542,9 @@ def sym_step1(s1, lim, res, want_all, cand, scr, ph):
     ``ph`` a phase table of at least 8 rows. Fills ``res`` as
     :func:`._shapes.step1` does (``R_T``, ``R_N``, ``R_SHAPE``, and with
     ``want_all`` every valid duration in ``res[R_V0:]``, else the fastest) and
-    returns the index of the fastest valid candidate (rebuild it with
-    :func:`build_candidate`). Returns -1 when no candidate passes, or (with
+    returns the index of the fastest valid candidate (without ``want_all`` it is
+    left built in ``ph``, its phase count in ``res[R_N]``; with it, rebuild it
+    with :func:`build_candidate`). Returns -1 when no candidate passes, or (with
     ``want_all``) when the count of distinct valid durations is even: the
     caller then runs the general step 1.
     """
@@ -569,8 +570,10 @@ def sym_step1(s1, lim, res, want_all, cand, scr, ph):
             tb = res[R_T] if ib >= 0 else math.inf
             iq = _fastest_valid(cand, nclosed, nc, tb, s1, lim, ph, res)
             if iq >= 0:
-                return iq
+                return iq  # (built in ph: the last candidate tried)
             if ib >= 0:
+                if nc > nclosed:  # (a quartic candidate may have been tried since)
+                    build_candidate(cand, ib, s1, lim, ph)
                 return ib
         return -1
     _, nc, _ = _direction(1.0, s1, lim, cand, 0, coef, unit, roots, tmp, ph, res, False)
