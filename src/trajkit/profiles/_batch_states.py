@@ -47,7 +47,7 @@ ST_GOAL = 9
 #: than the move's phases (``nph`` says how many; plan it again with a wider one).
 ST_WIDE = 10
 
-#: Status of :func:`solve_many`: a value of the row lies outside the supported
+#: Status of :func:`solve_many`: a value of the move lies outside the supported
 #: range of the state planners (see :func:`_in_range`; not planned).
 ST_RANGE = 11
 
