@@ -582,30 +582,29 @@ def sym_step1(s1, lim, res, want_all, cand, scr, ph):
     _, nc, _ = _direction(-1.0, s1, lim, cand, nc, coef, unit, roots, tmp, ph, res, False)
     if nc < 0:
         return -1
+    # every valid duration (the blocked intervals) and the fastest
     ib = -1
-    if want_all:
-        nv = 0
-        for i in range(nc):
-            n, T = _try(cand, i, s1, lim, ph)
-            if n == 0:
-                continue
-            if nv < NVALID:
-                res[R_V0 + nv] = T
-                nv += 1
-            if T < res[R_T]:
-                ib = i
-                _keep(cand, i, n, T, res)
-        res[R_NV] = nv
-        if nv == 0:
-            return -1
-        # distinct durations (sorted, merged as the blocked intervals merge them):
-        # their count must be odd
-        v = res[R_V0:R_V0 + nv]
-        sort_ascending(v, nv)
-        m = merge_equal(v, nv, MERGE_RTOL)
-        res[R_NV] = m
-        return ib if m % 2 == 1 else -1
-    return -1
+    nv = 0
+    for i in range(nc):
+        n, T = _try(cand, i, s1, lim, ph)
+        if n == 0:
+            continue
+        if nv < NVALID:
+            res[R_V0 + nv] = T
+            nv += 1
+        if T < res[R_T]:
+            ib = i
+            _keep(cand, i, n, T, res)
+    res[R_NV] = nv
+    if nv == 0:
+        return -1
+    # distinct durations (sorted, merged as the blocked intervals merge them):
+    # their count must be odd
+    v = res[R_V0:R_V0 + nv]
+    sort_ascending(v, nv)
+    m = merge_equal(v, nv, MERGE_RTOL)
+    res[R_NV] = m
+    return ib if m % 2 == 1 else -1
 
 
 @jit_raw
