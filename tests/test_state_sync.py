@@ -100,3 +100,30 @@ def test_none_and_inputs():
         plan_ptp_states([0.0, 0.0], [1.0], lim)
     with pytest.raises(InfeasibleError, match="below the minimum synchronised duration"):
         plan_ptp_states([0.0, 0.0], [1.0, 2.0], lim, duration=0.1)
+
+
+def test_axes_made_on_first_access_are_the_planned_ones():
+    """The compiled synchronisation leaves the profile objects for the first access of
+    ``axes`` (unbounded axes) or makes them at once (an axis with a position range, which
+    is checked): both give the same profiles and ``duration`` is the longest of theirs."""
+    import pickle
+
+    rng = np.random.default_rng(21)
+    free = [AxisLimits(lim.v_max, lim.a_max, lim.j_max, lim.a_max_decel, lim.j_max_decel)
+            for lim in LIMS]
+    ranged = [AxisLimits(lim.v_max, lim.a_max, lim.j_max, lim.a_max_decel, lim.j_max_decel,
+                         position_min=-1e3, position_max=1e3) for lim in LIMS]
+    for _ in range(20):
+        s = [tuple(r) for r in _random_states(rng, LIMS).tolist()]
+        g = [tuple(r) for r in _random_states(rng, LIMS).tolist()]
+        lazy = plan_ptp_states(s, g, free)
+        assert "axes" not in vars(lazy)  # not made yet
+        copy = pickle.loads(pickle.dumps(lazy))
+        eager = plan_ptp_states(s, g, ranged)
+        assert "axes" in vars(eager)
+        assert lazy.duration == max(p.duration for p in lazy.axes) == eager.duration
+        for traj in (lazy, copy):
+            for a, b in zip(traj.axes, eager.axes):
+                assert a.phase_durations == b.phase_durations
+                assert a.jerks == b.jerks and a.family == b.family
+                assert a.start_state == b.start_state and a.end_state == b.end_state

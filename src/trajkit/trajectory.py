@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -64,10 +65,33 @@ class Trajectory:
 
     def __init__(self, axes: Sequence[Any], sync: str = "none",
                  names: Sequence[str] | None = None) -> None:
-        self.axes = tuple(axes)
+        self.__dict__["axes"] = tuple(axes)
         self.sync = sync
         self.duration = max((p.duration for p in self.axes), default=0.0)
         self._names = None if names is None else tuple(names)
+        self._build: Callable[[], Sequence[Any]] | None = None
+
+    @classmethod
+    def _deferred(cls, build: Callable[[], Sequence[Any]], duration: float,
+                  sync: str) -> Trajectory:
+        """A trajectory whose axis motions ``build()`` makes on the first access of
+        :attr:`axes` (a planner that has every axis' phase table already, and its
+        ``duration``, the longest axis duration, leaves the objects for when they
+        are used)."""
+        traj = cls.__new__(cls)
+        traj.sync = sync
+        traj.duration = duration
+        traj._names = None
+        traj._build = build
+        return traj
+
+    @cached_property
+    def axes(self) -> tuple[Any, ...]:
+        """The per-axis motions (all start at t = 0)."""
+        build = self._build
+        assert build is not None  # (set by _deferred; __init__ stores the axes)
+        self._build = None
+        return tuple(build())
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -14,6 +14,7 @@ import math
 import struct
 import threading
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -38,6 +39,8 @@ from ._inputs import check_duration, coerce_limits, coerce_states, state_tuples
 __all__ = ["plan_ptp_states", "STATE_SYNC_MODES", "COLLINEAR_RTOL"]
 
 _log = logging.getLogger("trajkit.sync")
+
+_fsum = math.fsum
 
 #: Accepted values of ``plan_ptp_states(..., sync=...)``.
 STATE_SYNC_MODES = SYNC_MODES
@@ -84,7 +87,10 @@ def plan_ptp_states(
     Returns
     -------
     Trajectory
-        Its ``axes`` are :class:`~trajkit.profiles.StateProfile` objects.
+        Its ``axes`` are :class:`~trajkit.profiles.StateProfile` objects
+        (with ``sync="time"``, made on their first access when no axis has a
+        position range: the plan itself, every axis' phase table, is complete
+        when this returns).
 
     Raises
     ------
@@ -207,18 +213,33 @@ def _sync_time_compiled(S, G, lims, duration):
     code, T = B.sync_time(inp, math.nan if duration is None else float(duration), *out)
     if code != 0:
         return None
-    axes = []
-    stride = 24 * B.NPH  # bytes per axis of ph
     tmins = tmin.tolist()
     nphs = nph.tolist()
     nbrs = nbr.tolist()
     shapes = shape.tolist()
-    for k in range(n):
+    table = ph.tobytes()  # (the buffers are reused by the next call)
+    if not all(lim.__dict__["_sfast"][6] for lim in lims):
+        # an axis with a position range: its profile is checked now (it may raise)
+        return Trajectory(_state_axes(S, G, lims, table, tmins, nphs, nbrs, shapes), "time")
+    # the profile objects are made when the axes are first used; the duration now
+    # (as Trajectory computes it: the longest of the axes' sums of phase durations)
+    durations = ph[:, :, 0].tolist()
+    longest = max(_fsum(row[:c]) for row, c in zip(durations, nphs))
+    return Trajectory._deferred(
+        partial(_state_axes, S, G, lims, table, tmins, nphs, nbrs, shapes), longest, "time")
+
+
+def _state_axes(S, G, lims, table, tmins, nphs, nbrs, shapes):
+    """The axes' profiles from the compiled synchronisation's outputs (their
+    positions checked against the axes' ranges)."""
+    axes = []
+    stride = 24 * B.NPH  # bytes per axis of the phase table
+    for k in range(len(S)):
         lim = lims[k]
-        prof = _profile(S[k], G[k], _TABLES[nphs[k]].unpack_from(ph, k * stride), tmins[k],
+        prof = _profile(S[k], G[k], _TABLES[nphs[k]].unpack_from(table, k * stride), tmins[k],
                         nbrs[k], int(shapes[k]), lim)
         axes.append(prof if lim.__dict__["_sfast"][6] else _check_range(prof, lim))
-    return Trajectory(axes, "time")
+    return axes
 
 
 _tls = threading.local()
