@@ -9,7 +9,10 @@ start and goal states. Rows:
   call, as a controller would). Each case is timed ``--repeat`` times, the
   best is kept; median and 99th percentile over the cases.
 * **6 axes**: ``plan_ptp_states(start, goal, limits)`` (time
-  synchronisation) vs ``Ruckig(6).calculate``.
+  synchronisation) vs ``Ruckig(6).calculate``; then the control cycle: the
+  same plan and the state one period (1 ms) in, ``Trajectory.state_at`` vs
+  ruckig's ``at_time`` (trajkit makes the axes' profile objects on that
+  first access).
 * **batch**: ``plan_state_moves`` on ``--batch`` moves in one call vs a
   Python loop of ``Ruckig(1).calculate`` over the same moves (inputs set as
   in the 1-axis row), per move (throughput); the two calls alternate
@@ -133,7 +136,7 @@ def main(argv=None):
 
     # ---- 6 axes
     r6, inp6, traj6 = _ruckig(6)
-    tk, rk = [], []
+    tk, rk, tk_cy, rk_cy = [], [], [], []
     for cs in _cases(rng, args.n, dof=6):
         S = [c[0] for c in cs]
         G = [c[1] for c in cs]
@@ -153,9 +156,14 @@ def main(argv=None):
 
         tk.append(_best(lambda S=S, G=G, lims=lims: plan_ptp_states(S, G, lims), args.repeat))
         rk.append(_best(six_rk, args.repeat))
+        # the control cycle: plan, then read the first setpoint (one period in)
+        tk_cy.append(_best(lambda S=S, G=G, lims=lims: plan_ptp_states(S, G, lims).state_at(1e-3),
+                           args.repeat))
+        rk_cy.append(_best(lambda: (six_rk(), traj6.at_time(1e-3)), args.repeat))
         d = plan_ptp_states(S, G, lims).duration
         worst = max(worst, abs(d - traj6.duration) / traj6.duration)
     _row("6 axes: `plan_ptp_states` vs `Ruckig(6).calculate`", tk, rk)
+    _row("6 axes, plan and the first setpoint: `.state_at(1 ms)` vs `.at_time(1 ms)`", tk_cy, rk_cy)
 
     # ---- batch
     cs = [c for (c,) in _cases(rng, args.batch)]

@@ -24,7 +24,7 @@ from trajkit.profiles._phase import phase_end, phase_eval
 from trajkit.profiles.motion import JerkMotion
 from trajkit.profiles.state import plan_state_to_state
 from trajkit.runtime._brake import BrakeProfile, brake_profile
-from trajkit.sync import plan_ptp
+from trajkit.sync import plan_ptp, plan_ptp_states
 from trajkit.verify import (
     verify_motion,
     verify_profile,
@@ -59,6 +59,37 @@ def test_every_profile_is_a_jerk_motion():
         # the end state of the table is the goal (exact to round-off)
         np.testing.assert_allclose(twin.end_state, m.end_state, rtol=1e-9, atol=1e-12)
         assert verify_motion(m).ok
+
+
+def test_state_at_is_what_sample_gives_there():
+    """One time at once (Python floats) equals the vectorised sampler bit for bit
+    (the same operations in the same order): at random times, at every phase
+    boundary, before the start and after the end; on one-axis motions of every
+    kind and on the axes of a trajectory between states."""
+    rng = np.random.default_rng(5)
+    lims = [AxisLimits(1.0, 2.0, 10.0), AxisLimits(0.5, 1.0, 5.0, 0.5, 2.0), AxisLimits(2.0, 4.0, 40.0)]
+    trajs = [plan_ptp([0.0, 1.0, -2.0], [1.5, -0.5, 0.3], lims)]
+    for _ in range(20):
+        s = [(rng.uniform(-1, 1), 0.4 * rng.uniform(-1, 1) * lm.v_max, 0.0) for lm in lims]
+        g = [(rng.uniform(-1, 1), 0.0, 0.0) for _lm in lims]
+        trajs.append(plan_ptp_states(s, g, lims))
+    motions = _motions() + [p for tr in trajs for p in tr.axes]
+    checked = 0
+    for m in motions:
+        bounds = np.cumsum(m.phase_durations)
+        ts = np.concatenate([[-0.5, 0.0, m.duration, m.duration + 0.7], bounds,
+                             np.nextafter(bounds, -np.inf), rng.uniform(0.0, m.duration, 40)])
+        smp = m.sample(ts)
+        for i, t in enumerate(ts):
+            assert m.state_at(t) == (smp.position[i], smp.velocity[i], smp.acceleration[i],
+                                     smp.jerk[i]), (m, t)
+            checked += 1
+    assert checked > 3000
+    for tr in trajs:
+        for t in (0.0, 0.37 * tr.duration, tr.duration, tr.duration + 1.0):
+            smp = tr.sample([t])
+            want = np.stack([smp.position[0], smp.velocity[0], smp.acceleration[0], smp.jerk[0]])
+            np.testing.assert_array_equal(tr.state_at(t), want)
 
 
 def test_one_phase_formula():

@@ -149,6 +149,19 @@ class Trajectory:
             out[3, :, k] = s.jerk
         return TrajectorySample(tt, out[0], out[1], out[2], out[3])
 
+    def state_at(self, t: float) -> np.ndarray:
+        """Every axis' state at one time ``t`` [s] (what :meth:`sample` gives
+        there, without its arrays per axis: one setpoint per control period).
+
+        Returns
+        -------
+        ndarray, shape (4, n_axes)
+            Rows: position, velocity, acceleration, jerk [unit, unit/s,
+            unit/s^2, unit/s^3].
+        """
+        t = float(t)
+        return np.array([p.state_at(t) for p in self.axes]).T.reshape(4, -1)
+
     def times(self, period: float, max_samples: int | None = MAX_SAMPLES) -> np.ndarray:
         """Sample times 0, dt, 2 dt, ..., always ending exactly at ``duration``.
 

@@ -234,6 +234,45 @@ class JerkMotion:
             jer = np.where(after | before, 0.0, jer)
         return ProfileSample(pos, vel, acc, jer)
 
+    def state_at(self, t: float) -> tuple[float, float, float, float]:
+        """The state at one time ``t`` [s] as Python floats: what :meth:`sample`
+        gives there (the same arithmetic), without arrays -- for a control loop
+        that reads one setpoint per period.
+
+        Returns
+        -------
+        tuple of 4 float
+            ``(position, velocity, acceleration, jerk)`` [unit, unit/s,
+            unit/s^2, unit/s^3].
+        """
+        t = float(t)
+        T = self.duration
+        if t >= T:
+            pe, ve, ae = self.end_state
+            da = t - T
+            return (pe + da * (ve + 0.5 * ae * da), ve + ae * da, ae, 0.0)
+        p0, v0, a0 = self.start_state
+        if not t >= 0.0:  # (before the start, and NaN)
+            return (p0, v0, a0, 0.0) if t < 0.0 else (math.nan,) * 4
+        durs = self.phase_durations
+        acc = self.phase_accelerations
+        jerks = self.jerks
+        # the phase table as :meth:`_table` integrates it, up to the phase holding t
+        # (the last phase starting at or before t)
+        p, v, tk = 0.0, v0, 0.0
+        k = 0
+        n = len(durs)
+        while k + 1 < n:
+            t_next = tk + durs[k]
+            if t_next > t:
+                break
+            p, v, _ = phase_end(p, v, acc[k], jerks[k], durs[k])
+            tk = t_next
+            k += 1
+        dt = t - tk
+        pos, vel, a = phase_end(p, v, acc[k], jerks[k], dt)
+        return (p0 + pos, vel, a, jerks[k])
+
     def _sample_sorted(self, tc, tb, P, Vv, A, J):
         """:meth:`sample` for sorted times: each phase on its slice, scalar coefficients."""
         m = tc.shape[0]
