@@ -783,11 +783,13 @@ def test_servo_is_at_rest_on_the_command_after_estop_and_reset(client):
         time.sleep(0.01)
     servo = sess.drive.streamer.servo
     assert not servo.braking
-    np.testing.assert_array_equal(servo.v, 0.0)
+    # at rest: zero up to the round-off of one driven period at rest (the servo's
+    # discrete step cancels position terms of the size of the axis position)
+    np.testing.assert_allclose(servo.v, 0.0, rtol=0, atol=1e-12)
     st = client.get("/api/status").json()
     for a in st["axes"]:
         assert abs(a["following_error"]) <= 1e-9, a  # [mm or deg]: command and actual agree
-        assert a["velocity"] == 0.0
+        assert abs(a["velocity"]) <= 1e-9, a
     np.testing.assert_allclose(sess.drive.last.position, servo.measured, rtol=0, atol=1e-12)
     # the run continues from there (a re-entry move first) and ends at the goal
     assert client.post("/api/run/start").json()["state"] == "running"
