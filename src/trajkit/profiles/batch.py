@@ -256,8 +256,10 @@ def _limit_array(value, name, n, allow_inf=True):
         raise InvalidInputError(
             f"{name} must be a scalar or have {n} entries, got shape {arr.shape}"
         ) from None
-    bad = np.isnan(arr) | (arr <= 0.0) | (~allow_inf & np.isinf(arr))
-    if bad.any():
+    # one pass when every entry is fine (NaN fails ``> 0``); the first bad one named
+    ok = bool(np.all(arr > 0.0)) if allow_inf else bool(np.all((arr > 0.0) & (arr < np.inf)))
+    if not ok:
+        bad = np.isnan(arr) | (arr <= 0.0) | (~allow_inf & np.isinf(arr))
         i = int(np.flatnonzero(bad)[0])
         raise InvalidInputError(
             f"{name}[{i}] should be larger than zero, got {float(arr[i])!r}"
