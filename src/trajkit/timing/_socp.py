@@ -34,7 +34,11 @@ grid: a lower bound).
 A start or end at rest is exact: the first (last) interval is one jerk
 phase from rest, ``x_1 = 1.5 D_0 u_1`` and path jerk ``sqrt(u_1^3 / (6 D_0))``.
 
-Pure math: arrays in, arrays out. The SOCP solver is Clarabel.
+Each round is solved by the banded interior-point method of :mod:`._ipm`
+(compiled with numba; the time minimised directly, no cone), or as the cone
+program by Clarabel where that method does not apply or does not converge.
+
+Pure math: arrays in, arrays out.
 """
 
 from __future__ import annotations
@@ -44,6 +48,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+
+from . import _ipm
 
 __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 
@@ -463,9 +469,92 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
                      np.concatenate([b, extra]), n)
 
 
+def _cell_rows(row: np.ndarray, col: np.ndarray, val: np.ndarray, nrows: int,
+               n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Rows on the columns ``x`` (0 .. n-1) and ``u`` (n .. 2n-1) of the nodes in the
+    interval form of :mod:`._ipm`: the interval of every row (its first node, the
+    last interval for a row on the end node alone) and its four coefficients on
+    ``(x_i, x_{i+1}, u_i, u_{i+1})``."""
+    node = col % n
+    first = np.full(nrows, n, dtype=np.int64)
+    np.minimum.at(first, row, node)
+    cell = np.minimum(first, n - 2)
+    cell[first == n] = 0  # (a row without entries)
+    slot = (node - cell[row]) + 2 * (col >= n)
+    coef = np.zeros((nrows, 4))
+    np.add.at(coef, (row, slot), val)
+    return cell, coef
+
+
+def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
+               x_bar, u_bar, xv, nv, n):
+    """One round by the banded interior-point method (:mod:`._ipm`) on the
+    inequalities ``keep`` (of the static rows, then the jerk rows, as in
+    ``b_in_all``): ``(z, time)`` with ``z`` the cone program's unknowns (only
+    ``x`` and ``u`` filled), or ``(None, nan)`` when it did not solve."""
+    N = n - 1
+    cells = [s_cell]
+    coefs = [s_coef]
+    if jerk is not None:
+        cells.append(jerk.cols[0])
+        coefs.append(jerk.coef)
+        if jerk.rest.size:
+            node = jerk.rest_col - n
+            rc = np.zeros((node.size, 4))
+            rc[:, 2] = jerk.rest
+            cells.append(np.minimum(node, N - 1))
+            coefs.append(rc)
+    cell = np.concatenate(cells).astype(np.int64)
+    C = np.concatenate(coefs)
+    rows = keep[:cell.size] & np.isfinite(b_in_all[:cell.size])
+    cell, C, h = cell[rows], C[rows], b_in_all[:cell.size][rows]
+    # equalities: the rest intervals' relations, then the node relations of the intervals g
+    ecells, ecoefs = [], []
+    k = 0
+    if rest0:
+        ecells.append(np.array([0]))
+        ecoefs.append(np.array([[0.0, eq_values[0][0], 0.0, eq_values[0][1]]]))
+        k += 1
+    if restN:
+        ecells.append(np.array([N - 1]))
+        ecoefs.append(np.array([[eq_values[k][0], 0.0, eq_values[k][1], 0.0]]))
+        k += 1
+    one, mone, cu0, cu1 = eq_values[k:k + 4]
+    ecells.append(g)
+    ecoefs.append(np.column_stack([mone * np.ones(g.size), one * np.ones(g.size), cu0, cu1]))
+    ecell = np.concatenate(ecells).astype(np.int64)
+    E = np.concatenate(ecoefs)
+    e = np.asarray(b_eq, dtype=float)
+    if x_bar is None:  # the jerk-free round: from a slow, feasible-looking state
+        inner = xv[1:-1]
+        level = float(np.min(inner[np.isfinite(inner)], initial=1.0))
+        x0 = np.full(n, 0.1 * level)
+        u0 = np.zeros(n)
+    else:
+        x0, u0 = x_bar.copy(), u_bar.copy()
+    x0[0], u0[0], x0[N], u0[N] = p.x0, p.u0, p.xN, p.uN
+    X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0)
+    if status != _ipm.ST_SOLVED:
+        return None, math.nan
+    z = np.zeros(nv)
+    z[:n] = X
+    z[n:2 * n] = U
+    return z, f
+
+
+#: Use the banded interior-point method (:mod:`._ipm`) where it applies (numba
+#: installed, no curvature-coupled path acceleration); the cone solver otherwise.
+USE_IPM = True
+
+
 #: Nodes within this fraction of the path's speed cap are put on it (a cruise
 #: at the programmed speed is exactly at that speed, not a solver tolerance below).
 SNAP_RTOL = 1e-6
+
+#: A node of a cruise at the cap has no path acceleration (the speed is at its
+#: largest there, on both sides): a solver's remainder (about 1e-8 of it) is
+#: set to zero where it is below this fraction of the cap over the path's length.
+SNAP_U_RTOL = 1e-4
 
 
 def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
@@ -480,7 +569,7 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
     flat = np.zeros(x.size, dtype=bool)
     flat[:-1] |= same
     flat[1:] |= same
-    u[flat & (np.abs(u) * (p.s[-1] - p.s[0]) <= 1e-6 * np.maximum(cap, 1e-300))] = 0.0
+    u[flat & (np.abs(u) * (p.s[-1] - p.s[0]) <= SNAP_U_RTOL * np.maximum(cap, 1e-300))] = 0.0
 
 
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
@@ -657,6 +746,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     A_static, b_static = ineq.matrix(normalise=True)
     A_static = A_static.tocsr()
     st = A_static.tocoo()
+    use_ipm = USE_IPM and _ipm.AVAILABLE and kn.size == 0
+    if use_ipm:
+        s_cell, s_coef = _cell_rows(st.row, st.col, st.data, b_static.size, n)
     n_static = b_static.size
     # the node of every inequality (the first node it involves: screening around a node)
     node_static = np.full(n_static, n, dtype=np.int64)
@@ -767,18 +859,24 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             keep[n_static:] = False
         values = [np.concatenate(eq_values), np.concatenate([st.data, jerk_values]), nn_values,
                   cn_values, acc_values]
+        ipm_round = use_ipm  # (the cone solver takes the round if the method fails)
         for screen in range(SCREEN_PASSES):
-            A = layout.matrix(values, keep)
-            b_in = b_in_all[keep]
-            b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
-            cones = [clarabel.ZeroConeT(n_eq),
-                     clarabel.NonnegativeConeT(b_in.size + b_nn.size)]
-            cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
-            sol = _clarabel_solve(clarabel, P, q, A, b, cones)
+            if ipm_round:
+                z_new, t_new = _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values[1:],
+                                          b_eq[6:], rest0, restN, D, wts, p, x_bar, u_bar, xv, nv, n)
+                ipm_round = z_new is not None
+            if not ipm_round:
+                A = layout.matrix(values, keep)
+                b_in = b_in_all[keep]
+                b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
+                cones = [clarabel.ZeroConeT(n_eq),
+                         clarabel.NonnegativeConeT(b_in.size + b_nn.size)]
+                cones += [clarabel.SecondOrderConeT(3)] * (nf + N + kn.size)
+                sol = _clarabel_solve(clarabel, P, q, A, b, cones)
+                z_new = np.asarray(sol.x)
             if keep.all() or (jerk is None and keep[:n_static].all()):
                 break
             # a row left out must not be violated, nor come close to its bound
-            z_new = np.asarray(sol.x)
             az_new = ineq_times(z_new)
             viol = (b_in_all - az_new) < SCREEN_MARGIN * b_in_all - SCREEN_TOL
             if jerk is None:
@@ -791,15 +889,19 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                 keep |= _around(node_in, viol & ~keep, n) | _near(az_new, b_in_all)
             if jerk is None:
                 keep[n_static:] = False
-        status = str(sol.status).split(".")[-1]
+        if ipm_round:
+            status = "Solved"
+            usable = True
+        else:
+            status = str(sol.status).split(".")[-1]
+            usable = status in ("Solved", "AlmostSolved") or (
+                status == "InsufficientProgress" and float(getattr(sol, "r_prim", 1.0)) < PRIMAL_RTOL)
         times_status.append(status)
-        usable = status in ("Solved", "AlmostSolved") or (
-            status == "InsufficientProgress" and float(getattr(sol, "r_prim", 1.0)) < PRIMAL_RTOL)
         if not usable:
             if x_bar is None:
                 raise RuntimeError(f"path timing: the jerk-free grid problem failed ({status})")
             break  # keep the previous round's solution
-        z = np.asarray(sol.x)
+        z = z_new
         z_prev = z
         x = np.maximum(z[ix], 0.0)
         u = z[iu].copy()
@@ -810,7 +912,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             u[1] = x[1] / (1.5 * D[0])
         if restN:
             u[N - 1] = -x[N - 1] / (1.5 * D[N - 1])
-        t = float(q @ z)
+        t = t_new if ipm_round else float(q @ z)
         times.append(t)
         if x_bar is None:
             jerk_free = t

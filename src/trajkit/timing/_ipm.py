@@ -1,0 +1,506 @@
+"""A banded primal-dual interior-point method for the grid problem of one round.
+
+The round's problem (see :mod:`._socp`) in the node states alone: with
+``x_k = sdot^2`` and ``u_k = sddot`` at the nodes ``k = 0 .. N`` (both end
+nodes given),
+
+    minimise   f(x) = sum_i w_i / (sqrt(x_i) + sqrt(x_{i+1}))
+    subject to G z <= h,   E z = e
+
+where every row of ``G`` and ``E`` involves one interval ``i`` only: the
+coefficients on ``(x_i, x_{i+1}, u_i, u_{i+1})``. ``f`` is the time of the
+grid (convex for ``x > 0``), so the cone program's auxiliary variables are
+not needed: the Hessian of ``f`` is tridiagonal.
+
+The method is Mehrotra's predictor-corrector on the KKT conditions (slacks
+``s``, multipliers ``lam`` of the inequalities, ``nu`` of the equalities).
+Eliminating ``s`` and ``lam`` leaves the symmetric quasi-definite system
+
+    [ H + G^T (lam / s) G    E^T   ] [dz]   [r_z]
+    [ E                    -delta  ] [dnu] = [r_e]
+
+ordered node by node (``x_k, u_k``, then the equalities whose last node is
+``k``): a band of half-width about 6, factored as ``L D L^T`` without
+pivoting (quasi-definite, with the small regularisation ``delta``: any order
+is stable) in ``O(N)``; a step of iterative refinement against the
+unregularised matrix follows every solve. The start is centred (every slack
+times its multiplier equal), the step goes 0.99 of the way to the boundary
+of ``s, lam > 0`` and of ``x > 0`` (the objective's domain).
+
+Compiled by numba when it is installed (the engine uses the cone solver
+otherwise; the plain-Python run gives the same results, slowly). Pure math:
+arrays in, arrays out.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..profiles._compile import ENABLED, numba
+
+__all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_MAXITER", "ST_FAILED", "solve_round"]
+
+#: Stopping tolerance: relative primal and dual residuals and the complementarity
+#: gap over the objective.
+IPM_TOL = 1e-8
+
+#: Iterations at most.
+IPM_MAX_ITER = 80
+
+#: Regularisation of the quasi-definite system: a constant and a part proportional
+#: to its largest diagonal entry (the refinement steps remove its effect).
+REG = 1e-10
+REG_PROP = 1e-30
+
+#: Status codes.
+ST_SOLVED = 0
+ST_MAXITER = 1
+ST_FAILED = 2
+
+#: The step goes this fraction of the way to the boundary at most.
+STEP_FRACTION = 0.99
+
+#: Starting point: slacks of at least this (the rows are normalised to
+#: coefficients <= 1 and the problem to times of order one), and every product
+#: of a slack and its multiplier equal to START_MU (a centred point; from the
+#: previous round's solution the method then needs 9-17 iterations, 30-40 from
+#: a cold start).
+START_SLACK = 1e-2
+START_MU = 1e-3
+
+#: Steps of iterative refinement of every linear solve.
+REFINE = 1
+
+
+def _jit(fn):
+    if not ENABLED or numba is None:
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+#: Whether the compiled solver is available (numba installed and enabled).
+AVAILABLE = ENABLED and numba is not None
+
+
+@_jit
+def _layout(N, ecell):
+    """Positions in the KKT system: ``px[k]``, ``pu[k]`` of the inner nodes'
+    ``x`` and ``u`` (-1 for the end nodes), ``pe[j]`` of every equality; size."""
+    px = np.full(N + 1, -1, dtype=np.int64)
+    pu = np.full(N + 1, -1, dtype=np.int64)
+    p = ecell.size
+    place = np.empty(p, dtype=np.int64)
+    count = np.zeros(N + 1, dtype=np.int64)
+    for j in range(p):
+        k = min(ecell[j] + 1, N - 1)
+        k = max(k, 1)
+        place[j] = k
+        count[k] += 1
+    start = np.zeros(N + 1, dtype=np.int64)
+    pos = 0
+    for k in range(1, N):
+        px[k] = pos
+        pu[k] = pos + 1
+        pos += 2
+        start[k] = pos
+        pos += count[k]
+    pe = np.empty(p, dtype=np.int64)
+    fill = np.zeros(N + 1, dtype=np.int64)
+    for j in range(p):
+        k = place[j]
+        pe[j] = start[k] + fill[k]
+        fill[k] += 1
+    return px, pu, pe, pos
+
+
+@_jit
+def _fold(cell, C, h, px, pu, X, U):
+    """The rows on the unknowns alone: every row's four KKT positions and
+    coefficients, the end nodes' (given) values moved to the right-hand side. A
+    coefficient on an end node, or zero, becomes 0 on the row's first unknown
+    (so that every loop over the rows runs without branches); a row on end
+    nodes alone is left out (``keep`` false) and its feasibility returned."""
+    m = cell.size
+    pos = np.zeros((m, 4), dtype=np.int64)
+    cf = np.zeros((m, 4))
+    hh = np.empty(m)
+    keep = np.ones(m, dtype=np.bool_)
+    feasible = True
+    for r in range(m):
+        i = cell[r]
+        q = (px[i], px[i + 1], pu[i], pu[i + 1])
+        val = (X[i], X[i + 1], U[i], U[i + 1])
+        first = -1
+        b = h[r]
+        for a in range(4):
+            if q[a] >= 0 and C[r, a] != 0.0:
+                if first < 0:
+                    first = q[a]
+            elif C[r, a] != 0.0:
+                b -= C[r, a] * val[a]
+        hh[r] = b
+        if first < 0:
+            keep[r] = False
+            feasible = feasible and b >= 0.0
+            continue
+        for a in range(4):
+            if q[a] >= 0 and C[r, a] != 0.0:
+                pos[r, a] = q[a]
+                cf[r, a] = C[r, a]
+            else:
+                pos[r, a] = first
+    return pos, cf, hh, keep, feasible
+
+
+@_jit
+def _dot4(pos, cf, r, z):
+    return (cf[r, 0] * z[pos[r, 0]] + cf[r, 1] * z[pos[r, 1]]
+            + cf[r, 2] * z[pos[r, 2]] + cf[r, 3] * z[pos[r, 3]])
+
+
+@_jit
+def _band_add(M, a, b, v):
+    """Add ``v`` at ``(a, b)`` of the symmetric matrix in lower band storage."""
+    if a >= b:
+        M[a, a - b] += v
+    else:
+        M[b, b - a] += v
+
+
+@_jit
+def _ldl(M, bw, L, d):
+    """``M = L D L^T`` of the band matrix ``M`` (lower band, half-width ``bw``)."""
+    n = M.shape[0]
+    for j in range(n):
+        s = M[j, 0]
+        for k in range(max(0, j - bw), j):
+            ljk = L[j, j - k]
+            s -= ljk * ljk * d[k]
+        d[j] = s
+        if s == 0.0 or s != s:
+            return False
+        for i in range(j + 1, min(n, j + bw + 1)):
+            s2 = M[i, i - j]
+            for k in range(max(0, i - bw), j):
+                s2 -= L[i, i - k] * L[j, j - k] * d[k]
+            L[i, i - j] = s2 / d[j]
+    return True
+
+
+@_jit
+def _ldl_solve(L, d, bw, b, x):
+    n = b.size
+    for i in range(n):
+        s = b[i]
+        for k in range(max(0, i - bw), i):
+            s -= L[i, i - k] * x[k]
+        x[i] = s
+    for i in range(n):
+        x[i] /= d[i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, min(n, i + bw + 1)):
+            s -= L[k, k - i] * x[k]
+        x[i] = s
+
+
+@_jit
+def _band_mul(M, bw, x, out):
+    """``out = M x`` for the symmetric band matrix ``M``."""
+    n = x.size
+    for i in range(n):
+        out[i] = M[i, 0] * x[i]
+    for i in range(n):
+        for k in range(1, min(bw, i) + 1):
+            v = M[i, k]
+            out[i] += v * x[i - k]
+            out[i - k] += v * x[i]
+
+
+@_jit
+def _objective(X, w):
+    f = 0.0
+    for i in range(w.size):
+        f += w[i] / (math.sqrt(X[i]) + math.sqrt(X[i + 1]))
+    return f
+
+
+@_jit
+def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, diag_reg, refine):
+    """``sol`` from the factors of the regularised matrix, refined against ``M``
+    without the regularisation (``diag_reg``: what was added to the diagonal)."""
+    _ldl_solve(L, dd, bw, rhs, sol)
+    for _ in range(refine):
+        _band_mul(M, bw, sol, res)
+        for q in range(rhs.size):
+            res[q] = rhs[q] - (res[q] - diag_reg[q] * sol[q])
+        _ldl_solve(L, dd, bw, res, tmp)
+        for q in range(rhs.size):
+            sol[q] += tmp[q]
+
+
+@_jit
+def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
+    """The compiled solver (see :func:`solve_round`)."""
+    px, pu, pe, nk = _layout(N, ecell)
+    X = X0.copy()
+    U = U0.copy()
+    gpos, gcf, hh, gkeep, feas = _fold(cell, C, h, px, pu, X, U)
+    epos, ecf, ee, ekeep, efeas = _fold(ecell, E, e, px, pu, X, U)
+    if not (feas and efeas and ekeep.all()):
+        return X, U, ST_FAILED, 0, math.nan, math.inf, math.inf, math.inf
+    if not gkeep.all():
+        idx = np.nonzero(gkeep)[0]
+        gpos = gpos[idx]
+        gcf = gcf[idx]
+        hh = hh[idx]
+    m = hh.size
+    p = ee.size
+    # half-width of the band
+    bw = 1
+    for r in range(m):
+        for a in range(4):
+            for b in range(4):
+                bw = max(bw, abs(gpos[r, a] - gpos[r, b]))
+    for j in range(p):
+        for a in range(4):
+            bw = max(bw, abs(pe[j] - epos[j, a]))
+    for i in range(1, N - 1):
+        bw = max(bw, px[i + 1] - px[i])
+    # the iterate: z (x, u of the inner nodes; nu in the equalities' places), s, lam
+    xs = 0.0
+    for k in range(1, N):
+        xs = max(xs, X[k])
+    floor = 1e-6 * xs if xs > 0.0 else 1e-6
+    z = np.zeros(nk)
+    for k in range(1, N):
+        X[k] = max(X[k], floor)
+        z[px[k]] = X[k]
+        z[pu[k]] = U[k]
+    s = np.empty(m)
+    lam = np.empty(m)
+    # a centred start: the slacks at the starting point (at least START_SLACK),
+    # every product slack x multiplier equal to START_MU
+    for r in range(m):
+        s[r] = max(hh[r] - _dot4(gpos, gcf, r, z), START_SLACK)
+        lam[r] = START_MU / s[r]
+    M = np.zeros((nk, bw + 1))
+    L = np.zeros((nk, bw + 1))
+    dd = np.zeros(nk)
+    gf = np.zeros(nk)
+    rz = np.zeros(nk)
+    rhs = np.zeros(nk)
+    sol = np.zeros(nk)
+    res = np.zeros(nk)
+    tmp = np.zeros(nk)
+    reg = np.zeros(nk)
+    rin = np.zeros(m)
+    Dg = np.zeros(m)
+    ds = np.zeros(m)
+    dl = np.zeros(m)
+    ds_a = np.zeros(m)
+    dl_a = np.zeros(m)
+    rc = np.zeros(m)
+    req = np.zeros(p)
+    hn = 1.0
+    for r in range(m):
+        hn = max(hn, abs(hh[r]))
+    en = 1.0
+    for j in range(p):
+        en = max(en, abs(ee[j]))
+    status = ST_MAXITER
+    it = 0
+    pres = dres = gap = fval = math.inf
+    while it < max_iter:
+        # ---- residuals at the iterate; the objective's gradient and Hessian
+        for k in range(1, N):
+            X[k] = z[px[k]]
+            U[k] = z[pu[k]]
+        gf[:] = 0.0
+        M[:, :] = 0.0
+        for i in range(N):
+            a = math.sqrt(X[i])
+            b = math.sqrt(X[i + 1])
+            S = a + b
+            f2 = w[i] / (S * S)
+            f3 = 2.0 * f2 / S
+            # w / S: first derivative -w S_x / S^2, second w (2 S_x^2 / S^3 - S_xx / S^2)
+            if px[i] >= 0:
+                Sa = 0.5 / a
+                gf[px[i]] -= f2 * Sa
+                M[px[i], 0] += f3 * Sa * Sa + f2 * 0.25 / (a * X[i])
+            if px[i + 1] >= 0:
+                Sb = 0.5 / b
+                gf[px[i + 1]] -= f2 * Sb
+                M[px[i + 1], 0] += f3 * Sb * Sb + f2 * 0.25 / (b * X[i + 1])
+            if px[i] >= 0 and px[i + 1] >= 0:
+                _band_add(M, px[i + 1], px[i], f3 * (0.5 / a) * (0.5 / b))
+        # r_d = grad f + G^T lam + E^T nu
+        for q in range(nk):
+            rz[q] = gf[q]
+        pres = 0.0
+        gap = 0.0
+        for r in range(m):
+            rin[r] = _dot4(gpos, gcf, r, z) + s[r] - hh[r]
+            pres = max(pres, abs(rin[r]) / hn)
+            gap += s[r] * lam[r]
+            lr = lam[r]
+            for a in range(4):
+                rz[gpos[r, a]] += gcf[r, a] * lr
+        for j in range(p):
+            req[j] = _dot4(epos, ecf, j, z) - ee[j]
+            pres = max(pres, abs(req[j]) / en)
+            nu = z[pe[j]]
+            for a in range(4):
+                rz[epos[j, a]] += ecf[j, a] * nu
+        dres = 0.0
+        gn = 1.0
+        for k in range(1, N):
+            dres = max(dres, abs(rz[px[k]]), abs(rz[pu[k]]))
+            gn = max(gn, abs(gf[px[k]]))
+        dres /= gn
+        fval = _objective(X, w)
+        mu = gap / max(m, 1)
+        if pres < tol and dres < tol and gap < tol * (1.0 + fval):
+            status = ST_SOLVED
+            break
+        # ---- the matrix: H + G^T D G, E, regularisation
+        for r in range(m):
+            dr = lam[r] / s[r]
+            Dg[r] = dr
+            for a in range(4):
+                qa = gpos[r, a]
+                ca = dr * gcf[r, a]
+                M[qa, 0] += ca * gcf[r, a]
+                for b in range(a):
+                    _band_add(M, qa, gpos[r, b], ca * gcf[r, b])
+        scale = 0.0
+        for k in range(1, N):
+            scale = max(scale, M[px[k], 0], M[pu[k], 0])
+        delta = REG + REG_PROP * scale
+        for j in range(p):
+            for a in range(4):
+                _band_add(M, pe[j], epos[j, a], ecf[j, a])
+        for k in range(1, N):
+            reg[px[k]] = delta
+            reg[pu[k]] = delta
+        for j in range(p):
+            reg[pe[j]] = -delta
+        for q in range(nk):
+            M[q, 0] += reg[q]
+        ok = _ldl(M, bw, L, dd)
+        for q in range(nk):
+            M[q, 0] -= reg[q]
+        if not ok:
+            status = ST_FAILED
+            break
+        # ---- predictor (affine) and corrector with the same factors
+        for corr in range(2):
+            if corr == 0:
+                for r in range(m):
+                    rc[r] = s[r] * lam[r]
+            else:
+                # the affine step's complementarity and the centring
+                ap, ad = _max_steps(s, lam, ds_a, dl_a, z, sol, px, N, 1.0)
+                mu_aff = 0.0
+                for r in range(m):
+                    mu_aff += (s[r] + ap * ds_a[r]) * (lam[r] + ad * dl_a[r])
+                mu_aff /= max(m, 1)
+                sigma = (mu_aff / mu) ** 3 if mu > 0.0 else 0.0
+                sigma = min(max(sigma, 0.0), 1.0)
+                for r in range(m):
+                    rc[r] = s[r] * lam[r] + ds_a[r] * dl_a[r] - sigma * mu
+            # right-hand side: -r_d - G^T (D r_in - r_c / s); -r_eq
+            for q in range(nk):
+                rhs[q] = -rz[q]
+            for r in range(m):
+                t = Dg[r] * rin[r] - rc[r] / s[r]
+                for a in range(4):
+                    rhs[gpos[r, a]] -= gcf[r, a] * t
+            for j in range(p):
+                rhs[pe[j]] = -req[j]
+            _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, reg, REFINE)
+            # ds = -r_in - G dz; dlam = D (G dz + r_in) - r_c / s
+            for r in range(m):
+                gdz = _dot4(gpos, gcf, r, sol)
+                ds[r] = -rin[r] - gdz
+                dl[r] = Dg[r] * (gdz + rin[r]) - rc[r] / s[r]
+            if corr == 0:
+                for r in range(m):
+                    ds_a[r] = ds[r]
+                    dl_a[r] = dl[r]
+        ap, ad = _max_steps(s, lam, ds, dl, z, sol, px, N, STEP_FRACTION)
+        alpha = min(ap, ad)
+        if not alpha > 0.0:
+            status = ST_FAILED
+            break
+        for k in range(1, N):
+            z[px[k]] += alpha * sol[px[k]]
+            z[pu[k]] += alpha * sol[pu[k]]
+        for j in range(p):
+            z[pe[j]] += alpha * sol[pe[j]]
+        for r in range(m):
+            s[r] += alpha * ds[r]
+            lam[r] += alpha * dl[r]
+        it += 1
+    for k in range(1, N):
+        X[k] = z[px[k]]
+        U[k] = z[pu[k]]
+    return X, U, status, it, _objective(X, w), pres, dres, gap / (1.0 + fval)
+
+
+@_jit
+def _max_steps(s, lam, ds, dl, z, dz, px, N, frac):
+    """The largest steps (primal, dual) up to ``frac`` of the way to the boundary
+    of ``s > 0``, ``lam > 0`` and ``x > 0`` (the objective's domain)."""
+    ap = 1.0
+    ad = 1.0
+    for r in range(s.size):
+        if ds[r] < 0.0:
+            ap = min(ap, -frac * s[r] / ds[r])
+        if dl[r] < 0.0:
+            ad = min(ad, -frac * lam[r] / dl[r])
+    for k in range(1, N):
+        q = px[k]
+        if dz[q] < 0.0:
+            ap = min(ap, -frac * z[q] / dz[q])
+    return ap, ad
+
+
+def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
+                ecell: np.ndarray, E: np.ndarray, e: np.ndarray,
+                x0: np.ndarray, u0: np.ndarray,
+                max_iter: int = IPM_MAX_ITER, tol: float = IPM_TOL):
+    """Solve one round's grid problem (see the module text).
+
+    Parameters
+    ----------
+    w : ndarray, shape (N,)
+        Objective weights of the intervals.
+    cell, C, h : ndarray, shapes (m,), (m, 4), (m,)
+        Inequalities ``C[r] . (x_i, x_{i+1}, u_i, u_{i+1}) <= h[r]``, ``i = cell[r]``.
+    ecell, E, e : ndarray, shapes (p,), (p, 4), (p,)
+        Equalities of the same form.
+    x0, u0 : ndarray, shape (N + 1,)
+        Starting point; the end nodes' entries are the given end states.
+
+    Returns
+    -------
+    x, u : ndarray, shape (N + 1,)
+    status : int
+        :data:`ST_SOLVED`, :data:`ST_MAXITER` or :data:`ST_FAILED`.
+    iterations : int
+    objective : float
+    """
+    N = int(w.size)
+    if N < 2:  # no inner node: nothing to solve here
+        return np.array(x0, dtype=float), np.array(u0, dtype=float), ST_FAILED, 0, math.nan
+    X, U, status, it, f, _pres, _dres, _gap = _solve(
+        N, np.ascontiguousarray(w, dtype=np.float64), np.ascontiguousarray(cell, dtype=np.int64),
+        np.ascontiguousarray(C, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
+        np.ascontiguousarray(ecell, dtype=np.int64), np.ascontiguousarray(E, dtype=np.float64),
+        np.ascontiguousarray(e, dtype=np.float64), np.array(x0, dtype=np.float64),
+        np.array(u0, dtype=np.float64), int(max_iter), float(tol))
+    return X, U, int(status), int(it), float(f)

@@ -1,0 +1,133 @@
+"""The banded interior-point method of the path-timing rounds (``timing._ipm``).
+
+* On a problem with a known optimum (every node at the speed cap) it finds it.
+* On grid problems of real paths it finds the cone solver's (Clarabel's)
+  optimum: the same round times and node states, with and without the rounds'
+  jerk rows.
+* Where it does not converge the engine gives the round to the cone solver
+  and returns the same timing.
+* Its compiled and plain-Python runs agree.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from trajkit import AxisLimits
+from trajkit.timing import LinearJointPath, _ipm, _socp, plan_path_timing
+from trajkit.timing._socp import GridProblem, solve_grid
+
+needs_compiled = pytest.mark.skipif(not _ipm.AVAILABLE, reason="the method runs compiled only")
+
+
+def _cruise_problem(N: int, cap: float):
+    """Intervals of lengths D between nodes moving at the cap: x <= cap at every
+    inner node, the node relations x_{i+1} - x_i = D (u_i + u_{i+1}), ends at the
+    cap with u = 0. Optimum: x = cap, u = 0, time sum(2 D) / (2 sqrt(cap))."""
+    rng = np.random.default_rng(N)
+    D = rng.uniform(0.5, 1.5, N)
+    w = 2.0 * D
+    inner = np.arange(1, N)
+    cell = np.minimum(inner, N - 1)  # x_k on the interval that starts at k (slot 0)
+    C = np.zeros((inner.size, 4))
+    C[:, 0] = 1.0
+    h = np.full(inner.size, cap)
+    ecell = np.arange(N)
+    E = np.column_stack([-np.ones(N), np.ones(N), -D, -D])
+    e = np.zeros(N)
+    x0 = np.full(N + 1, 0.3 * cap)
+    x0[0] = x0[N] = cap
+    u0 = np.zeros(N + 1)
+    return w, cell, C, h, ecell, E, e, x0, u0, D
+
+
+@needs_compiled
+@pytest.mark.parametrize("N", [2, 3, 10, 80])
+def test_known_optimum_every_node_at_the_cap(N):
+    cap = 2.5
+    w, cell, C, h, ecell, E, e, x0, u0, D = _cruise_problem(N, cap)
+    X, U, status, its, f = _ipm.solve_round(w, cell, C, h, ecell, E, e, x0, u0)
+    assert status == _ipm.ST_SOLVED and its < _ipm.IPM_MAX_ITER
+    assert f == pytest.approx(np.sum(D) / math.sqrt(cap), rel=1e-7)
+    np.testing.assert_allclose(X, cap, rtol=1e-7)
+    np.testing.assert_allclose(U, 0.0, atol=1e-7)
+    assert np.all(X <= cap * (1 + 1e-12))  # an interior method: inside the limits
+
+
+@needs_compiled
+def test_plain_python_run_agrees_with_the_compiled_one():
+    w, cell, C, h, ecell, E, e, x0, u0, _D = _cruise_problem(6, 1.7)
+    args = (6, w, cell.astype(np.int64), C, h, ecell.astype(np.int64), E, e, x0, u0,
+            _ipm.IPM_MAX_ITER, _ipm.IPM_TOL)
+    a = _ipm._solve(*args)
+    b = _ipm._solve.py_func(*args)
+    assert a[2] == b[2] == _ipm.ST_SOLVED and a[3] == b[3]
+    np.testing.assert_allclose(a[0], b[0], rtol=1e-12)
+    np.testing.assert_allclose(a[1], b[1], rtol=1e-12, atol=1e-12)
+
+
+def _grid_problem(kind: str) -> GridProblem:
+    """The grid problem of a joint path: q', q'', q''' on a grid, the joint limits
+    (separate legs)."""
+    if kind == "line":
+        path = LinearJointPath([0.0, 0.2, -0.3], [1.0, -0.6, 0.9])
+        s = np.linspace(0.0, path.length, 41)
+        _q, d1, d2, d3 = path.derivatives(s)
+    else:  # a helix in three joints: q = (cos 2s, sin 2s, s / 2)
+        s = np.linspace(0.0, 1.0, 41)
+        th = 2.0 * s
+        d1 = np.column_stack([-2 * np.sin(th), 2 * np.cos(th), 0.5 + 0 * s])
+        d2 = np.column_stack([-4 * np.cos(th), -4 * np.sin(th), 0 * s])
+        d3 = np.column_stack([8 * np.sin(th), -8 * np.cos(th), 0 * s])
+    m = d1.shape[1]
+    v = np.full(m, 1.5)
+    a = np.full(m, 6.0)
+    j = np.full(m, 60.0)
+    return GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=v, a_acc=a, a_dec=0.7 * a, j_acc=j,
+                       j_dec=0.8 * j, x_cap=np.full(s.size, np.inf))
+
+
+@needs_compiled
+@pytest.mark.parametrize("kind", ["line", "curve"])
+@pytest.mark.parametrize("rounds", [1, 4])
+def test_rounds_equal_the_cone_solvers(monkeypatch, kind, rounds):
+    """One round (jerk-free) and several (with the jerk rows): the same time every
+    round as Clarabel's, and the same speeds (the accelerations of a jerk-free
+    optimum are not unique where no limit binds them), to the solvers' tolerances."""
+    prob = _grid_problem(kind)
+    monkeypatch.setattr(_socp, "USE_IPM", True)
+    a = solve_grid(prob, max_rounds=rounds)
+    monkeypatch.setattr(_socp, "USE_IPM", False)
+    b = solve_grid(prob, max_rounds=rounds)
+    assert a.rounds == b.rounds
+    np.testing.assert_allclose(a.history, b.history, rtol=2e-6)
+    assert a.jerk_free_time == pytest.approx(b.jerk_free_time, rel=1e-7)
+    scale = float(np.max(b.x))
+    np.testing.assert_allclose(a.x, b.x, rtol=0, atol=2e-4 * scale)
+
+
+@needs_compiled
+def test_a_round_it_does_not_solve_goes_to_the_cone_solver(monkeypatch):
+    """With too few iterations allowed the method never converges: every round is
+    Clarabel's, and the timing is the cone solver's alone."""
+    path = LinearJointPath([0.0, 0.5], [1.0, -0.4])
+    lims = [AxisLimits(1.0, 4.0, 40.0), AxisLimits(1.5, 3.0, 20.0, 2.0, 10.0)]
+    monkeypatch.setattr(_socp, "USE_IPM", False)
+    want = plan_path_timing(path, lims)
+    calls = []
+    real = _ipm.solve_round
+
+    def starved(*args, **kw):
+        out = real(*args, max_iter=2)
+        calls.append(out[2])
+        return out
+
+    monkeypatch.setattr(_socp, "USE_IPM", True)
+    monkeypatch.setattr(_ipm, "solve_round", starved)
+    got = plan_path_timing(path, lims)
+    assert calls and all(st != _ipm.ST_SOLVED for st in calls)
+    assert got.duration == want.duration
+    np.testing.assert_array_equal(got.t, want.t)
