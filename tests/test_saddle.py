@@ -168,9 +168,15 @@ def test_saddle_plan_holds_every_axis_limit(i):
     assert np.max(fs.v) <= feed * (1 + 1e-12)
     s_nodes = np.unique(fs.s)
     assert np.max(chord_deviations(c, s_nodes)) <= tol * (1 + 1e-9)
-    # each slowdown names an axis quantity (or the chord error) and holds its limit
+    # each slowdown names an axis quantity (or the chord error); a velocity or chord
+    # limit bounds the speed itself (an acceleration or jerk "limit" is the speed
+    # that reaches the axis limit at constant speed: the path's own acceleration
+    # may offset the axis' part from the curvature, so the speed may pass it while
+    # the axis keeps its limit, checked above)
     for z in plan.slowdowns:
-        assert z.speed <= z.limit * (1 + 1e-12) and z.speed < feed
+        assert z.speed < feed
+        if z.reason.endswith("velocity") or z.reason.startswith("chord"):
+            assert z.speed <= z.limit * (1 + 1e-12)
         assert z.reason.split()[0] in ("theta", "z_axis", "chord")
 
 

@@ -60,7 +60,9 @@ def test_known_optimum_every_node_at_the_cap(N):
 @needs_compiled
 def test_plain_python_run_agrees_with_the_compiled_one():
     w, cell, C, h, ecell, E, e, x0, u0, _D = _cruise_problem(6, 1.7)
-    args = (6, w, cell.astype(np.int64), C, h, ecell.astype(np.int64), E, e, x0, u0,
+    none = np.zeros(0, dtype=np.int64)
+    args = (6, w, cell.astype(np.int64), C, h, ecell.astype(np.int64), E, e, none, none * 1.0,
+            none * 1.0, x0, u0,
             _ipm.IPM_MAX_ITER, _ipm.IPM_TOL)
     a = _ipm._solve(*args)
     b = _ipm._solve.py_func(*args)
@@ -131,3 +133,35 @@ def test_a_round_it_does_not_solve_goes_to_the_cone_solver(monkeypatch):
     assert calls and all(st != _ipm.ST_SOLVED for st in calls)
     assert got.duration == want.duration
     np.testing.assert_array_equal(got.t, want.t)
+
+
+@needs_compiled
+def test_known_optimum_with_the_curvature_rows():
+    """The path acceleration with a curvature, (kappa x)^2 + u^2 <= a^2, binding at
+    every node: x = a / kappa, u = 0 (the speed cap is looser)."""
+    N, cap, a, kappa = 12, 4.0, 3.0, 1.5
+    w, cell, C, h, ecell, E, e, x0, u0, D = _cruise_problem(N, cap)
+    x0[0] = x0[N] = a / kappa
+    inner = np.arange(1, N)
+    quad = (inner, np.full(inner.size, (kappa / a) ** 2), np.full(inner.size, 1.0 / a**2))
+    X, U, status, _its, f = _ipm.solve_round(w, cell, C, h, ecell, E, e, x0, u0, quad)
+    assert status == _ipm.ST_SOLVED
+    np.testing.assert_allclose(X, a / kappa, rtol=1e-7)
+    np.testing.assert_allclose(U, 0.0, atol=1e-7)
+    assert f == pytest.approx(np.sum(D) / math.sqrt(a / kappa), rel=1e-7)
+    # (a curved row is met to the solver's tolerance, as a cone solver meets its cones)
+    assert np.all((kappa * X[1:-1]) ** 2 + U[1:-1] ** 2 <= a * a * (1 + 1e-8))
+
+
+@needs_compiled
+def test_rounds_with_the_curvature_rows_equal_the_cone_solvers(monkeypatch):
+    prob = _grid_problem("curve")
+    prob.kappa = np.full(prob.s.size, 2.0)
+    prob.a_path = 2.0
+    monkeypatch.setattr(_socp, "USE_IPM", True)
+    a = solve_grid(prob, max_rounds=4)
+    monkeypatch.setattr(_socp, "USE_IPM", False)
+    b = solve_grid(prob, max_rounds=4)
+    assert a.rounds == b.rounds
+    np.testing.assert_allclose(a.history, b.history, rtol=2e-6)
+    np.testing.assert_allclose(a.x, b.x, rtol=0, atol=2e-4 * float(np.max(b.x)))

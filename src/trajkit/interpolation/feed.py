@@ -75,7 +75,12 @@ class Slowdown:
     speed : float
         Planned tool speed there [m/s].
     limit : float
-        Lowest value of the speed-limit curve there [m/s].
+        Lowest value of the speed-limit curve there [m/s]. For a velocity (or
+        chord-error) reason a bound of the speed; for an acceleration or jerk
+        reason the speed at which that axis quantity reaches its limit at
+        constant tool speed (the path's own acceleration can offset the part
+        from the curvature, so the planned speed may pass it while the axis
+        keeps its limit).
     reason : str
         Which axis and quantity sets that lowest limit (e.g. ``"theta velocity"``).
     """

@@ -40,14 +40,21 @@ import numpy as np
 
 from ..profiles._compile import ENABLED, numba
 
-__all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_MAXITER", "ST_FAILED", "solve_round"]
+__all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_ALMOST", "ST_MAXITER", "ST_FAILED",
+           "solve_round"]
 
 #: Stopping tolerance: relative primal and dual residuals and the complementarity
 #: gap over the objective.
 IPM_TOL = 1e-8
 
-#: Iterations at most.
-IPM_MAX_ITER = 80
+#: Iterations at most (a solved round takes 9-48).
+IPM_MAX_ITER = 60
+
+#: A run that stops (no step possible, or the iterations used up) counts as
+#: almost solved when its primal residual and gap are below ALMOST_TOL and its
+#: dual residual below ALMOST_TOL_DUAL (as a cone solver's reduced tolerances).
+ALMOST_TOL = 1e-6
+ALMOST_TOL_DUAL = 1e-4
 
 #: Regularisation of the quasi-definite system: a constant and a part proportional
 #: to its largest diagonal entry (the refinement steps remove its effect).
@@ -58,6 +65,7 @@ REG_PROP = 1e-30
 ST_SOLVED = 0
 ST_MAXITER = 1
 ST_FAILED = 2
+ST_ALMOST = 3
 
 #: The step goes this fraction of the way to the boundary at most.
 STEP_FRACTION = 0.99
@@ -242,7 +250,7 @@ def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, diag_reg, refine):
 
 
 @_jit
-def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
+def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol):
     """The compiled solver (see :func:`solve_round`)."""
     px, pu, pe, nk = _layout(N, ecell)
     X = X0.copy()
@@ -256,6 +264,26 @@ def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
         gpos = gpos[idx]
         gcf = gcf[idx]
         hh = hh[idx]
+    # the quadratic rows after the linear ones: their coefficients are the
+    # gradient at the iterate, their right-hand side makes G_r z - h_r = g_r(z)
+    ml = hh.size
+    mq = qnode.size
+    if mq:
+        gpos2 = np.zeros((ml + mq, 4), dtype=np.int64)
+        gcf2 = np.zeros((ml + mq, 4))
+        hh2 = np.zeros(ml + mq)
+        gpos2[:ml] = gpos
+        gcf2[:ml] = gcf
+        hh2[:ml] = hh
+        for j in range(mq):
+            k = qnode[j]
+            if px[k] < 0:
+                return X, U, ST_FAILED, 0, math.nan, math.inf, math.inf, math.inf
+            gpos2[ml + j, 0] = px[k]
+            gpos2[ml + j, 1] = px[k]
+            gpos2[ml + j, 2] = pu[k]
+            gpos2[ml + j, 3] = pu[k]
+        gpos, gcf, hh = gpos2, gcf2, hh2
     m = hh.size
     p = ee.size
     # half-width of the band
@@ -281,6 +309,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
         z[pu[k]] = U[k]
     s = np.empty(m)
     lam = np.empty(m)
+    _quad_rows(qnode, qxx, quu, px, pu, z, gcf, hh, ml)
     # a centred start: the slacks at the starting point (at least START_SLACK),
     # every product slack x multiplier equal to START_MU
     for r in range(m):
@@ -305,7 +334,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
     rc = np.zeros(m)
     req = np.zeros(p)
     hn = 1.0
-    for r in range(m):
+    for r in range(ml):
         hn = max(hn, abs(hh[r]))
     en = 1.0
     for j in range(p):
@@ -318,6 +347,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
         for k in range(1, N):
             X[k] = z[px[k]]
             U[k] = z[pu[k]]
+        _quad_rows(qnode, qxx, quu, px, pu, z, gcf, hh, ml)
         gf[:] = 0.0
         M[:, :] = 0.0
         for i in range(N):
@@ -376,6 +406,10 @@ def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
                 M[qa, 0] += ca * gcf[r, a]
                 for b in range(a):
                     _band_add(M, qa, gpos[r, b], ca * gcf[r, b])
+        for j in range(mq):  # the quadratic rows' curvature, lam grad^2 g
+            k = qnode[j]
+            M[px[k], 0] += 2.0 * lam[ml + j] * qxx[j]
+            M[pu[k], 0] += 2.0 * lam[ml + j] * quu[j]
         scale = 0.0
         for k in range(1, N):
             scale = max(scale, M[px[k], 0], M[pu[k], 0])
@@ -445,10 +479,32 @@ def _solve(N, w, cell, C, h, ecell, E, e, X0, U0, max_iter, tol):
             s[r] += alpha * ds[r]
             lam[r] += alpha * dl[r]
         it += 1
+    if (status != ST_SOLVED and pres < ALMOST_TOL and dres < ALMOST_TOL_DUAL
+            and gap < ALMOST_TOL * (1.0 + fval)):
+        status = ST_ALMOST
     for k in range(1, N):
         X[k] = z[px[k]]
         U[k] = z[pu[k]]
     return X, U, status, it, _objective(X, w), pres, dres, gap / (1.0 + fval)
+
+
+@_jit
+def _quad_rows(qn, qk, qa, px, pu, z, gcf, hh, ml):
+    """The quadratic rows ``g = qk x^2 + qa u^2 - 1 <= 0`` at the iterate: the
+    gradient as coefficients (on ``x`` and ``u`` of the node), the right-hand
+    side ``grad . z - g`` (so that the row's ``G z - h`` is ``g(z)``)."""
+    for j in range(qn.size):
+        k = qn[j]
+        x = z[px[k]]
+        u = z[pu[k]]
+        gx = 2.0 * qk[j] * x
+        gu = 2.0 * qa[j] * u
+        r = ml + j
+        gcf[r, 0] = gx
+        gcf[r, 1] = 0.0
+        gcf[r, 2] = gu
+        gcf[r, 3] = 0.0
+        hh[r] = qk[j] * x * x + qa[j] * u * u + 1.0
 
 
 @_jit
@@ -471,7 +527,7 @@ def _max_steps(s, lam, ds, dl, z, dz, px, N, frac):
 
 def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
                 ecell: np.ndarray, E: np.ndarray, e: np.ndarray,
-                x0: np.ndarray, u0: np.ndarray,
+                x0: np.ndarray, u0: np.ndarray, quad: tuple | None = None,
                 max_iter: int = IPM_MAX_ITER, tol: float = IPM_TOL):
     """Solve one round's grid problem (see the module text).
 
@@ -485,22 +541,30 @@ def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
         Equalities of the same form.
     x0, u0 : ndarray, shape (N + 1,)
         Starting point; the end nodes' entries are the given end states.
+    quad : tuple of 3 ndarray, optional
+        Quadratic rows ``qk x_k^2 + qa u_k^2 <= 1``: ``(nodes (inner), qk, qa)``
+        (the path's acceleration with a curvature: ``(kappa x)^2 + u^2 <= a^2``).
 
     Returns
     -------
     x, u : ndarray, shape (N + 1,)
     status : int
-        :data:`ST_SOLVED`, :data:`ST_MAXITER` or :data:`ST_FAILED`.
+        :data:`ST_SOLVED`, :data:`ST_ALMOST` (stopped within the reduced
+        tolerances), :data:`ST_MAXITER` or :data:`ST_FAILED`.
     iterations : int
     objective : float
     """
     N = int(w.size)
     if N < 2:  # no inner node: nothing to solve here
         return np.array(x0, dtype=float), np.array(u0, dtype=float), ST_FAILED, 0, math.nan
+    if quad is None:
+        quad = (np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
     X, U, status, it, f, _pres, _dres, _gap = _solve(
         N, np.ascontiguousarray(w, dtype=np.float64), np.ascontiguousarray(cell, dtype=np.int64),
         np.ascontiguousarray(C, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
         np.ascontiguousarray(ecell, dtype=np.int64), np.ascontiguousarray(E, dtype=np.float64),
-        np.ascontiguousarray(e, dtype=np.float64), np.array(x0, dtype=np.float64),
+        np.ascontiguousarray(e, dtype=np.float64), np.ascontiguousarray(quad[0], dtype=np.int64),
+        np.ascontiguousarray(quad[1], dtype=np.float64),
+        np.ascontiguousarray(quad[2], dtype=np.float64), np.array(x0, dtype=np.float64),
         np.array(u0, dtype=np.float64), int(max_iter), float(tol))
     return X, U, int(status), int(it), float(f)

@@ -487,7 +487,7 @@ def _cell_rows(row: np.ndarray, col: np.ndarray, val: np.ndarray, nrows: int,
 
 
 def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
-               x_bar, u_bar, xv, nv, n):
+               x_bar, u_bar, xv, nv, n, quad=None):
     """One round by the banded interior-point method (:mod:`._ipm`) on the
     inequalities ``keep`` (of the static rows, then the jerk rows, as in
     ``b_in_all``): ``(z, time)`` with ``z`` the cone program's unknowns (only
@@ -533,8 +533,8 @@ def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, 
     else:
         x0, u0 = x_bar.copy(), u_bar.copy()
     x0[0], u0[0], x0[N], u0[N] = p.x0, p.u0, p.xN, p.uN
-    X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0)
-    if status != _ipm.ST_SOLVED:
+    X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0, quad)
+    if status not in (_ipm.ST_SOLVED, _ipm.ST_ALMOST):
         return None, math.nan
     z = np.zeros(nv)
     z[:n] = X
@@ -542,8 +542,8 @@ def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, 
     return z, f
 
 
-#: Use the banded interior-point method (:mod:`._ipm`) where it applies (numba
-#: installed, no curvature-coupled path acceleration); the cone solver otherwise.
+#: Use the banded interior-point method (:mod:`._ipm`) where numba is installed;
+#: the cone solver otherwise (and for a round the method does not solve).
 USE_IPM = True
 
 
@@ -746,7 +746,12 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     A_static, b_static = ineq.matrix(normalise=True)
     A_static = A_static.tocsr()
     st = A_static.tocoo()
-    use_ipm = USE_IPM and _ipm.AVAILABLE and kn.size == 0
+    use_ipm = USE_IPM and _ipm.AVAILABLE
+    # the path's acceleration with the curvature, as the method's quadratic rows
+    quad = None
+    if kn.size:
+        ka = np.asarray(p.kappa)[kn] / p.a_path
+        quad = (kn.astype(np.int64), ka * ka, np.full(kn.size, 1.0 / p.a_path**2))
     if use_ipm:
         s_cell, s_coef = _cell_rows(st.row, st.col, st.data, b_static.size, n)
     n_static = b_static.size
@@ -863,7 +868,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         for screen in range(SCREEN_PASSES):
             if ipm_round:
                 z_new, t_new = _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values[1:],
-                                          b_eq[6:], rest0, restN, D, wts, p, x_bar, u_bar, xv, nv, n)
+                                          b_eq[6:], rest0, restN, D, wts, p, x_bar, u_bar, xv, nv, n,
+                                          quad)
                 ipm_round = z_new is not None
             if not ipm_round:
                 A = layout.matrix(values, keep)
