@@ -133,3 +133,26 @@ def test_zero_length_lin_is_skipped(arm):
     run = run_motions(arm, [Lin(JointTarget(q0), 0.1)], q0)
     assert run.duration == 0.0 and run.segments == []
     assert math.isfinite(run.duration)
+
+
+def test_rotation_angle_is_accurate_at_small_angles():
+    """The angle between two orientations a tiny rotation apart, to a few 1e-16 rad
+    (an arccos of the quaternions' dot product resolves only about 1e-8 rad)."""
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        w, x, y, z = rng.normal(size=4)
+        n = math.sqrt(w * w + x * x + y * y + z * z)
+        q = np.array([w, x, y, z]) / n
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        for angle in (1e-10, 1e-7, 1e-4, 0.5, 3.0):
+            c, s = math.cos(angle / 2), math.sin(angle / 2)
+            r = np.concatenate([[c], s * axis])
+            w0, x0, y0, z0 = q
+            w1, x1, y1, z1 = r
+            q1 = np.array([w0 * w1 - x0 * x1 - y0 * y1 - z0 * z1,
+                           w0 * x1 + x0 * w1 + y0 * z1 - z0 * y1,
+                           w0 * y1 - x0 * z1 + y0 * w1 + z0 * x1,
+                           w0 * z1 + x0 * y1 - y0 * x1 + z0 * w1])
+            for a, b in ((q, q1), (q1, q), (q, -q1)):
+                assert rotation_angle(a, b) == pytest.approx(angle, rel=1e-6, abs=4e-16)

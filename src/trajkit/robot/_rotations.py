@@ -63,9 +63,19 @@ def matrix_from_quat(q: Any) -> np.ndarray:
 
 
 def rotation_angle(q0: Any, q1: Any) -> float:
-    """Angle [rad] of the shortest rotation between two unit quaternions."""
-    d = abs(float(np.dot(q0, q1)))
-    return 2.0 * math.acos(min(1.0, d))
+    """Angle [rad] of the shortest rotation between two unit quaternions.
+
+    From the relative rotation ``conj(q0) q1 = (c, v)``: ``2 atan2(|v|, |c|)``,
+    accurate to a few ulps at every angle (``2 acos(|c|)`` loses half the
+    digits near zero: about 1e-8 rad).
+    """
+    w0, x0, y0, z0 = (float(c) for c in q0)
+    w1, x1, y1, z1 = (float(c) for c in q1)
+    c = w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1
+    vx = w0 * x1 - w1 * x0 - (y0 * z1 - z0 * y1)
+    vy = w0 * y1 - w1 * y0 - (z0 * x1 - x0 * z1)
+    vz = w0 * z1 - w1 * z0 - (x0 * y1 - y0 * x1)
+    return 2.0 * math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), abs(c))
 
 
 def slerp(q0: Any, q1: Any, u: Any) -> np.ndarray:

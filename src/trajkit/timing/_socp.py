@@ -534,7 +534,7 @@ def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, 
         x0, u0 = x_bar.copy(), u_bar.copy()
     x0[0], u0[0], x0[N], u0[N] = p.x0, p.u0, p.xN, p.uN
     X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0, quad)
-    if status not in (_ipm.ST_SOLVED, _ipm.ST_ALMOST):
+    if status != _ipm.ST_SOLVED:
         return None, math.nan
     z = np.zeros(nv)
     z[:n] = X
