@@ -36,7 +36,7 @@ phase from rest, ``x_1 = 1.5 D_0 u_1`` and path jerk ``sqrt(u_1^3 / (6 D_0))``.
 
 Each round is solved by the banded interior-point method of :mod:`._ipm`
 (compiled with numba; the time minimised directly, no cone), or as the cone
-program by Clarabel where that method does not apply or does not converge.
+program by Clarabel where numba is missing or that method does not converge.
 
 Pure math: arrays in, arrays out.
 """
