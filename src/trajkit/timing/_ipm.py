@@ -40,8 +40,7 @@ import numpy as np
 
 from ..profiles._compile import ENABLED, numba
 
-__all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_ALMOST", "ST_MAXITER", "ST_FAILED",
-           "solve_round"]
+__all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_MAXITER", "ST_FAILED", "solve_round"]
 
 #: Stopping tolerance: relative primal and dual residuals and the complementarity
 #: gap over the objective.
@@ -49,12 +48,6 @@ IPM_TOL = 1e-8
 
 #: Iterations at most (a solved round takes 9-48).
 IPM_MAX_ITER = 60
-
-#: A run that stops (no step possible, or the iterations used up) counts as
-#: almost solved when its primal residual and gap are below ALMOST_TOL and its
-#: dual residual below ALMOST_TOL_DUAL (as a cone solver's reduced tolerances).
-ALMOST_TOL = 1e-6
-ALMOST_TOL_DUAL = 1e-4
 
 #: Regularisation of the quasi-definite system: a constant and a part proportional
 #: to its largest diagonal entry (the refinement steps remove its effect).
@@ -65,7 +58,6 @@ REG_PROP = 1e-30
 ST_SOLVED = 0
 ST_MAXITER = 1
 ST_FAILED = 2
-ST_ALMOST = 3
 
 #: The step goes this fraction of the way to the boundary at most.
 STEP_FRACTION = 0.99
@@ -258,7 +250,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     gpos, gcf, hh, gkeep, feas = _fold(cell, C, h, px, pu, X, U)
     epos, ecf, ee, ekeep, efeas = _fold(ecell, E, e, px, pu, X, U)
     if not (feas and efeas and ekeep.all()):
-        return X, U, ST_FAILED, 0, math.nan, math.inf, math.inf, math.inf
+        return X, U, ST_FAILED, 0, math.nan
     if not gkeep.all():
         idx = np.nonzero(gkeep)[0]
         gpos = gpos[idx]
@@ -278,7 +270,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         for j in range(mq):
             k = qnode[j]
             if px[k] < 0:
-                return X, U, ST_FAILED, 0, math.nan, math.inf, math.inf, math.inf
+                return X, U, ST_FAILED, 0, math.nan
             gpos2[ml + j, 0] = px[k]
             gpos2[ml + j, 1] = px[k]
             gpos2[ml + j, 2] = pu[k]
@@ -341,7 +333,6 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         en = max(en, abs(ee[j]))
     status = ST_MAXITER
     it = 0
-    pres = dres = gap = fval = math.inf
     while it < max_iter:
         # ---- residuals at the iterate; the objective's gradient and Hessian
         for k in range(1, N):
@@ -479,13 +470,10 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
             s[r] += alpha * ds[r]
             lam[r] += alpha * dl[r]
         it += 1
-    if (status != ST_SOLVED and pres < ALMOST_TOL and dres < ALMOST_TOL_DUAL
-            and gap < ALMOST_TOL * (1.0 + fval)):
-        status = ST_ALMOST
     for k in range(1, N):
         X[k] = z[px[k]]
         U[k] = z[pu[k]]
-    return X, U, status, it, _objective(X, w), pres, dres, gap / (1.0 + fval)
+    return X, U, status, it, _objective(X, w)
 
 
 @_jit
@@ -549,8 +537,8 @@ def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
     -------
     x, u : ndarray, shape (N + 1,)
     status : int
-        :data:`ST_SOLVED`, :data:`ST_ALMOST` (stopped within the reduced
-        tolerances), :data:`ST_MAXITER` or :data:`ST_FAILED`.
+        :data:`ST_SOLVED`, :data:`ST_MAXITER` or :data:`ST_FAILED` (the last
+        two: not converged; the engine then solves the round with Clarabel).
     iterations : int
     objective : float
     """
@@ -559,7 +547,7 @@ def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
         return np.array(x0, dtype=float), np.array(u0, dtype=float), ST_FAILED, 0, math.nan
     if quad is None:
         quad = (np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
-    X, U, status, it, f, _pres, _dres, _gap = _solve(
+    X, U, status, it, f = _solve(
         N, np.ascontiguousarray(w, dtype=np.float64), np.ascontiguousarray(cell, dtype=np.int64),
         np.ascontiguousarray(C, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
         np.ascontiguousarray(ecell, dtype=np.int64), np.ascontiguousarray(E, dtype=np.float64),
