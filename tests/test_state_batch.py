@@ -217,3 +217,32 @@ def test_sync_moves_on_when_step2_finds_no_profile(caplog):
     assert max(mins) == pytest.approx(10.0)
     assert t.duration > 13.86
     assert "step 2 found no profile" in caplog.text
+
+
+def test_phase_sums_are_correctly_rounded():
+    """The compiled loops' durations are ``math.fsum`` of the phase table (the
+    correctly rounded sum), on sums that cancel, tie and span 40 decades."""
+    import math
+
+    from trajkit.profiles import _batch_states as B
+    from trajkit.profiles import _kernel as K
+
+    rng = np.random.default_rng(5)
+    ws = K.workspace()
+    tricky = [1.0, 2.0**-53, 2.0**-54, 2.0**-106, -(2.0**-106), 3.0, 1e16, -1e16, 0.1]
+    for trial in range(20000):
+        n = int(rng.integers(0, K.NPH + 1))
+        kind = trial % 3
+        if kind == 0:
+            x = rng.random(n) * 10.0 ** rng.uniform(-6, 3, n)
+        elif kind == 1:
+            x = rng.standard_normal(n) * 10.0 ** rng.integers(-20, 20, n)
+        else:
+            x = rng.choice(tricky, n)
+        ws[K.OUT_PH:K.OUT_PH + 3 * n:3] = x
+        got = B.exact_sum(ws, K.OUT_PH, 3, n, K.SUM_SCRATCH)
+        assert got == math.fsum(x.tolist()), x.tolist()
+    b = plan_state_moves([(0.0, 0.3, -1.0), (2.0, 0.0, 0.0)], [(1.0, 0.0, 0.0), (-1.0, 0.2, 0.1)],
+                         1.0, 2.0, 7.0)
+    for i in range(2):
+        assert b.duration[i] == math.fsum(b.phases[i, :b.n_phases[i], 0].tolist())

@@ -163,22 +163,64 @@ def _store(ws, i, status, dur, tmin, nph, nbr, shape, ph):
         return
     nbr[i] = int(ws[K.OUT_NB])
     shape[i] = ws[K.OUT_SHAPE]
-    # the duration is the sum of the phases, compensated (as ``math.fsum`` in
-    # the one-axis planner)
-    tot = 0.0
-    comp = 0.0
     for k in range(n):
-        d = ws[K.OUT_PH + 3 * k]
-        ph[i, k, 0] = d
+        ph[i, k, 0] = ws[K.OUT_PH + 3 * k]
         ph[i, k, 1] = ws[K.OUT_PH + 3 * k + 1]
         ph[i, k, 2] = ws[K.OUT_PH + 3 * k + 2]
-        t = tot + d
-        if abs(tot) >= abs(d):
-            comp += (tot - t) + d
-        else:
-            comp += (d - t) + tot
-        tot = t
-    dur[i] = tot + comp if st == K.ST_OK else ws[K.OUT_T]
+    # the duration is the sum of the phases correctly rounded: the float
+    # ``math.fsum`` gives in the one-axis planner, bit for bit
+    dur[i] = exact_sum(ws, K.OUT_PH, 3, n, K.SUM_SCRATCH) if st == K.ST_OK else ws[K.OUT_T]
+
+
+@jit_raw
+def exact_sum(ws, first, stride, n, scratch):
+    """The correctly rounded sum of ``ws[first + stride * k]``, k < n (finite
+    values; ``n`` <= :data:`NPH`): the same float as ``math.fsum``, which
+    rounds the exact sum the same way (to nearest, ties to even).
+
+    Shewchuk's algorithm: the running sum is kept exactly as non-overlapping
+    partials (``ws[scratch:]``, in increasing magnitude); the result is
+    their sum from the largest down, with the tie case across partials
+    decided by the sign of the rest.
+    """
+    m = 0  # partials in use
+    for k in range(n):
+        x = ws[first + stride * k]
+        j = 0
+        for i in range(m):
+            y = ws[scratch + i]
+            if abs(x) < abs(y):
+                x, y = y, x
+            hi = x + y
+            lo = y - (hi - x)
+            if lo != 0.0:
+                ws[scratch + j] = lo
+                j += 1
+            x = hi
+        m = j
+        if x != 0.0:
+            ws[scratch + m] = x
+            m += 1
+    if m == 0:
+        return 0.0
+    m -= 1
+    hi = ws[scratch + m]
+    lo = 0.0
+    while m > 0:
+        x = hi
+        m -= 1
+        y = ws[scratch + m]
+        hi = x + y
+        lo = y - (hi - x)
+        if lo != 0.0:
+            break
+    if m > 0 and ((lo < 0.0 and ws[scratch + m - 1] < 0.0) or (lo > 0.0 and ws[scratch + m - 1] > 0.0)):
+        # the exact sum lies just past the halfway point hi + lo: round away
+        y = lo * 2.0
+        x = hi + y
+        if y == x - hi:
+            hi = x
+    return hi
 
 
 @jit_raw

@@ -130,7 +130,9 @@ _SFS = _SFC + NCF * NSF         # ... and its scratch
 #: Input: non-zero to plan with the general step 1 only (the closed form of
 #: symmetric limits off; for the tests that compare both).
 IN_GENERAL = _SFS + SF_SCRATCH
-NWS = IN_GENERAL + 1
+#: Scratch of the correctly rounded sum of a phase table (``_batch_states``).
+SUM_SCRATCH = IN_GENERAL + 1
+NWS = SUM_SCRATCH + NPH + 1
 
 
 def workspace() -> np.ndarray:

@@ -40,8 +40,6 @@ __all__ = ["plan_ptp_states", "STATE_SYNC_MODES", "COLLINEAR_RTOL"]
 
 _log = logging.getLogger("trajkit.sync")
 
-_fsum = math.fsum
-
 #: Accepted values of ``plan_ptp_states(..., sync=...)``.
 STATE_SYNC_MODES = SYNC_MODES
 
@@ -222,9 +220,9 @@ def _sync_time_compiled(S, G, lims, duration):
         # an axis with a position range: its profile is checked now (it may raise)
         return Trajectory(_state_axes(S, G, lims, table, tmins, nphs, nbrs, shapes), "time")
     # the profile objects are made when the axes are first used; the duration now
-    # (as Trajectory computes it: the longest of the axes' sums of phase durations)
-    durations = ph[:, :, 0].tolist()
-    longest = max(_fsum(row[:c]) for row, c in zip(durations, nphs))
+    # (as Trajectory computes it: the longest of the axes' durations, each the
+    # correctly rounded sum of its phases, which the kernel computed)
+    longest = max(dur.tolist())
     return Trajectory._deferred(
         partial(_state_axes, S, G, lims, table, tmins, nphs, nbrs, shapes), longest, "time")
 
