@@ -215,6 +215,31 @@ def test_blend_is_curvature_continuous_and_arc_length_exact():
             assert np.linalg.norm(pts - corner, axis=1).max() <= r * (1 + 1e-12)
 
 
+def test_compiled_blend_points_equal_the_numpy_steps():
+    """``BezierBlend.point`` (compiled when numba is there) and the numpy steps
+    (``u_of_s``, then the Bernstein sum) give the same points to round-off."""
+    from trajkit.robot import _bezier_jit
+    from trajkit.robot._pieces import _GL_W, _GL_X, BLEND_NEWTON
+
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        ta, tb = rng.normal(size=(2, 3))
+        ta /= np.linalg.norm(ta)
+        tb /= np.linalg.norm(tb)
+        if float(ta @ tb) < -0.95:
+            continue
+        r = float(rng.uniform(0.005, 0.05))
+        corner = rng.normal(size=3)
+        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+        s = np.concatenate([[0.0, bz.length, -1.0, 2.0 * bz.length], rng.uniform(0.0, bz.length, 500)])
+        ref_u = bz.u_of_s(s)
+        ref = BezierBlend._eval(bz.ctrl, ref_u)
+        pts, u = _bezier_jit.points_at(bz.ctrl, bz._u, bz._cum, _GL_X, _GL_W, BLEND_NEWTON, s)
+        assert np.abs(u - ref_u).max() < 1e-14
+        assert np.abs(pts - ref).max() < 1e-15 * max(1.0, float(np.abs(ref).max())) * 8
+        np.testing.assert_array_equal(bz.point(s), pts if _bezier_jit.AVAILABLE else ref)
+
+
 def test_blend_ends_are_g3_with_lines_and_arcs():
     """At both ends the blend has the piece's tangent and curvature vector, and the
     normal part of its third derivative by arc length is zero (that of a line or an

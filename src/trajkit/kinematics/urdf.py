@@ -26,7 +26,7 @@ from scipy.linalg.lapack import dposv as _dposv
 from .._validate import check_array, check_positive
 from ..errors import InvalidInputError, UnreachableError
 from ..limits import AxisLimits
-from . import _jets
+from . import _chain_jit, _jets
 from .base import PRISMATIC, REVOLUTE, Pose, RobotModel, _fmt_xyz
 
 try:  # pragma: no cover - depends on the install
@@ -363,6 +363,50 @@ class UrdfRobot(RobotModel):
         r_par, p_par = rots[int(frame.parentJoint)], poss[int(frame.parentJoint)]
         return (p_par + r_par @ np.array(frame.placement.translation),
                 r_par @ np.array(frame.placement.rotation))
+
+    def joint_taylor_many(self, q0: np.ndarray, pos: np.ndarray,
+                          rot: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """:func:`trajkit.kinematics._jets.joint_taylor` of this robot, compiled.
+
+        Parameters
+        ----------
+        q0 : ndarray, shape (n, n_joints)
+            Joints at the expansion points [rad or m].
+        pos, rot : ndarray, shapes (n, 4, 3), (n, 4, 3, 3)
+            Taylor coefficients of the tool position [m] and rotation.
+
+        Returns
+        -------
+        (qj, singular) as ``joint_taylor`` returns them, or None when the compiled
+        loop is not available (no numba, a chain the vectorised kinematics does
+        not cover, or a redundant robot): then ``joint_taylor`` with
+        :meth:`fk_jet` gives the same coefficients to round-off.
+        """
+        arrays = self._chain_arrays()
+        if arrays is None:
+            return None
+        return _chain_jit.chain_joint_taylor(
+            *arrays, np.ascontiguousarray(q0, dtype=np.float64),
+            np.ascontiguousarray(pos, dtype=np.float64), np.ascontiguousarray(rot, dtype=np.float64))
+
+    def _chain_arrays(self) -> tuple | None:
+        """The chain as the arrays of :func:`._chain_jit.chain_joint_taylor`, or None."""
+        if "_chain_arrays_cache" in self.__dict__:
+            return cast("tuple | None", self.__dict__["_chain_arrays_cache"])
+        chain = self._chain()
+        out: tuple | None = None
+        if chain is not None and _chain_jit.AVAILABLE and self.n_joints <= 6:
+            frame = self.model.frames[self.frame_id]
+            out = (np.array([c[0] for c in chain], dtype=np.int64),
+                   np.array([c[1] for c in chain], dtype=np.int64),
+                   np.array([c[2] for c in chain], dtype=np.float64).reshape(-1, 3, 3),
+                   np.array([c[3] for c in chain], dtype=np.float64).reshape(-1, 3),
+                   np.array([c[4] for c in chain], dtype=np.float64).reshape(-1, 3),
+                   np.array([c[5] for c in chain], dtype=np.bool_),
+                   int(frame.parentJoint), np.array(frame.placement.rotation, dtype=np.float64),
+                   np.array(frame.placement.translation, dtype=np.float64))
+        self._chain_arrays_cache = out
+        return out
 
     def ik_near_many(self, positions: np.ndarray, rotations: np.ndarray,
                      seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

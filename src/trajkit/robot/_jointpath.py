@@ -246,8 +246,12 @@ class ChainJointPath:
             pj[:, order] = dp / fact
             rj[:, order] = dr / fact
         q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s))
-        many = getattr(self.robot, "jacobian_many", None)
-        qj, singular = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
+        compiled = getattr(self.robot, "joint_taylor_many", None)
+        got = None if compiled is None else compiled(q, pj, rj)
+        if got is None:
+            many = getattr(self.robot, "jacobian_many", None)
+            got = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
+        qj, singular = got
         d1, d2, d3 = qj[:, 1], 2.0 * qj[:, 2], 6.0 * qj[:, 3]
         if singular.any():  # on a singularity: differences of the inverse kinematics there
             self._check_followable(np.flatnonzero(singular), q, pj, rj, k)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..paths.base import Path
+from . import _bezier_jit
 from ._rotations import SLERP_SMALL_ANGLE, rotation_angle, slerp
 
 __all__ = ["Piece", "BezierBlend", "BLEND_TABLE"]
@@ -262,7 +263,11 @@ class BezierBlend:
 
     def point(self, s: Any) -> np.ndarray:
         """Positions (n, 3) [m] at arc lengths ``s`` (n,) [m]."""
-        return self._eval(self.ctrl, self.u_of_s(np.atleast_1d(np.asarray(s, dtype=np.float64))))
+        s = np.atleast_1d(np.asarray(s, dtype=np.float64))
+        if _bezier_jit.AVAILABLE:  # the same steps, compiled
+            return _bezier_jit.points_at(self.ctrl, self._u, self._cum, _GL_X, _GL_W, BLEND_NEWTON,
+                                         np.ascontiguousarray(s.ravel()))[0]
+        return self._eval(self.ctrl, self.u_of_s(s))
 
 
 class Piece:

@@ -1,0 +1,280 @@
+"""Compiled joint jets of a serial chain: :func:`chain_joint_taylor`.
+
+The same mathematics as :func:`trajkit.kinematics._jets.joint_taylor` with the
+forward kinematics of a chain of revolute and prismatic joints (each with a
+fixed placement in its parent and a unit axis, as
+:meth:`trajkit.kinematics.urdf.UrdfRobot` reads them), point by point in one
+compiled loop instead of numpy passes over all the points: the jets of every
+joint frame (Taylor coefficients ``0 .. 3`` of rotation and position along the
+motion), the world-frame Jacobian, the singularity test on its singular
+values, and the joint coefficients order by order (the coefficient ``k`` of
+the tool pose is linear in ``q_k`` through the Jacobian, plus the lower
+coefficients' terms, which a jet pass with ``q_k = 0`` gives).
+
+Used only when numba is available (:data:`AVAILABLE`); otherwise the numpy
+version runs. Both give the same coefficients to round-off.
+
+Pure math: arrays in, arrays out.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..profiles._compile import ENABLED, numba
+from ._jets import COND_MAX, ORDER
+
+__all__ = ["AVAILABLE", "chain_joint_taylor"]
+
+#: True when the compiled loop is used (numba installed and not disabled).
+AVAILABLE = ENABLED
+
+_N = ORDER + 1
+
+
+def _jit(fn):
+    if not ENABLED:
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+@_jit
+def _frames(qj, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot):
+    """Jets of every joint frame for the joint jet ``qj`` (N, m).
+
+    ``R`` (J + 1, N, 3, 3), ``P`` (J + 1, N, 3): rotation and position jets of
+    frame 0 (the base) and of each joint's moving frame; ``W`` (J, 3), ``O``
+    (J, 3): each joint's world axis and the origin of its moving frame (the
+    constant coefficients), for the Jacobian. ``kx``, ``k2`` (J, 3, 3): the
+    skew matrix of each axis and its square; ``rj``, ``pj``, ``mot``: scratch.
+    """
+    nj = parent.shape[0]
+    R[0] = 0.0
+    P[0] = 0.0
+    for a in range(3):
+        R[0, 0, a, a] = 1.0
+    for i in range(nj):
+        pa = parent[i]
+        # the joint's fixed frame: parent frame times the placement
+        for k in range(_N):
+            for r in range(3):
+                s = 0.0
+                for c in range(3):
+                    s += R[pa, k, r, c] * t_pl[i, c]
+                pj[k, r] = P[pa, k, r] + s
+                for c in range(3):
+                    s = 0.0
+                    for b in range(3):
+                        s += R[pa, k, r, b] * r_pl[i, b, c]
+                    rj[k, r, c] = s
+        ax0, ax1, ax2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        for r in range(3):
+            W[i, r] = rj[0, r, 0] * ax0 + rj[0, r, 1] * ax1 + rj[0, r, 2] * ax2
+        x0 = qj[0, iq[i]]
+        x1 = qj[1, iq[i]]
+        x2 = qj[2, iq[i]]
+        x3 = qj[3, iq[i]]
+        if rev[i]:
+            # cos and sin jets of the angle (angle-sum formula on its non-constant part)
+            c0, s0 = np.cos(x0), np.sin(x0)
+            sd1, sd2, sd3 = x1, x2, x3 - x1 * x1 * x1 / 6.0
+            cd2, cd3 = -0.5 * x1 * x1, -x1 * x2
+            cj = (c0, -s0 * sd1, c0 * cd2 - s0 * sd2, c0 * cd3 - s0 * sd3)
+            sj = (s0, c0 * sd1, s0 * cd2 + c0 * sd2, s0 * cd3 + c0 * sd3)
+            # Rodrigues: I + sin K + (1 - cos) K^2
+            for k in range(_N):
+                for r in range(3):
+                    for c in range(3):
+                        mot[k, r, c] = sj[k] * kx[i, r, c] + (-cj[k]) * k2[i, r, c]
+            for r in range(3):
+                for c in range(3):
+                    mot[0, r, c] += k2[i, r, c] + (1.0 if r == c else 0.0)
+            for k in range(_N):
+                for r in range(3):
+                    for c in range(3):
+                        R[i + 1, k, r, c] = 0.0
+            for a in range(_N):
+                for b in range(_N - a):
+                    for r in range(3):
+                        for c in range(3):
+                            s = 0.0
+                            for e in range(3):
+                                s += rj[a, r, e] * mot[b, e, c]
+                            R[i + 1, a + b, r, c] += s
+            for k in range(_N):
+                for r in range(3):
+                    P[i + 1, k, r] = pj[k, r]
+        else:
+            xs = (x0, x1, x2, x3)
+            for k in range(_N):
+                for r in range(3):
+                    for c in range(3):
+                        R[i + 1, k, r, c] = rj[k, r, c]
+                    P[i + 1, k, r] = pj[k, r]
+            for a in range(_N):
+                for b in range(_N - a):
+                    for r in range(3):
+                        w = rj[b, r, 0] * ax0 + rj[b, r, 1] * ax1 + rj[b, r, 2] * ax2
+                        P[i + 1, a + b, r] += xs[a] * w
+        for r in range(3):
+            O[i, r] = P[i + 1, 0, r]
+
+
+@_jit
+def _tool(R, P, tpar, r_tool, t_tool, pt, rt):
+    """Tool position ``pt`` (N, 3) and rotation ``rt`` (N, 3, 3) jets from the
+    frame ``tpar`` and the tool's placement in it."""
+    for k in range(_N):
+        for r in range(3):
+            s = 0.0
+            for c in range(3):
+                s += R[tpar, k, r, c] * t_tool[c]
+            pt[k, r] = P[tpar, k, r] + s
+            for c in range(3):
+                s = 0.0
+                for b in range(3):
+                    s += R[tpar, k, r, b] * r_tool[b, c]
+                rt[k, r, c] = s
+
+
+#: Below this bound on the condition number (``|A|_F |A^-1|_F``, computed with
+#: the inverse) the Jacobian is certainly regular; at or above it the singular
+#: values decide (a factor of 100 below :data:`COND_MAX` for the inverse's
+#: round-off; for fewer than 6 joints the bound is on the normal matrix, whose
+#: condition number is the Jacobian's squared, kept where that is accurate).
+_FAST_COND = COND_MAX / 100.0
+_FAST_COND_NORMAL = 1e8
+
+
+@_jit
+def _singular(jac, lhs, square):
+    """The test of :func:`._jets.joint_taylor`: the Jacobian's condition number
+    (largest over smallest singular value) is not below :data:`COND_MAX`.
+    Decided by a cheap upper bound where that suffices, else by the SVD."""
+    if np.all(np.isfinite(lhs)) and np.linalg.det(lhs) != 0.0:  # (inv needs nonzero pivots)
+        inv = np.linalg.inv(lhs)
+        bound = np.sqrt(np.sum(lhs * lhs) * np.sum(inv * inv))
+        if bound < (_FAST_COND if square else _FAST_COND_NORMAL):
+            return False
+    sv = np.linalg.svd(jac)[1]
+    return not (sv[sv.size - 1] * COND_MAX > sv[0])
+
+
+@_jit
+def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, q0, pos, rot):
+    """Joint Taylor coefficients that follow a tool-pose jet, point by point.
+
+    Parameters
+    ----------
+    parent : ndarray of int64, shape (J,)
+        Frame each joint hangs from (0: the base, ``i + 1``: joint ``i``).
+    iq : ndarray of int64, shape (J,)
+        Configuration index of each joint.
+    r_pl, t_pl : ndarray, shapes (J, 3, 3), (J, 3)
+        Each joint's placement in its parent frame [-, m].
+    axis : ndarray, shape (J, 3)
+        Unit joint axes in the joint frames.
+    rev : ndarray of bool, shape (J,)
+        Revolute (else prismatic).
+    tpar : int
+        Frame the tool hangs from; ``r_tool``, ``t_tool`` (3, 3), (3,) its
+        placement there.
+    q0 : ndarray, shape (n, m)
+        Joints at the expansion points [rad or m].
+    pos, rot : ndarray, shapes (n, 4, 3), (n, 4, 3, 3)
+        Taylor coefficients of the tool position [m] and rotation.
+
+    Returns
+    -------
+    qj : ndarray, shape (n, 4, m)
+        ``q_0 .. q_3`` (``q_k = q^(k) / k!``); NaN beyond ``q_0`` where singular.
+    singular : ndarray of bool, shape (n,)
+        The Jacobian's condition number is above :data:`COND_MAX`.
+    """
+    n, m = q0.shape
+    nj = parent.shape[0]
+    qj = np.zeros((n, _N, m))
+    singular = np.zeros(n, dtype=np.bool_)
+    R = np.empty((nj + 1, _N, 3, 3))
+    P = np.empty((nj + 1, _N, 3))
+    W = np.empty((nj, 3))
+    O = np.empty((nj, 3))
+    rj = np.empty((_N, 3, 3))
+    pj = np.empty((_N, 3))
+    mot = np.empty((_N, 3, 3))
+    kx = np.zeros((nj, 3, 3))
+    for i in range(nj):
+        a0, a1, a2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        kx[i, 0, 1], kx[i, 0, 2], kx[i, 1, 2] = -a2, a1, -a0
+        kx[i, 1, 0], kx[i, 2, 0], kx[i, 2, 1] = a2, -a1, a0
+    k2 = np.empty((nj, 3, 3))
+    for i in range(nj):
+        k2[i] = kx[i] @ kx[i]
+    pt = np.empty((_N, 3))
+    rt = np.empty((_N, 3, 3))
+    jac = np.zeros((6, m))
+    jt = np.empty((m, 6))
+    lhs = np.empty((m, m))
+    rhs = np.empty(6)
+    dr = np.empty((3, 3))
+    x = np.empty((3, 3))
+    cur = np.zeros((_N, m))
+    for p in range(n):
+        cur[:] = 0.0
+        for j in range(m):
+            cur[0, j] = q0[p, j]
+            qj[p, 0, j] = q0[p, j]
+        _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot)
+        _tool(R, P, tpar, r_tool, t_tool, pt, rt)
+        jac[:] = 0.0
+        for i in range(nj):
+            c = iq[i]
+            w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
+            if rev[i]:
+                d0, d1, d2 = pt[0, 0] - O[i, 0], pt[0, 1] - O[i, 1], pt[0, 2] - O[i, 2]
+                jac[0, c] = w1 * d2 - w2 * d1
+                jac[1, c] = w2 * d0 - w0 * d2
+                jac[2, c] = w0 * d1 - w1 * d0
+                jac[3, c] = w0
+                jac[4, c] = w1
+                jac[5, c] = w2
+            else:
+                jac[0, c] = w0
+                jac[1, c] = w1
+                jac[2, c] = w2
+        for r in range(6):
+            for c in range(m):
+                jt[c, r] = jac[r, c]
+        if m == 6:
+            lhs[:] = jac
+        else:  # fewer joints: the normal equations
+            lhs[:] = jt @ jac
+        if _singular(jac, lhs, m == 6):
+            singular[p] = True
+            for k in range(1, _N):
+                for j in range(m):
+                    qj[p, k, j] = np.nan
+            continue
+        for k in range(1, _N):
+            if k > 1:  # the coefficient k of the motion so far (q_k still 0)
+                _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot)
+                _tool(R, P, tpar, r_tool, t_tool, pt, rt)
+            for r in range(3):
+                rhs[r] = pos[p, k, r] - (pt[k, r] if k > 1 else 0.0)
+                for c in range(3):
+                    dr[r, c] = rot[p, k, r, c] - (rt[k, r, c] if k > 1 else 0.0)
+            # the angular part: vee(dR R0^T)
+            for r in range(3):
+                for c in range(3):
+                    acc = 0.0
+                    for b in range(3):
+                        acc += dr[r, b] * rot[p, 0, c, b]
+                    x[r, c] = acc
+            rhs[3] = 0.5 * (x[2, 1] - x[1, 2])
+            rhs[4] = 0.5 * (x[0, 2] - x[2, 0])
+            rhs[5] = 0.5 * (x[1, 0] - x[0, 1])
+            sol = np.linalg.solve(lhs, rhs if m == 6 else jt @ rhs)
+            for j in range(m):
+                qj[p, k, j] = sol[j]
+                cur[k, j] = sol[j]
+    return qj, singular

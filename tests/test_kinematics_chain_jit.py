@@ -1,0 +1,93 @@
+"""The compiled joint jets of a serial chain (``UrdfRobot.joint_taylor_many``)
+against the numpy version (``_jets.joint_taylor`` with ``fk_jet``) and against
+the joint jet that made the tool-pose jet."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from arms import load_arm
+
+from trajkit.kinematics import _chain_jit, _jets
+
+pytest.importorskip("pinocchio")
+
+DATA = Path(__file__).parent / "data"
+
+#: A SCARA as a URDF: three revolute joints and a prismatic quill (4 joints: the
+#: least-squares branch of the jets, and a prismatic joint).
+SCARA_URDF = """<?xml version="1.0"?>
+<robot name="scara_test">
+  <link name="base"/><link name="l1"/><link name="l2"/><link name="l3"/><link name="tool"/>
+  <joint name="J1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.4" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-2.5" upper="2.5" velocity="3" effort="10"/></joint>
+  <joint name="J2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.3 0 0" rpy="0 0 0.2"/><axis xyz="0 0 1"/>
+    <limit lower="-2.5" upper="2.5" velocity="3" effort="10"/></joint>
+  <joint name="J3" type="prismatic"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.25 0 0" rpy="0 0 0"/><axis xyz="0 0 -1"/>
+    <limit lower="0" upper="0.2" velocity="1" effort="10"/></joint>
+  <joint name="J4" type="revolute"><parent link="l3"/><child link="tool"/>
+    <origin xyz="0 0.01 -0.05" rpy="0.1 0 0"/><axis xyz="0 0.6 0.8"/>
+    <limit lower="-3" upper="3" velocity="5" effort="10"/></joint>
+</robot>
+"""
+
+
+def _robot(name, tmp_path):
+    from trajkit.kinematics.urdf import UrdfRobot
+
+    if name == "arm6_urdf":
+        return UrdfRobot(str(DATA / "arm6_test.urdf"), "tool0")
+    if name == "scara_urdf":
+        path = tmp_path / "scara.urdf"
+        path.write_text(SCARA_URDF)
+        return UrdfRobot(str(path), "tool")
+    return load_arm(name)
+
+
+@pytest.mark.parametrize("name", ["ur5", "arm6_urdf", "scara_urdf"])
+def test_compiled_joint_jets_recover_the_joint_motion(name, tmp_path):
+    if not _chain_jit.AVAILABLE:
+        pytest.skip("numba is not available: the numpy version is the only one")
+    robot = _robot(name, tmp_path)
+    m = robot.n_joints
+    rng = np.random.default_rng(11)
+    n = 200
+    qj = np.zeros((n, 4, m))
+    qj[:, 0] = rng.uniform(-2.0, 2.0, (n, m))
+    if name == "scara_urdf":
+        qj[:, 0, 2] = rng.uniform(0.01, 0.19, n)
+    qj[:, 1:] = rng.standard_normal((n, 3, m))
+    pos, rot = robot.fk_jet(qj)
+    got, sing = robot.joint_taylor_many(qj[:, 0], pos, rot)
+    jac = robot.jacobian_many(qj[:, 0])
+    ref, sing_ref = _jets.joint_taylor(robot.fk_jet, qj[:, 0], pos, rot, jac)
+    assert got.shape == (n, 4, m)
+    np.testing.assert_array_equal(sing, sing_ref)
+    sv = np.linalg.svd(jac, compute_uv=False)
+    good = sv[:, 0] < 1e3 * sv[:, -1]  # well-conditioned: round-off stays small
+    assert good.sum() > n // 2
+    for out in (got, ref):  # both recover the joint jet that made the pose jet
+        err = np.abs(out[good] - qj[good]).max(axis=(1, 2)) / np.abs(qj[good]).max(axis=(1, 2))
+        assert err.max() < 1e-9
+    np.testing.assert_array_equal(got[:, 0], qj[:, 0])
+
+
+def test_compiled_joint_jets_flag_the_singular_points():
+    if not _chain_jit.AVAILABLE:
+        pytest.skip("numba is not available: the numpy version is the only one")
+    robot = load_arm("ur5")
+    q = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0],           # stretched, wrist aligned
+                  [0.0, -np.pi / 2, 0.0, -np.pi / 2, 0.0, 0.0],
+                  [0.0, -1.2, 1.5, -1.87, -1.57, 0.0],       # regular
+                  [0.0, -1.2, 1.5, -1.87, 1e-13, 0.0]])       # wrist singular to 1e-13
+    qj = np.concatenate([q[:, None], np.full((4, 3, 6), 0.1)], axis=1)
+    pos, rot = robot.fk_jet(qj)
+    got, sing = robot.joint_taylor_many(q, pos, rot)
+    _ref, sing_ref = _jets.joint_taylor(robot.fk_jet, q, pos, rot)
+    assert sing.tolist() == sing_ref.tolist() == [True, True, False, True]
+    assert np.isnan(got[sing, 1:]).all() and np.isfinite(got[~sing]).all()
