@@ -91,3 +91,36 @@ def test_compiled_joint_jets_flag_the_singular_points():
     _ref, sing_ref = _jets.joint_taylor(robot.fk_jet, q, pos, rot)
     assert sing.tolist() == sing_ref.tolist() == [True, True, False, True]
     assert np.isnan(got[sing, 1:]).all() and np.isfinite(got[~sing]).all()
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "scara_urdf"])
+def test_compiled_batch_ik_equals_the_numpy_steps(name, tmp_path):
+    """``ik_near_many``'s Newton steps compiled and in numpy: the same solutions
+    to round-off (well-conditioned poses), the same poses left to the one-by-one
+    solver (seeds too far), and every solution on its pose."""
+    if not _chain_jit.AVAILABLE:
+        pytest.skip("numba is not available: the numpy version is the only one")
+    robot = _robot(name, tmp_path)
+    rng = np.random.default_rng(4)
+    lo, hi = robot.joint_ranges[:, 0], robot.joint_ranges[:, 1]
+    n = 300
+    qt = rng.uniform(np.maximum(lo, -2.0), np.minimum(hi, 2.0), (n, robot.n_joints))
+    pos, rot, jac = robot._fk_jacobian_many(qt)
+    seeds = np.clip(qt + rng.normal(0.0, 1e-8, qt.shape), lo, hi)
+    seeds[::10] = np.clip(qt[::10] + 0.05, lo, hi)  # too far for the batch
+    got, ok = robot.ik_near_many(pos, rot, seeds)
+    arrays = robot._chain_arrays()
+    robot._chain_arrays_cache = None  # the numpy steps
+    try:
+        ref, ok_ref = robot.ik_near_many(pos, rot, seeds)
+    finally:
+        robot._chain_arrays_cache = arrays
+    np.testing.assert_array_equal(ok, ok_ref)
+    sv = np.linalg.svd(jac, compute_uv=False)
+    good = ok & (sv[:, 0] < 1e3 * sv[:, -1])
+    assert good.sum() > n // 2
+    np.testing.assert_allclose(got[good], ref[good], rtol=0, atol=1e-12)
+    for i in np.flatnonzero(good)[:40]:
+        pose = robot.fk(got[i])
+        assert np.abs(pose.position - pos[i]).max() < 1e-10
+        assert np.abs(pose.rotation - rot[i]).max() < 1e-10

@@ -1,4 +1,5 @@
-"""Compiled joint jets of a serial chain: :func:`chain_joint_taylor`.
+"""Compiled kinematics of a serial chain: joint jets (:func:`chain_joint_taylor`)
+and the batch inverse kinematics' Newton steps (:func:`chain_ik_near`).
 
 The same mathematics as :func:`trajkit.kinematics._jets.joint_taylor` with the
 forward kinematics of a chain of revolute and prismatic joints (each with a
@@ -24,7 +25,7 @@ import numpy as np
 from ..profiles._compile import ENABLED, numba
 from ._jets import COND_MAX, ORDER
 
-__all__ = ["AVAILABLE", "chain_joint_taylor"]
+__all__ = ["AVAILABLE", "chain_joint_taylor", "chain_ik_near"]
 
 #: True when the compiled loop is used (numba installed and not disabled).
 AVAILABLE = ENABLED
@@ -278,3 +279,169 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
                 qj[p, k, j] = sol[j]
                 cur[k, j] = sol[j]
     return qj, singular
+
+
+@_jit
+def _mat3(a, b, out):
+    """``out = a @ b`` for 3 x 3 arrays (explicit loops: no BLAS call)."""
+    for r in range(3):
+        for c in range(3):
+            out[r, c] = a[r, 0] * b[0, c] + a[r, 1] * b[1, c] + a[r, 2] * b[2, c]
+
+
+@_jit
+def _pose(q, parent, iq, r_pl, t_pl, axis, k1, k2, rev, tpar, r_tool, t_tool, R, P, W, O, pt, rt,
+          rj, mot):
+    """Forward kinematics at ``q`` (m,): every joint frame (``R``, ``P`` of
+    shapes (J + 1, 3, 3), (J + 1, 3)), each joint's world axis ``W`` and moving
+    frame origin ``O`` (J, 3), the tool's position ``pt`` (3,) and rotation
+    ``rt`` (3, 3); ``rj``, ``mot`` (3, 3): scratch."""
+    nj = parent.shape[0]
+    R[0] = 0.0
+    P[0] = 0.0
+    for a in range(3):
+        R[0, a, a] = 1.0
+    for i in range(nj):
+        pa = parent[i]
+        _mat3(R[pa], r_pl[i], rj)
+        x = q[iq[i]]
+        for r in range(3):
+            P[i + 1, r] = P[pa, r] + (R[pa, r, 0] * t_pl[i, 0] + R[pa, r, 1] * t_pl[i, 1]
+                                      + R[pa, r, 2] * t_pl[i, 2])
+            W[i, r] = rj[r, 0] * axis[i, 0] + rj[r, 1] * axis[i, 1] + rj[r, 2] * axis[i, 2]
+        if rev[i]:
+            c, s = np.cos(x), np.sin(x)
+            for r in range(3):  # Rodrigues
+                for cc in range(3):
+                    mot[r, cc] = (1.0 if r == cc else 0.0) + s * k1[i, r, cc] + (1.0 - c) * k2[i, r, cc]
+            _mat3(rj, mot, R[i + 1])
+        else:
+            R[i + 1] = rj
+            for r in range(3):
+                P[i + 1, r] += W[i, r] * x
+        for r in range(3):
+            O[i, r] = P[i + 1, r]
+    for r in range(3):
+        pt[r] = P[tpar, r] + (R[tpar, r, 0] * t_tool[0] + R[tpar, r, 1] * t_tool[1]
+                              + R[tpar, r, 2] * t_tool[2])
+    _mat3(R[tpar], r_tool, rt)
+
+
+@_jit
+def chain_ik_near(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, positions, rotations,
+                  seeds, lo, hi, scale, damping, entry, max_iter, tol, max_step):
+    """Damped least-squares IK steps of many poses from seeds close to them.
+
+    For each pose: the pose error in the tool frame (position times
+    ``scale[:3]``, the rotation's vector part times ``scale[3:]``); a seed whose
+    error is at least ``entry``, or whose rotation is not on the principal
+    branch (trace of the relative rotation <= 1), is left to the caller. Then
+    steps ``dq = J^T (J J^T + damping)^-1 e`` (tool-frame Jacobian with the rows
+    scaled), at most ``max_step`` per joint, clipped to ``[lo, hi]``, until the
+    error before a step is below ``tol`` (that step, the polishing one,
+    included), at most ``max_iter`` steps.
+
+    Returns
+    -------
+    q : ndarray, shape (n, m)
+        The final joints (the seeds where not converged).
+    ok : ndarray of bool, shape (n,)
+        Converged.
+    """
+    n, m = seeds.shape
+    nj = parent.shape[0]
+    k1 = np.zeros((nj, 3, 3))
+    for i in range(nj):
+        a0, a1, a2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        k1[i, 0, 1], k1[i, 0, 2], k1[i, 1, 2] = -a2, a1, -a0
+        k1[i, 1, 0], k1[i, 2, 0], k1[i, 2, 1] = a2, -a1, a0
+    k2 = np.empty((nj, 3, 3))
+    for i in range(nj):
+        k2[i] = k1[i] @ k1[i]
+    R = np.empty((nj + 1, 3, 3))
+    P = np.empty((nj + 1, 3))
+    W = np.empty((nj, 3))
+    O = np.empty((nj, 3))
+    pt = np.empty(3)
+    rt = np.empty((3, 3))
+    jw = np.zeros((6, m))
+    js = np.empty((6, m))
+    es = np.empty(6)
+    out = seeds.copy()
+    ok = np.zeros(n, dtype=np.bool_)
+    q = np.empty(m)
+    rj = np.empty((3, 3))
+    mot = np.empty((3, 3))
+    rel = np.empty((3, 3))
+    lin = np.empty(3)
+    A = np.empty((6, 6))
+    dq = np.empty(m)
+    for p in range(n):
+        for j in range(m):
+            q[j] = seeds[p, j]
+        for it in range(max_iter):
+            _pose(q, parent, iq, r_pl, t_pl, axis, k1, k2, rev, tpar, r_tool, t_tool,
+                  R, P, W, O, pt, rt, rj, mot)
+            # the error in the tool frame: rt^T (target - current), vee(rt^T R_target)
+            for r in range(3):
+                lin[r] = (rt[0, r] * (positions[p, 0] - pt[0]) + rt[1, r] * (positions[p, 1] - pt[1])
+                          + rt[2, r] * (positions[p, 2] - pt[2]))
+                for c in range(3):
+                    rel[r, c] = (rt[0, r] * rotations[p, 0, c] + rt[1, r] * rotations[p, 1, c]
+                                 + rt[2, r] * rotations[p, 2, c])
+            es[0] = lin[0] * scale[0]
+            es[1] = lin[1] * scale[1]
+            es[2] = lin[2] * scale[2]
+            es[3] = 0.5 * (rel[2, 1] - rel[1, 2]) * scale[3]
+            es[4] = 0.5 * (rel[0, 2] - rel[2, 0]) * scale[4]
+            es[5] = 0.5 * (rel[1, 0] - rel[0, 1]) * scale[5]
+            err = 0.0
+            for r in range(6):
+                err = max(err, abs(es[r]))
+            if it == 0 and not (err < entry and rel[0, 0] + rel[1, 1] + rel[2, 2] > 1.0):
+                break
+            # the world-frame Jacobian, then the tool frame's, rows scaled
+            jw[:] = 0.0
+            for i in range(nj):
+                c = iq[i]
+                w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
+                if rev[i]:
+                    d0, d1, d2 = pt[0] - O[i, 0], pt[1] - O[i, 1], pt[2] - O[i, 2]
+                    jw[0, c] = w1 * d2 - w2 * d1
+                    jw[1, c] = w2 * d0 - w0 * d2
+                    jw[2, c] = w0 * d1 - w1 * d0
+                    jw[3, c] = w0
+                    jw[4, c] = w1
+                    jw[5, c] = w2
+                else:
+                    jw[0, c] = w0
+                    jw[1, c] = w1
+                    jw[2, c] = w2
+            for h in range(2):
+                for r in range(3):
+                    for c in range(m):
+                        js[3 * h + r, c] = (rt[0, r] * jw[3 * h, c] + rt[1, r] * jw[3 * h + 1, c]
+                                            + rt[2, r] * jw[3 * h + 2, c]) * scale[3 * h + r]
+            for r in range(6):
+                for c in range(6):
+                    acc = damping[r, c]
+                    for j in range(m):
+                        acc += js[r, j] * js[c, j]
+                    A[r, c] = acc
+            y = np.linalg.solve(A, es)
+            step = 0.0
+            for j in range(m):
+                acc = 0.0
+                for r in range(6):
+                    acc += js[r, j] * y[r]
+                dq[j] = acc
+                step = max(step, abs(acc))
+            f = max_step / step if step > max_step else 1.0
+            for j in range(m):
+                q[j] = min(max(q[j] + (dq[j] * f if f != 1.0 else dq[j]), lo[j]), hi[j])
+            if err < tol:  # this step was the polishing one
+                ok[p] = True
+                for j in range(m):
+                    out[p, j] = q[j]
+                break
+    return out, ok

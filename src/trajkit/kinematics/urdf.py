@@ -383,7 +383,7 @@ class UrdfRobot(RobotModel):
         :meth:`fk_jet` gives the same coefficients to round-off.
         """
         arrays = self._chain_arrays()
-        if arrays is None:
+        if arrays is None or self.n_joints > 6:
             return None
         return _chain_jit.chain_joint_taylor(
             *arrays, np.ascontiguousarray(q0, dtype=np.float64),
@@ -395,7 +395,7 @@ class UrdfRobot(RobotModel):
             return cast("tuple | None", self.__dict__["_chain_arrays_cache"])
         chain = self._chain()
         out: tuple | None = None
-        if chain is not None and _chain_jit.AVAILABLE and self.n_joints <= 6:
+        if chain is not None and _chain_jit.AVAILABLE:
             frame = self.model.frames[self.frame_id]
             out = (np.array([c[0] for c in chain], dtype=np.int64),
                    np.array([c[1] for c in chain], dtype=np.int64),
@@ -442,7 +442,15 @@ class UrdfRobot(RobotModel):
         q = seeds.copy()
         ok = np.zeros(n, dtype=bool)
         lo, hi, scale, damping = self._ik_constants()
-        active = np.arange(n) if self._chain() is not None else np.zeros(0, dtype=int)
+        arrays = self._chain_arrays()
+        if arrays is not None:  # the same steps, compiled
+            q, ok = _chain_jit.chain_ik_near(
+                *arrays, np.ascontiguousarray(positions, dtype=np.float64),
+                np.ascontiguousarray(rotations, dtype=np.float64), np.ascontiguousarray(seeds),
+                lo, hi, scale, damping, IK_BATCH_ENTRY, IK_BATCH_ITER, IK_TOL, IK_MAX_STEP)
+            active = np.zeros(0, dtype=int)
+        else:
+            active = np.arange(n) if self._chain() is not None else np.zeros(0, dtype=int)
         for it in range(IK_BATCH_ITER):
             if not active.size:
                 break
