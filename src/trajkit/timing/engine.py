@@ -26,9 +26,10 @@ Steps:
    to a limit); on a path without cheap derivatives it evaluates the true
    derivatives at :data:`VERIFY_POINTS` of every cell where it comes within
    :data:`VERIFY_ABOVE` of a limit and corrects the interpolation there
-   (``_Corrected``). Any excess left is removed by slowing the whole motion
-   down uniformly (time scaled by ``k``: velocities / k, accelerations / k^2,
-   jerks / k^3), which always succeeds.
+   (``_Corrected``). The checks run compiled (:mod:`trajkit.timing._checks`)
+   when numba is installed. Any excess left is removed by slowing the whole
+   motion down uniformly (time scaled by ``k``: velocities / k, accelerations
+   / k^2, jerks / k^3), which always succeeds.
 
 Optimality: the result is a stationary point of the grid problem (the rounds
 stop when the time changes by less than :data:`ROUND_RTOL`); the
@@ -38,6 +39,7 @@ jerk-free optimum on the same grid is reported beside it as a lower bound
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -50,6 +52,7 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import plan_move
 from ..profiles._pieces import eval_pieces
+from . import _checks
 from ._hermite import hermite_pieces
 from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, solve_grid
 from .paths import JointPath
@@ -730,6 +733,9 @@ def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None)
     Returns ``(rv, ra, rj)`` (n, m), the speed-cap ratio (n,), the path
     acceleration norm (n,), the path jerk (n,), the grid cell (n,), ``s`` (n,)
     and ``qd * qdd`` (n, m).
+
+    The numpy formulation: the checks use it when numba is not installed
+    (:func:`_evaluate_compiled` otherwise).
     """
     p0, v0, a0, jk = st[piece, 0], st[piece, 1], st[piece, 2], jerk[piece]
     S = p0 + dt * (v0 + dt * (0.5 * a0 + dt * jk / 6.0))
@@ -798,28 +804,109 @@ def _use_of(lim: _Limits, rv, ra, rj, rs, acc_norm, jk) -> LimitUse:
                     rj.max(axis=0, initial=0.0), a_use, j_use, float(rs.max(initial=0.0)))
 
 
-def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None):
+def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
+    """The limit ratios of :func:`_evaluate` at the times ``t[piece] + dt`` of the pieces,
+    in one pass of the kernel :func:`._checks.sample_ratios` (the same results to a
+    few ulps), with their :class:`LimitUse`.
+
+    The derivatives come from the grid (``path`` None, an :class:`_Interp` on
+    ``s_grid`` or a :class:`_Corrected`) inside the kernel, or from
+    ``path.derivatives`` (a path with cheap derivatives) at the samples.
+
+    Returns the LimitUse and, per sample (n,), the grid cell, ``rv, ra, rj``
+    (n, m), the speed-cap ratio and the largest of the sample's ratios.
+    """
+    m = lim.vlim.size
+    k = jerk.size
+    f64 = np.float64
+    s_grid = np.ascontiguousarray(s_grid, dtype=f64)
+    t = np.ascontiguousarray(t, dtype=f64)
+    st = np.ascontiguousarray(st, dtype=f64)
+    jerk = np.ascontiguousarray(jerk, dtype=f64)
+    piece = np.ascontiguousarray(piece, dtype=np.int64)
+    dt = np.ascontiguousarray(dt, dtype=f64)
+    tol = REST_RTOL * lim.vlim
+    empty = np.zeros(0)
+    none2 = np.zeros((0, m))
+    mid = np.zeros((k, m))
+    have = np.zeros(k, dtype=bool)
+    done = np.zeros(0, dtype=bool)
+    err = np.zeros((0, len(VERIFY_POINTS), 3, m))
+    xs = np.concatenate([[0.0], VERIFY_POINTS, [1.0]])
+    grid_source = path is None or (isinstance(path, _Interp) and path.s is s_grid)
+    S = S_eval = empty
+    if not grid_source:
+        S, S_eval, _, _, _ = _checks.sample_states(t, st, jerk, s_grid, piece, dt)
+    elif lim.cap is not None and lim.cap_fn is not None:
+        S = _checks.sample_positions(t, st, jerk, s_grid, piece, dt)
+    if grid_source:
+        d = der[1:] if path is None else path.der[1:]
+        r = [x[1:] for x in d] if path is None else path.right
+        d1, d2, d3, r1, r2, r3 = (np.ascontiguousarray(x, dtype=f64) for x in (*d, *r))
+        F1 = F2 = F3 = none2
+        if isinstance(path, _Corrected):
+            done, err = path.done, np.ascontiguousarray(path.err, dtype=f64)
+    else:  # the path's own derivatives at the samples (and the pieces' middles)
+        d1 = d2 = d3 = r1 = r2 = r3 = none2
+        F1, F2, F3 = (np.ascontiguousarray(x, dtype=f64) for x in path.derivatives(S_eval)[1:])
+        rest = np.nonzero(_checks.rest_pieces(F1, t, st, jerk, s_grid, piece, dt, tol, k))[0]
+        if rest.size:
+            _, Sm, Vm, Am, _ = _checks.sample_states(t, st, jerk, s_grid, rest, 0.5 * np.diff(t)[rest])
+            _, g1, g2, _ = path.derivatives(Sm)
+            mid[rest] = _checks.mid_products(np.ascontiguousarray(g1, dtype=f64),
+                                             np.ascontiguousarray(g2, dtype=f64), Vm, Am, tol)
+            have[rest] = True
+    kappa = empty if lim.kappa is None else np.ascontiguousarray(lim.kappa, dtype=f64)
+    cap = empty if lim.cap is None else np.ascontiguousarray(lim.cap, dtype=f64)
+    cap_s = empty if (lim.cap is None or lim.cap_fn is None) else \
+        np.ascontiguousarray(lim.cap_fn(S), dtype=f64)
+    cell, rv, ra, rj, rs, worst, peak, path_peak = _checks.sample_ratios(
+        t, st, jerk, s_grid, piece, dt, d1, d2, d3, r1, r2, r3, done, err, xs, F1, F2, F3,
+        np.ascontiguousarray(lim.vlim, dtype=f64), np.ascontiguousarray(lim.alim_acc, dtype=f64),
+        np.ascontiguousarray(lim.alim_dec, dtype=f64), np.ascontiguousarray(lim.jacc, dtype=f64),
+        np.ascontiguousarray(lim.jdec, dtype=f64), tol, kappa, cap, cap_s, mid, have)
+    a_use = float(path_peak[0] / lim.a_path) if math.isfinite(lim.a_path) else 0.0
+    j_use = float(path_peak[1] / lim.j_path) if math.isfinite(lim.j_path) else 0.0
+    use = LimitUse(peak[0], peak[1], peak[2], a_use, j_use, float(path_peak[2]))
+    return use, cell, rv, ra, rj, rs, worst
+
+
+def _max_use(a: LimitUse, b: LimitUse) -> LimitUse:
+    """The larger of two limit uses, ratio by ratio."""
+    return LimitUse(np.maximum(a.velocity, b.velocity), np.maximum(a.acceleration, b.acceleration),
+                    np.maximum(a.jerk, b.jerk), max(a.path_acceleration, b.path_acceleration),
+                    max(a.path_jerk, b.path_jerk), max(a.path_speed, b.path_speed))
+
+
+def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None,
+           compiled: bool = _checks.AVAILABLE):
     """Limit use at both ends of every piece and ``per_piece`` (default
     :data:`CHECK_PER_PIECE`) points inside it.
 
     Returns the LimitUse and, per sample, the grid cell, the joint ratios
-    ``rv, ra, rj`` (n, m) and the speed-cap ratio (n,); the samples run piece by
-    piece, ``per_piece + 2`` each."""
+    ``rv, ra, rj`` (n, m), the speed-cap ratio (n,) and the largest of the
+    sample's ratios (n,); the samples run piece by piece, ``per_piece + 2``
+    each. ``compiled``: by the kernel (:func:`_evaluate_compiled`), else by
+    :func:`_evaluate` (numpy)."""
     k = jerk.size
     frac = np.linspace(0.0, 1.0, (per_piece or CHECK_PER_PIECE) + 2)
     npp = frac.size
     piece = np.repeat(np.arange(k), npp)
     dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
     dt[npp - 1::npp] = np.diff(t)  # the piece's end exactly
+    if compiled:
+        return _evaluate_compiled(s_grid, der, t, st, jerk, lim, path, piece, dt)
     # in chunks of whole pieces (the arrays of a chunk stay in the cache)
     step = max(1, CHECK_CHUNK // npp) * npp
     parts = [_evaluate(s_grid, der, t, st, jerk, lim, path, piece[i:i + step], dt[i:i + step])[:7]
              for i in range(0, piece.size, step)]
     rv, ra, rj, rs, acc, jk, cell = (np.concatenate([pt[j] for pt in parts]) for j in range(7))
-    return _use_of(lim, rv, ra, rj, rs, acc, jk), cell, rv, ra, rj, rs
+    worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)
+    return _use_of(lim, rv, ra, rj, rs, acc, jk), cell, rv, ra, rj, rs, worst
 
 
-def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp: int) -> LimitUse:
+def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp: int,
+          compiled: bool = _checks.AVAILABLE) -> LimitUse:
     """The largest limit ratios inside the pieces that come close to a limit, found by
     repeated bracketing around their largest sampled values.
 
@@ -829,7 +916,7 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
     neighbouring samples is sampled again with :data:`ZOOM_POINTS` points,
     :data:`ZOOM_LEVELS` times, each level narrowing the bracket by ``(ZOOM_POINTS
     - 1) / 2``: a smooth maximum inside a piece is found to within the square of a
-    tiny fraction of the piece's duration.
+    tiny fraction of the piece's duration. ``compiled`` as for :func:`_check`.
     """
     k = jerk.size
     m = lim.vlim.size
@@ -849,6 +936,7 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
     dur = np.diff(t)[pieces]
     u = np.linspace(-1.0, 1.0, ZOOM_POINTS)
     found = []
+    uses = []
     rows = np.arange(pieces.size)
     for _level in range(ZOOM_LEVELS):
         frac = np.clip(centre[:, None] + half[:, None] * u[None, :], 0.0, 1.0)
@@ -856,12 +944,19 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
         dt = (dur[:, None] * frac).ravel()
         at_end = frac.ravel() >= 1.0
         dt[at_end] = np.repeat(dur, ZOOM_POINTS)[at_end]
-        out = _evaluate(s_grid, der, t, st, jerk, lim, path, pc, dt)
-        found.append(out[:6])
-        worst = np.max(np.column_stack([out[0], out[1], out[2], out[3][:, None]]), axis=1)
+        if compiled:
+            ev = _evaluate_compiled(s_grid, der, t, st, jerk, lim, path, pc, dt)
+            uses.append(ev[0])
+            worst = ev[6]
+        else:
+            out = _evaluate(s_grid, der, t, st, jerk, lim, path, pc, dt)
+            found.append(out[:6])
+            worst = np.max(np.column_stack([out[0], out[1], out[2], out[3][:, None]]), axis=1)
         best = np.argmax(worst.reshape(pieces.size, ZOOM_POINTS), axis=1)
         centre = frac[rows, best]
         half = half * 2.0 / (ZOOM_POINTS - 1)
+    if compiled:
+        return functools.reduce(_max_use, uses)
     cat = [np.concatenate([f[i] for f in found]) for i in range(6)]
     return _use_of(lim, *cat)
 
@@ -1042,8 +1137,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
             lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                           cap_fn if callable(speed) else None)
-            use, cell, rv, ra, rj, rs = _check(s, der, t, st, jk, lim,
-                                               exact if cheap else _Interp(s, der, breaks, left))
+            use, cell, rv, ra, rj, rs, _ = _check(s, der, t, st, jk, lim,
+                                                  exact if cheap else _Interp(s, der, breaks, left))
             k = _uniform_scale(use)
             # a timing that needs no uniform slow-down keeps its exact cruise speeds:
             # preferred unless a slowed one is clearly faster
@@ -1128,21 +1223,15 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left)
         src = exact if exact is not None else corrected
-        use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+        use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         if corrected is not None:
             # the true derivatives in the cells that come close to a limit, then again
-            near = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1) > 1.0 - VERIFY_ABOVE
-            if corrected.add(_c[near]):
-                use, _c, rv, ra, rj, rs = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+            if corrected.add(_c[worst > 1.0 - VERIFY_ABOVE]):
+                use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
-        worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)
         zu = _zoom(s, der, t, st, jk, lim, src, worst, FINAL_CHECK_PER_PIECE + 2)
-        use = LimitUse(np.maximum(use.velocity, zu.velocity),
-                       np.maximum(use.acceleration, zu.acceleration),
-                       np.maximum(use.jerk, zu.jerk),
-                       max(use.path_acceleration, zu.path_acceleration),
-                       max(use.path_jerk, zu.path_jerk), max(use.path_speed, zu.path_speed))
+        use = _max_use(use, zu)
         extra = _uniform_scale(use)
         if extra <= 1.0:
             break
