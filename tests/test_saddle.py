@@ -254,3 +254,21 @@ def test_axis_states_chain_rule_matches_finite_differences_in_time():
         fd = (plan.axes(t + h)[:, order] - plan.axes(t - h)[:, order]) / (2 * h)
         scale = np.max(np.abs(st[:, order + 1]), axis=1, keepdims=True)
         assert np.all(np.abs(fd - st[:, order + 1]) <= 1e-4 * scale + 1e-9)
+
+
+def test_compiled_arc_length_inversion_equals_the_numpy_steps(monkeypatch):
+    """theta(s) by the compiled Newton loop and by the numpy one: the same angles to
+    a few ulps, on the four benchmark seams (offset and oblique ones included)."""
+    from trajkit.paths import _saddle_jit
+
+    rng = np.random.default_rng(3)
+    for R, r, ang, off in ((0.11, 0.1, 90, 0.0), (0.2, 0.1, 90, 0.0), (0.15, 0.1, 60, 0.0),
+                           (0.16, 0.1, 90, 0.04)):
+        curve = SaddleCurve(R, r, math.radians(ang), off)
+        s = np.concatenate([[0.0, curve.length], rng.uniform(0.0, curve.length, 3000)])
+        got = curve.theta_of_s(s)
+        monkeypatch.setattr(_saddle_jit, "AVAILABLE", False)
+        ref = curve.theta_of_s(s)
+        monkeypatch.setattr(_saddle_jit, "AVAILABLE", True)
+        assert np.abs(got - ref).max() <= 8 * np.spacing(2 * math.pi)
+        np.testing.assert_allclose(curve.s_of_theta(got), s, rtol=0, atol=1e-12)

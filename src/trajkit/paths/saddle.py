@@ -31,6 +31,7 @@ from scipy.special import roots_legendre
 
 from .._validate import check_finite, check_positive
 from ..errors import InvalidInputError
+from . import _saddle_jit
 from ._tolerances import (
     ARC_INVERSION_MAX_ITER,
     ARC_INVERSION_RTOL,
@@ -293,9 +294,14 @@ class SaddleCurve(Path):
 
     def _newton(self, ss: np.ndarray, th: np.ndarray) -> np.ndarray:
         k = np.clip(np.searchsorted(self._cum, ss, side="right") - 1, 0, len(self._edges) - 2)
+        tol = max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
+        if _saddle_jit.AVAILABLE:  # the same steps, compiled
+            return _saddle_jit.theta_newton(
+                np.ascontiguousarray(ss, dtype=np.float64), np.ascontiguousarray(th, dtype=np.float64),
+                k.astype(np.int64), self._edges, self._cum, self._gx, self._gw, self.branch_radius,
+                self.main_radius, self.offset, self._cot, self._sin, tol, ARC_INVERSION_MAX_ITER)
         a, b = self._edges[k], self._edges[k + 1]
         th = np.clip(th, a, b)
-        tol = max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
         for _ in range(ARC_INVERSION_MAX_ITER):
             res = self._partial(k, th) - ss
             th = np.clip(th - res / self.speed_theta(th), a, b)
