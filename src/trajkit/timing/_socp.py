@@ -43,6 +43,7 @@ Pure math: arrays in, arrays out.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -803,12 +804,16 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     jnode = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=np.int64)
     n_jerk, j_rows, j_cols = _JerkRows.pattern(jcell, jnode, n)
     node_in = np.concatenate([node_static, jcell, jnode])
-    layout = _Layout(nv, [(n_eq, np.concatenate(eq_rows), np.concatenate(eq_cols)),
-                          (n_static + n_jerk, np.concatenate([st.row, n_static + j_rows]),
-                           np.concatenate([st.col, j_cols])),
-                          (both.size, np.arange(both.size), both),
-                          (3 * nf + 3 * N, np.concatenate([cone_r, r2]), np.concatenate([cone_c, c2])),
-                          acc_block], select=1)
+
+    @functools.cache
+    def layout() -> _Layout:
+        """The cone program's sparsity pattern (made when the cone solver takes a round)."""
+        return _Layout(nv, [(n_eq, np.concatenate(eq_rows), np.concatenate(eq_cols)),
+                            (n_static + n_jerk, np.concatenate([st.row, n_static + j_rows]),
+                             np.concatenate([st.col, j_cols])),
+                            (both.size, np.arange(both.size), both),
+                            (3 * nf + 3 * N, np.concatenate([cone_r, r2]), np.concatenate([cone_c, c2])),
+                            acc_block], select=1)
     nn_values = -np.ones(both.size)
     no_jerk = np.zeros(j_rows.size)
 
@@ -872,7 +877,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
                                           quad)
                 ipm_round = z_new is not None
             if not ipm_round:
-                A = layout.matrix(values, keep)
+                A = layout().matrix(values, keep)
                 b_in = b_in_all[keep]
                 b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
                 cones = [clarabel.ZeroConeT(n_eq),
