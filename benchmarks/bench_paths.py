@@ -302,7 +302,11 @@ def main(argv=None) -> int:
         rw = [r["ratio"] for r in wps if r["blend"] == blend]
         print(f"waypoints, blend {blend:g} rad: {100 * (1 - statistics.mean(rw)):.1f} % shorter than "
               f"stopping (mean), worst {100 * (1 - max(rw)):.1f} %")
-    print(f"planning time / TOPP-RA's on the same grid: median {statistics.median(sp):.1f}x")
+    sa = [r["plan"] / r["peer"] for r in arms if r["peer"] > 0]
+    ss = [r["plan"] / r["peer"] for r in seams if r["peer"] > 0]
+    print(f"planning time / TOPP-RA's on the same grid: median {statistics.median(sp):.1f}x "
+          f"(arm motions {statistics.median(sa):.1f}x, range {min(sa):.1f}-{max(sa):.1f}x; "
+          f"seams {statistics.median(ss):.1f}x)")
     return 0
 
 
