@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..profiles._compile import ENABLED, numba
+from ..profiles._compile import ENABLED
+from ..profiles._compile import jit as _jit
 from ._jets import COND_MAX, ORDER
 
 __all__ = ["AVAILABLE", "chain_joint_taylor", "chain_ik_near"]
@@ -31,12 +32,6 @@ __all__ = ["AVAILABLE", "chain_joint_taylor", "chain_ik_near"]
 AVAILABLE = ENABLED
 
 _N = ORDER + 1
-
-
-def _jit(fn):
-    if not ENABLED:
-        return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 @_jit

@@ -16,18 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..profiles._compile import ENABLED, numba
+from ..profiles._compile import ENABLED
+from ..profiles._compile import jit as _jit
 
 __all__ = ["AVAILABLE", "theta_newton"]
 
 #: True when the compiled loop is used (numba installed and not disabled).
 AVAILABLE = ENABLED
-
-
-def _jit(fn):
-    if not ENABLED:
-        return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 @_jit

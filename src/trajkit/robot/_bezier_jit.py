@@ -3,10 +3,10 @@
 The same steps as :meth:`trajkit.robot._pieces.BezierBlend.u_of_s` (the
 arc-length table, then Newton steps on the arc length from the table node
 below, each integrated by Gauss-Legendre quadrature) and the curve's point
-there, point by point in one compiled loop; the curve and its derivative are
-evaluated by de Casteljau's algorithm, its speed by Horner's scheme on
-the derivative's power-basis coefficients. The same values as the numpy version
-to round-off. Used only when numba is available (:data:`AVAILABLE`).
+there, point by point in one compiled loop; the point by de Casteljau's
+algorithm, the speed |B'(u)| by Horner's scheme on the derivative's
+power-basis coefficients; a point's steps end early at a fixed point. The
+same values as the numpy version to round-off. Used only when numba is available (:data:`AVAILABLE`).
 
 Pure math: arrays in, arrays out.
 """
@@ -15,18 +15,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..profiles._compile import ENABLED, numba
+from ..profiles._compile import ENABLED
+from ..profiles._compile import jit as _jit
 
 __all__ = ["AVAILABLE", "points_at"]
 
 #: True when the compiled loop is used (numba installed and not disabled).
 AVAILABLE = ENABLED
-
-
-def _jit(fn):
-    if not ENABLED:
-        return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 @_jit

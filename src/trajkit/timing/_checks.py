@@ -41,14 +41,9 @@ import math
 import numpy as np
 
 from ..profiles._compile import ENABLED, numba
+from ..profiles._compile import jit as _jit
 
 __all__ = ["AVAILABLE", "sample_positions", "sample_states", "rest_pieces", "mid_products", "sample_ratios"]
-
-
-def _jit(fn):
-    if not ENABLED or numba is None:
-        return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 def _inline(fn):
