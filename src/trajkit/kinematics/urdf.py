@@ -390,7 +390,9 @@ class UrdfRobot(RobotModel):
             np.ascontiguousarray(pos, dtype=np.float64), np.ascontiguousarray(rot, dtype=np.float64))
 
     def _chain_arrays(self) -> tuple | None:
-        """The chain as the arrays of :func:`._chain_jit.chain_joint_taylor`, or None."""
+        """The chain as the arrays the compiled kinematics take
+        (:func:`._chain_jit.chain_joint_taylor`, :func:`._chain_jit.chain_ik_near`), or
+        None (no numba, or a chain the vectorised kinematics does not cover)."""
         if "_chain_arrays_cache" in self.__dict__:
             return cast("tuple | None", self.__dict__["_chain_arrays_cache"])
         chain = self._chain()
@@ -413,9 +415,10 @@ class UrdfRobot(RobotModel):
         """:meth:`ik_near` of many poses, vectorised where the seeds are close.
 
         The poses whose seed is within :data:`IK_BATCH_ENTRY` of its pose take
-        the IK's Newton steps all at once (the forward kinematics and Jacobians of
-        the chain vectorised over the poses, the pose error to first order, which
-        is exact to its square): steps until the error is below the tolerance,
+        the IK's Newton steps together (in one compiled loop over the chain where
+        numba is installed, else the forward kinematics and Jacobians vectorised
+        over the poses; the pose error to first order, which is exact to its
+        square): steps until the error is below the tolerance,
         then the one polishing step, as :meth:`ik_near` does. The others, and any
         not converged after :data:`IK_BATCH_ITER` steps, are solved one by one by
         :meth:`ik_near`'s solver from their seeds. The solutions are those of
