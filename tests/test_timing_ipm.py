@@ -165,3 +165,39 @@ def test_rounds_with_the_curvature_rows_equal_the_cone_solvers(monkeypatch):
     assert a.rounds == b.rounds
     np.testing.assert_allclose(a.history, b.history, rtol=2e-6)
     np.testing.assert_allclose(a.x, b.x, rtol=0, atol=2e-4 * float(np.max(b.x)))
+
+
+def test_interval_form_of_the_rows_equals_the_entry_by_entry_one():
+    """``_cell_rows`` (rows sorted as a CSR matrix runs, empty rows included, in
+    order or not) gives every row's interval and four coefficients as the
+    entry-by-entry accumulation does."""
+    rng = np.random.default_rng(12)
+    n = 40
+    for trial in range(200):
+        rows, cols, vals = [], [], []
+        nrows = int(rng.integers(1, 60))
+        for r in range(nrows):
+            if rng.random() < 0.1:
+                continue  # a row without entries
+            i = int(rng.integers(0, n))
+            nodes = [i] if i == n - 1 else [i, i + 1]
+            cand = [k for k in nodes] + [n + k for k in nodes]
+            pick = rng.choice(cand, size=int(rng.integers(1, len(cand) + 1)), replace=False)
+            for c in sorted(pick):
+                rows.append(r)
+                cols.append(int(c))
+                vals.append(float(rng.normal()))
+        row, col, val = np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64), np.array(vals)
+        if trial % 2:  # not in row order
+            perm = rng.permutation(row.size)
+            row, col, val = row[perm], col[perm], val[perm]
+        cell, coef = _socp._cell_rows(row, col, val, nrows, n)
+        node = col % n
+        first = np.full(nrows, n, dtype=np.int64)
+        np.minimum.at(first, row, node)
+        ref_cell = np.minimum(first, n - 2)
+        ref_cell[first == n] = 0
+        ref = np.zeros((nrows, 4))
+        np.add.at(ref, (row, (node - ref_cell[row]) + 2 * (col >= n)), val)
+        np.testing.assert_array_equal(cell, ref_cell)
+        np.testing.assert_array_equal(coef, ref)

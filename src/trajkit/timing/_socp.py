@@ -477,14 +477,26 @@ def _cell_rows(row: np.ndarray, col: np.ndarray, val: np.ndarray, nrows: int,
     last interval for a row on the end node alone) and its four coefficients on
     ``(x_i, x_{i+1}, u_i, u_{i+1})``."""
     node = col % n
-    first = np.full(nrows, n, dtype=np.int64)
-    np.minimum.at(first, row, node)
+    first = _row_min(row, node, nrows, n)
     cell = np.minimum(first, n - 2)
     cell[first == n] = 0  # (a row without entries)
     slot = (node - cell[row]) + 2 * (col >= n)
     coef = np.zeros((nrows, 4))
-    np.add.at(coef, (row, slot), val)
+    coef[row, slot] = val  # (a row's columns are distinct: one entry per slot)
     return cell, coef
+
+
+def _row_min(row: np.ndarray, val: np.ndarray, nrows: int, empty: int) -> np.ndarray:
+    """The smallest ``val`` of every row (``row`` sorted, as a CSR matrix's entries
+    run; ``empty`` for a row without entries)."""
+    out = np.full(nrows, empty, dtype=np.int64)
+    if row.size and (row[1:] < row[:-1]).any():  # (not sorted: entry by entry)
+        np.minimum.at(out, row, val)
+    elif row.size:
+        start = np.searchsorted(row, np.arange(nrows))
+        filled = np.bincount(row, minlength=nrows) > 0
+        out[filled] = np.minimum.reduceat(val, start[filled])
+    return out
 
 
 def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
@@ -757,8 +769,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         s_cell, s_coef = _cell_rows(st.row, st.col, st.data, b_static.size, n)
     n_static = b_static.size
     # the node of every inequality (the first node it involves: screening around a node)
-    node_static = np.full(n_static, n, dtype=np.int64)
-    np.minimum.at(node_static, st.row, st.col % n)
+    node_static = _row_min(st.row, st.col % n, n_static, n)
     node_static[node_static == n] = 0
     # the signs of c and d
     both = np.concatenate([ic[free], idd])
