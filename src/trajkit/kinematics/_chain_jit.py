@@ -117,6 +117,44 @@ def _frames(qj, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, m
 
 
 @_jit
+def _skews(axis):
+    """The skew matrix of every unit axis (J, 3) and its square, each (J, 3, 3)."""
+    nj = axis.shape[0]
+    k1 = np.zeros((nj, 3, 3))
+    for i in range(nj):
+        a0, a1, a2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        k1[i, 0, 1], k1[i, 0, 2], k1[i, 1, 2] = -a2, a1, -a0
+        k1[i, 1, 0], k1[i, 2, 0], k1[i, 2, 1] = a2, -a1, a0
+    k2 = np.empty((nj, 3, 3))
+    for i in range(nj):
+        k2[i] = k1[i] @ k1[i]
+    return k1, k2
+
+
+@_jit
+def _world_jacobian(W, O, p0, p1, p2, iq, rev, jac):
+    """The world-frame Jacobian (6, m) into ``jac``: the tool point ``(p0, p1, p2)``'s
+    velocity, then the angular velocity, per joint velocity, from each joint's
+    world axis ``W`` and moving-frame origin ``O`` (J, 3)."""
+    jac[:] = 0.0
+    for i in range(iq.shape[0]):
+        c = iq[i]
+        w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
+        if rev[i]:
+            d0, d1, d2 = p0 - O[i, 0], p1 - O[i, 1], p2 - O[i, 2]
+            jac[0, c] = w1 * d2 - w2 * d1
+            jac[1, c] = w2 * d0 - w0 * d2
+            jac[2, c] = w0 * d1 - w1 * d0
+            jac[3, c] = w0
+            jac[4, c] = w1
+            jac[5, c] = w2
+        else:
+            jac[0, c] = w0
+            jac[1, c] = w1
+            jac[2, c] = w2
+
+
+@_jit
 def _tool(R, P, tpar, r_tool, t_tool, pt, rt):
     """Tool position ``pt`` (N, 3) and rotation ``rt`` (N, 3, 3) jets from the
     frame ``tpar`` and the tool's placement in it."""
@@ -198,14 +236,7 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
     rj = np.empty((_N, 3, 3))
     pj = np.empty((_N, 3))
     mot = np.empty((_N, 3, 3))
-    kx = np.zeros((nj, 3, 3))
-    for i in range(nj):
-        a0, a1, a2 = axis[i, 0], axis[i, 1], axis[i, 2]
-        kx[i, 0, 1], kx[i, 0, 2], kx[i, 1, 2] = -a2, a1, -a0
-        kx[i, 1, 0], kx[i, 2, 0], kx[i, 2, 1] = a2, -a1, a0
-    k2 = np.empty((nj, 3, 3))
-    for i in range(nj):
-        k2[i] = kx[i] @ kx[i]
+    kx, k2 = _skews(axis)
     pt = np.empty((_N, 3))
     rt = np.empty((_N, 3, 3))
     jac = np.zeros((6, m))
@@ -222,22 +253,7 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
             qj[p, 0, j] = q0[p, j]
         _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot)
         _tool(R, P, tpar, r_tool, t_tool, pt, rt)
-        jac[:] = 0.0
-        for i in range(nj):
-            c = iq[i]
-            w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
-            if rev[i]:
-                d0, d1, d2 = pt[0, 0] - O[i, 0], pt[0, 1] - O[i, 1], pt[0, 2] - O[i, 2]
-                jac[0, c] = w1 * d2 - w2 * d1
-                jac[1, c] = w2 * d0 - w0 * d2
-                jac[2, c] = w0 * d1 - w1 * d0
-                jac[3, c] = w0
-                jac[4, c] = w1
-                jac[5, c] = w2
-            else:
-                jac[0, c] = w0
-                jac[1, c] = w1
-                jac[2, c] = w2
+        _world_jacobian(W, O, pt[0, 0], pt[0, 1], pt[0, 2], iq, rev, jac)
         for r in range(6):
             for c in range(m):
                 jt[c, r] = jac[r, c]
@@ -345,14 +361,7 @@ def chain_ik_near(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, posit
     """
     n, m = seeds.shape
     nj = parent.shape[0]
-    k1 = np.zeros((nj, 3, 3))
-    for i in range(nj):
-        a0, a1, a2 = axis[i, 0], axis[i, 1], axis[i, 2]
-        k1[i, 0, 1], k1[i, 0, 2], k1[i, 1, 2] = -a2, a1, -a0
-        k1[i, 1, 0], k1[i, 2, 0], k1[i, 2, 1] = a2, -a1, a0
-    k2 = np.empty((nj, 3, 3))
-    for i in range(nj):
-        k2[i] = k1[i] @ k1[i]
+    k1, k2 = _skews(axis)
     R = np.empty((nj + 1, 3, 3))
     P = np.empty((nj + 1, 3))
     W = np.empty((nj, 3))
@@ -396,22 +405,7 @@ def chain_ik_near(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, posit
             if it == 0 and not (err < entry and rel[0, 0] + rel[1, 1] + rel[2, 2] > 1.0):
                 break
             # the world-frame Jacobian, then the tool frame's, rows scaled
-            jw[:] = 0.0
-            for i in range(nj):
-                c = iq[i]
-                w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
-                if rev[i]:
-                    d0, d1, d2 = pt[0] - O[i, 0], pt[1] - O[i, 1], pt[2] - O[i, 2]
-                    jw[0, c] = w1 * d2 - w2 * d1
-                    jw[1, c] = w2 * d0 - w0 * d2
-                    jw[2, c] = w0 * d1 - w1 * d0
-                    jw[3, c] = w0
-                    jw[4, c] = w1
-                    jw[5, c] = w2
-                else:
-                    jw[0, c] = w0
-                    jw[1, c] = w1
-                    jw[2, c] = w2
+            _world_jacobian(W, O, pt[0], pt[1], pt[2], iq, rev, jw)
             for h in range(2):
                 for r in range(3):
                     for c in range(m):
