@@ -28,7 +28,7 @@ from ._range import DISTANCE_ABS_MIN
 from ._shapes import NPH
 
 __all__ = ["NIN", "NSYNC", "NBLK", "ST_GOAL", "ST_WIDE", "ST_RANGE", "solve_many", "sync_time",
-           "NPH"]
+           "NPH", "exact_sum", "sum_partials"]
 
 NBLK = K.NBLK
 
@@ -56,6 +56,9 @@ SYNC_MAX_ROUNDS = 16
 
 #: Moves per chunk of the parallel loop (one workspace each).
 CHUNK = 64
+
+#: The unit round-off of doubles.
+_U = 2.0**-53
 
 
 @jit_raw
@@ -178,11 +181,42 @@ def exact_sum(ws, first, stride, n, scratch):
     values; ``n`` <= :data:`NPH`): the same float as ``math.fsum``, which
     rounds the exact sum the same way (to nearest, ties to even).
 
-    Shewchuk's algorithm: the running sum is kept exactly as non-overlapping
-    partials (``ws[scratch:]``, in increasing magnitude); the result is
-    their sum from the largest down, with the tie case across partials
-    decided by the sign of the rest.
+    First the running sum with every addition's error kept exactly (TwoSum),
+    the errors summed in floats with a bound on that sum's round-off: where
+    both ends of the exact sum's enclosure round to the same float, that
+    float is the correctly rounded sum (rounding is monotone). Otherwise (a
+    sum within a few ulps of a tie, or a huge cancellation)
+    :func:`sum_partials` decides.
     """
+    s = 0.0
+    c = 0.0
+    ea = 0.0
+    for k in range(n):
+        x = ws[first + stride * k]
+        t = s + x
+        bp = t - s
+        e = (s - (t - bp)) + (x - bp)
+        s = t
+        c += e
+        ea += abs(e)
+    if ea == 0.0:
+        return s  # every addition exact
+    # |c - sum(e)| <= (n - 1) u sum|e| (u = 2^-53); four times that margin
+    # also covers the round-off of c -/+ d
+    d = 4.0 * (n + 2) * _U * ea
+    lo = s + (c - d)
+    hi = s + (c + d)
+    if lo == hi and abs(lo) < math.inf:
+        return lo
+    return sum_partials(ws, first, stride, n, scratch)
+
+
+@jit_raw
+def sum_partials(ws, first, stride, n, scratch):
+    """:func:`exact_sum` by Shewchuk's algorithm (the general case): the running
+    sum is kept exactly as non-overlapping partials (``ws[scratch:]``, in
+    increasing magnitude); the result is their sum from the largest down,
+    with the tie case across partials decided by the sign of the rest."""
     m = 0  # partials in use
     for k in range(n):
         x = ws[first + stride * k]
