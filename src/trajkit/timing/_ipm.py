@@ -23,7 +23,10 @@ ordered node by node (``x_k, u_k``, then the equalities whose last node is
 ``k``): a band of half-width about 6, factored as ``L D L^T`` without
 pivoting (quasi-definite, with the small regularisation ``delta``: any order
 is stable) in ``O(N)``; a step of iterative refinement against the
-unregularised matrix follows every solve. The start is centred (every slack
+unregularised matrix follows every solve. The rows are grouped by their
+interval, so that every pass over them reads the interval's four unknowns
+once and adds one 4 x 4 block (or four entries) into the system per
+interval. The start is centred (every slack
 times its multiplier equal), the step goes 0.99 of the way to the boundary
 of ``s, lam > 0`` and of ``x > 0`` (the objective's domain).
 
@@ -242,81 +245,143 @@ def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, diag_reg, refine):
 
 
 @_jit
+def _cells(N, px, pu, nk):
+    """The KKT positions of every interval's ``(x_i, x_{i+1}, u_i, u_{i+1})``,
+    ``(N, 4)``; ``nk`` (a spare slot past the system, always zero in ``z``)
+    for an end node's (given) value."""
+    cp = np.empty((N, 4), dtype=np.int64)
+    for i in range(N):
+        q = (px[i], px[i + 1], pu[i], pu[i + 1])
+        for a in range(4):
+            cp[i, a] = q[a] if q[a] >= 0 else nk
+    return cp
+
+
+@_jit
+def _fold_cells(N, cell, C, h, px, X, U, qnode):
+    """The inequality rows grouped by interval (in their order within one), for
+    the per-interval loops: coefficients ``(m, 4)`` with the end nodes' given
+    values moved to the right-hand side (their coefficients zeroed), the
+    right-hand sides, the first row of every interval ``(N + 1,)``, the
+    position of every quadratic row (one per node ``k``, on the interval
+    starting at ``k``, after its linear rows; coefficients set per iterate)
+    and the feasibility of the rows left out (on end nodes alone)."""
+    m0 = cell.size
+    keep = np.zeros(m0, dtype=np.bool_)
+    rhs = np.empty(m0)
+    count = np.zeros(N + 1, dtype=np.int64)
+    feasible = True
+    for r in range(m0):
+        i = cell[r]
+        val = (X[i], X[i + 1], U[i], U[i + 1])
+        free = (px[i] >= 0, px[i + 1] >= 0, px[i] >= 0, px[i + 1] >= 0)
+        b = h[r]
+        any_free = False
+        for a in range(4):
+            if C[r, a] != 0.0:
+                if free[a]:
+                    any_free = True
+                else:
+                    b -= C[r, a] * val[a]
+        rhs[r] = b
+        if any_free:
+            keep[r] = True
+            count[i] += 1
+        else:
+            feasible = feasible and b >= 0.0
+    for j in range(qnode.size):
+        count[qnode[j]] += 1
+    ptr = np.zeros(N + 1, dtype=np.int64)
+    for i in range(N):
+        ptr[i + 1] = ptr[i] + count[i]
+    m = ptr[N]
+    cf = np.zeros((m, 4))
+    hh = np.zeros(m)
+    fill = ptr[:N].copy()
+    for r in range(m0):
+        if not keep[r]:
+            continue
+        i = cell[r]
+        free = (px[i] >= 0, px[i + 1] >= 0, px[i] >= 0, px[i + 1] >= 0)
+        q = fill[i]
+        for a in range(4):
+            if free[a]:
+                cf[q, a] = C[r, a]
+        hh[q] = rhs[r]
+        fill[i] += 1
+    qrow = np.empty(qnode.size, dtype=np.int64)
+    for j in range(qnode.size):
+        k = qnode[j]
+        qrow[j] = fill[k]
+        fill[k] += 1
+    return cf, hh, ptr, qrow, feasible
+
+
+@_jit
 def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol):
     """The compiled solver (see :func:`solve_round`)."""
     px, pu, pe, nk = _layout(N, ecell)
     X = X0.copy()
     U = U0.copy()
-    gpos, gcf, hh, gkeep, feas = _fold(cell, C, h, px, pu, X, U)
+    for j in range(qnode.size):
+        if px[qnode[j]] < 0:
+            return X, U, ST_FAILED, 0, math.nan
+    cf, hh, ptr, qrow, feas = _fold_cells(N, cell, C, h, px, X, U, qnode)
     epos, ecf, ee, ekeep, efeas = _fold(ecell, E, e, px, pu, X, U)
     if not (feas and efeas and ekeep.all()):
         return X, U, ST_FAILED, 0, math.nan
-    if not gkeep.all():
-        idx = np.nonzero(gkeep)[0]
-        gpos = gpos[idx]
-        gcf = gcf[idx]
-        hh = hh[idx]
-    # the quadratic rows after the linear ones: their coefficients are the
-    # gradient at the iterate, their right-hand side makes G_r z - h_r = g_r(z)
-    ml = hh.size
-    mq = qnode.size
-    if mq:
-        gpos2 = np.zeros((ml + mq, 4), dtype=np.int64)
-        gcf2 = np.zeros((ml + mq, 4))
-        hh2 = np.zeros(ml + mq)
-        gpos2[:ml] = gpos
-        gcf2[:ml] = gcf
-        hh2[:ml] = hh
-        for j in range(mq):
-            k = qnode[j]
-            if px[k] < 0:
-                return X, U, ST_FAILED, 0, math.nan
-            gpos2[ml + j, 0] = px[k]
-            gpos2[ml + j, 1] = px[k]
-            gpos2[ml + j, 2] = pu[k]
-            gpos2[ml + j, 3] = pu[k]
-        gpos, gcf, hh = gpos2, gcf2, hh2
+    cp = _cells(N, px, pu, nk)
     m = hh.size
     p = ee.size
-    # half-width of the band
+    mq = qnode.size
+    # half-width of the band (the quadratic rows: x_k and u_k, next to each other)
     bw = 1
-    for r in range(m):
-        for a in range(4):
-            for b in range(4):
-                bw = max(bw, abs(gpos[r, a] - gpos[r, b]))
+    for i in range(N):
+        for r in range(ptr[i], ptr[i + 1]):
+            for a in range(4):
+                if cf[r, a] != 0.0 and cp[i, a] < nk:
+                    for b in range(a):
+                        if cf[r, b] != 0.0 and cp[i, b] < nk:
+                            bw = max(bw, abs(cp[i, a] - cp[i, b]))
     for j in range(p):
         for a in range(4):
             bw = max(bw, abs(pe[j] - epos[j, a]))
     for i in range(1, N - 1):
         bw = max(bw, px[i + 1] - px[i])
-    # the iterate: z (x, u of the inner nodes; nu in the equalities' places), s, lam
+    # the iterate: z (x, u of the inner nodes; nu in the equalities' places; the
+    # spare slot nk stays zero), s, lam
     xs = 0.0
     for k in range(1, N):
         xs = max(xs, X[k])
     floor = 1e-6 * xs if xs > 0.0 else 1e-6
-    z = np.zeros(nk)
+    z = np.zeros(nk + 1)
     for k in range(1, N):
         X[k] = max(X[k], floor)
         z[px[k]] = X[k]
         z[pu[k]] = U[k]
     s = np.empty(m)
     lam = np.empty(m)
-    _quad_rows(qnode, qxx, quu, px, pu, z, gcf, hh, ml)
+    _quad_rows(qnode, qxx, quu, px, pu, z, cf, hh, qrow)
     # a centred start: the slacks at the starting point (at least START_SLACK),
     # every product slack x multiplier equal to START_MU
-    for r in range(m):
-        s[r] = max(hh[r] - _dot4(gpos, gcf, r, z), START_SLACK)
-        lam[r] = START_MU / s[r]
+    for i in range(N):
+        z0, z1, z2, z3 = z[cp[i, 0]], z[cp[i, 1]], z[cp[i, 2]], z[cp[i, 3]]
+        for r in range(ptr[i], ptr[i + 1]):
+            gz = cf[r, 0] * z0 + cf[r, 1] * z1 + cf[r, 2] * z2 + cf[r, 3] * z3
+            s[r] = max(hh[r] - gz, START_SLACK)
+            lam[r] = START_MU / s[r]
     M = np.zeros((nk, bw + 1))
     L = np.zeros((nk, bw + 1))
     dd = np.zeros(nk)
     gf = np.zeros(nk)
-    rz = np.zeros(nk)
-    rhs = np.zeros(nk)
-    sol = np.zeros(nk)
+    rz = np.zeros(nk + 1)
+    rhs = np.zeros(nk + 1)
+    sol = np.zeros(nk + 1)
     res = np.zeros(nk)
     tmp = np.zeros(nk)
     reg = np.zeros(nk)
+    rhs_k = rhs[:nk]
+    sol_k = sol[:nk]
     rin = np.zeros(m)
     Dg = np.zeros(m)
     ds = np.zeros(m)
@@ -325,9 +390,15 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     dl_a = np.zeros(m)
     rc = np.zeros(m)
     req = np.zeros(p)
+    # the scale of the primal residual: the linear rows' right-hand sides (the
+    # quadratic rows' change with the iterate)
+    linear = np.ones(m, dtype=np.bool_)
+    for j in range(mq):
+        linear[qrow[j]] = False
     hn = 1.0
-    for r in range(ml):
-        hn = max(hn, abs(hh[r]))
+    for r in range(m):
+        if linear[r]:
+            hn = max(hn, abs(hh[r]))
     en = 1.0
     for j in range(p):
         en = max(en, abs(ee[j]))
@@ -338,7 +409,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         for k in range(1, N):
             X[k] = z[px[k]]
             U[k] = z[pu[k]]
-        _quad_rows(qnode, qxx, quu, px, pu, z, gcf, hh, ml)
+        _quad_rows(qnode, qxx, quu, px, pu, z, cf, hh, qrow)
         gf[:] = 0.0
         M[:, :] = 0.0
         for i in range(N):
@@ -358,18 +429,33 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
                 M[px[i + 1], 0] += f3 * Sb * Sb + f2 * 0.25 / (b * X[i + 1])
             if px[i] >= 0 and px[i + 1] >= 0:
                 _band_add(M, px[i + 1], px[i], f3 * (0.5 / a) * (0.5 / b))
-        # r_d = grad f + G^T lam + E^T nu
+        # r_d = grad f + G^T lam + E^T nu, interval by interval
         for q in range(nk):
             rz[q] = gf[q]
         pres = 0.0
         gap = 0.0
-        for r in range(m):
-            rin[r] = _dot4(gpos, gcf, r, z) + s[r] - hh[r]
-            pres = max(pres, abs(rin[r]) / hn)
-            gap += s[r] * lam[r]
-            lr = lam[r]
-            for a in range(4):
-                rz[gpos[r, a]] += gcf[r, a] * lr
+        for i in range(N):
+            z0, z1, z2, z3 = z[cp[i, 0]], z[cp[i, 1]], z[cp[i, 2]], z[cp[i, 3]]
+            g0 = 0.0
+            g1 = 0.0
+            g2 = 0.0
+            g3 = 0.0
+            for r in range(ptr[i], ptr[i + 1]):
+                c0, c1, c2, c3 = cf[r, 0], cf[r, 1], cf[r, 2], cf[r, 3]
+                v = c0 * z0 + c1 * z1 + c2 * z2 + c3 * z3 + s[r] - hh[r]
+                rin[r] = v
+                pres = max(pres, abs(v))
+                lr = lam[r]
+                gap += s[r] * lr
+                g0 += c0 * lr
+                g1 += c1 * lr
+                g2 += c2 * lr
+                g3 += c3 * lr
+            rz[cp[i, 0]] += g0
+            rz[cp[i, 1]] += g1
+            rz[cp[i, 2]] += g2
+            rz[cp[i, 3]] += g3
+        pres /= hn  # (the largest quotient is the quotient of the largest: hn > 0)
         for j in range(p):
             req[j] = _dot4(epos, ecf, j, z) - ee[j]
             pres = max(pres, abs(req[j]) / en)
@@ -387,20 +473,51 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         if pres < tol and dres < tol and gap < tol * (1.0 + fval):
             status = ST_SOLVED
             break
-        # ---- the matrix: H + G^T D G, E, regularisation
-        for r in range(m):
-            dr = lam[r] / s[r]
-            Dg[r] = dr
-            for a in range(4):
-                qa = gpos[r, a]
-                ca = dr * gcf[r, a]
-                M[qa, 0] += ca * gcf[r, a]
-                for b in range(a):
-                    _band_add(M, qa, gpos[r, b], ca * gcf[r, b])
+        # ---- the matrix: H + G^T D G (a 4 x 4 block per interval), E, regularisation
+        for i in range(N):
+            m00 = 0.0
+            m11 = 0.0
+            m22 = 0.0
+            m33 = 0.0
+            m10 = 0.0
+            m20 = 0.0
+            m21 = 0.0
+            m30 = 0.0
+            m31 = 0.0
+            m32 = 0.0
+            for r in range(ptr[i], ptr[i + 1]):
+                dr = lam[r] / s[r]
+                Dg[r] = dr
+                c0, c1, c2, c3 = cf[r, 0], cf[r, 1], cf[r, 2], cf[r, 3]
+                t0 = dr * c0
+                t1 = dr * c1
+                t2 = dr * c2
+                t3 = dr * c3
+                m00 += t0 * c0
+                m11 += t1 * c1
+                m22 += t2 * c2
+                m33 += t3 * c3
+                m10 += t1 * c0
+                m20 += t2 * c0
+                m21 += t2 * c1
+                m30 += t3 * c0
+                m31 += t3 * c1
+                m32 += t3 * c2
+            q0, q1, q2, q3 = cp[i, 0], cp[i, 1], cp[i, 2], cp[i, 3]
+            _block_add(M, nk, q0, q0, m00)
+            _block_add(M, nk, q1, q1, m11)
+            _block_add(M, nk, q2, q2, m22)
+            _block_add(M, nk, q3, q3, m33)
+            _block_add(M, nk, q1, q0, m10)
+            _block_add(M, nk, q2, q0, m20)
+            _block_add(M, nk, q2, q1, m21)
+            _block_add(M, nk, q3, q0, m30)
+            _block_add(M, nk, q3, q1, m31)
+            _block_add(M, nk, q3, q2, m32)
         for j in range(mq):  # the quadratic rows' curvature, lam grad^2 g
             k = qnode[j]
-            M[px[k], 0] += 2.0 * lam[ml + j] * qxx[j]
-            M[pu[k], 0] += 2.0 * lam[ml + j] * quu[j]
+            M[px[k], 0] += 2.0 * lam[qrow[j]] * qxx[j]
+            M[pu[k], 0] += 2.0 * lam[qrow[j]] * quu[j]
         scale = 0.0
         for k in range(1, N):
             scale = max(scale, M[px[k], 0], M[pu[k], 0])
@@ -421,12 +538,10 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         if not ok:
             status = ST_FAILED
             break
-        # ---- predictor (affine) and corrector with the same factors
+        # ---- predictor (affine, into ds_a, dl_a) and corrector with the same factors
+        sigma_mu = 0.0
         for corr in range(2):
-            if corr == 0:
-                for r in range(m):
-                    rc[r] = s[r] * lam[r]
-            else:
+            if corr == 1:
                 # the affine step's complementarity and the centring
                 ap, ad = _max_steps(s, lam, ds_a, dl_a, z, sol, px, N, 1.0)
                 mu_aff = 0.0
@@ -435,27 +550,43 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
                 mu_aff /= max(m, 1)
                 sigma = (mu_aff / mu) ** 3 if mu > 0.0 else 0.0
                 sigma = min(max(sigma, 0.0), 1.0)
-                for r in range(m):
-                    rc[r] = s[r] * lam[r] + ds_a[r] * dl_a[r] - sigma * mu
-            # right-hand side: -r_d - G^T (D r_in - r_c / s); -r_eq
+                sigma_mu = sigma * mu
+            # right-hand side: -r_d - G^T (D r_in - r_c / s); -r_eq (r_c: s lam, with
+            # the corrector's second-order term and centring)
             for q in range(nk):
                 rhs[q] = -rz[q]
-            for r in range(m):
-                t = Dg[r] * rin[r] - rc[r] / s[r]
-                for a in range(4):
-                    rhs[gpos[r, a]] -= gcf[r, a] * t
+            for i in range(N):
+                h0 = 0.0
+                h1 = 0.0
+                h2 = 0.0
+                h3 = 0.0
+                for r in range(ptr[i], ptr[i + 1]):
+                    if corr == 0:
+                        rcr = s[r] * lam[r]
+                    else:
+                        rcr = s[r] * lam[r] + ds_a[r] * dl_a[r] - sigma_mu
+                    rc[r] = rcr
+                    t = Dg[r] * rin[r] - rcr / s[r]
+                    h0 += cf[r, 0] * t
+                    h1 += cf[r, 1] * t
+                    h2 += cf[r, 2] * t
+                    h3 += cf[r, 3] * t
+                rhs[cp[i, 0]] -= h0
+                rhs[cp[i, 1]] -= h1
+                rhs[cp[i, 2]] -= h2
+                rhs[cp[i, 3]] -= h3
             for j in range(p):
                 rhs[pe[j]] = -req[j]
-            _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, reg, REFINE)
+            _solve_linear(M, L, dd, bw, rhs_k, sol_k, res, tmp, reg, REFINE)
             # ds = -r_in - G dz; dlam = D (G dz + r_in) - r_c / s
-            for r in range(m):
-                gdz = _dot4(gpos, gcf, r, sol)
-                ds[r] = -rin[r] - gdz
-                dl[r] = Dg[r] * (gdz + rin[r]) - rc[r] / s[r]
-            if corr == 0:
-                for r in range(m):
-                    ds_a[r] = ds[r]
-                    dl_a[r] = dl[r]
+            out_s = ds_a if corr == 0 else ds
+            out_l = dl_a if corr == 0 else dl
+            for i in range(N):
+                x0, x1, x2, x3 = sol[cp[i, 0]], sol[cp[i, 1]], sol[cp[i, 2]], sol[cp[i, 3]]
+                for r in range(ptr[i], ptr[i + 1]):
+                    gdz = cf[r, 0] * x0 + cf[r, 1] * x1 + cf[r, 2] * x2 + cf[r, 3] * x3
+                    out_s[r] = -rin[r] - gdz
+                    out_l[r] = Dg[r] * (gdz + rin[r]) - rc[r] / s[r]
         ap, ad = _max_steps(s, lam, ds, dl, z, sol, px, N, STEP_FRACTION)
         alpha = min(ap, ad)
         if not alpha > 0.0:
@@ -477,21 +608,29 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
 
 
 @_jit
-def _quad_rows(qn, qk, qa, px, pu, z, gcf, hh, ml):
-    """The quadratic rows ``g = qk x^2 + qa u^2 - 1 <= 0`` at the iterate: the
-    gradient as coefficients (on ``x`` and ``u`` of the node), the right-hand
-    side ``grad . z - g`` (so that the row's ``G z - h`` is ``g(z)``)."""
+def _block_add(M, nk, a, b, v):
+    """Add ``v`` at ``(a, b)`` (``a, b`` positions of one interval) of the band
+    matrix, unless one of them is the spare slot or ``v`` is zero (a pair of
+    positions no row couples may lie outside the band)."""
+    if a < nk and b < nk and v != 0.0:
+        _band_add(M, a, b, v)
+
+
+@_jit
+def _quad_rows(qn, qk, qa, px, pu, z, cf, hh, qrow):
+    """The quadratic rows ``g = qk x^2 + qa u^2 - 1 <= 0`` at the iterate (row
+    ``qrow[j]``, on the interval starting at its node): the gradient as
+    coefficients (on ``x`` and ``u`` of the node), the right-hand side
+    ``grad . z - g`` (so that the row's ``G z - h`` is ``g(z)``)."""
     for j in range(qn.size):
         k = qn[j]
         x = z[px[k]]
         u = z[pu[k]]
-        gx = 2.0 * qk[j] * x
-        gu = 2.0 * qa[j] * u
-        r = ml + j
-        gcf[r, 0] = gx
-        gcf[r, 1] = 0.0
-        gcf[r, 2] = gu
-        gcf[r, 3] = 0.0
+        r = qrow[j]
+        cf[r, 0] = 2.0 * qk[j] * x
+        cf[r, 1] = 0.0
+        cf[r, 2] = 2.0 * qa[j] * u
+        cf[r, 3] = 0.0
         hh[r] = qk[j] * x * x + qa[j] * u * u + 1.0
 
 
