@@ -167,37 +167,56 @@ def test_rounds_with_the_curvature_rows_equal_the_cone_solvers(monkeypatch):
     np.testing.assert_allclose(a.x, b.x, rtol=0, atol=2e-4 * float(np.max(b.x)))
 
 
-def test_interval_form_of_the_rows_equals_the_entry_by_entry_one():
-    """``_cell_rows`` (rows sorted as a CSR matrix runs, empty rows included, in
-    order or not) gives every row's interval and four coefficients as the
-    entry-by-entry accumulation does."""
+def test_static_rows_in_interval_form_equal_the_sparse_assembly():
+    """The rounds' fixed rows (``_StaticRows``: interval form, normalised) equal
+    the rows assembled entry by entry as a sparse matrix and normalised by
+    scaling its rows: the products ``A z`` bit for bit (the same sums in the
+    same order), the right-hand sides, the nonzero entries and every row's
+    first node (0 for a row without a coefficient)."""
+    import scipy.sparse as sp
+
     rng = np.random.default_rng(12)
-    n = 40
-    for trial in range(200):
-        rows, cols, vals = [], [], []
-        nrows = int(rng.integers(1, 60))
-        for r in range(nrows):
-            if rng.random() < 0.1:
-                continue  # a row without entries
-            i = int(rng.integers(0, n))
-            nodes = [i] if i == n - 1 else [i, i + 1]
-            cand = [k for k in nodes] + [n + k for k in nodes]
-            pick = rng.choice(cand, size=int(rng.integers(1, len(cand) + 1)), replace=False)
-            for c in sorted(pick):
-                rows.append(r)
-                cols.append(int(c))
-                vals.append(float(rng.normal()))
-        row, col, val = np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64), np.array(vals)
-        if trial % 2:  # not in row order
-            perm = rng.permutation(row.size)
-            row, col, val = row[perm], col[perm], val[perm]
-        cell, coef = _socp._cell_rows(row, col, val, nrows, n)
-        node = col % n
-        first = np.full(nrows, n, dtype=np.int64)
-        np.minimum.at(first, row, node)
-        ref_cell = np.minimum(first, n - 2)
-        ref_cell[first == n] = 0
-        ref = np.zeros((nrows, 4))
-        np.add.at(ref, (row, (node - ref_cell[row]) + 2 * (col >= n)), val)
-        np.testing.assert_array_equal(cell, ref_cell)
-        np.testing.assert_array_equal(coef, ref)
+    n = 30
+    for _trial in range(100):
+        rows = _socp._StaticRows(n)
+        ref_r, ref_c, ref_v, ref_b = [], [], [], []
+        nr = 0
+        for _block in range(int(rng.integers(1, 6))):
+            k = int(rng.integers(0, 12))
+            cell = rng.integers(0, n - 1, k)
+            coefs = []
+            for _a in range(4):
+                c = rng.normal(size=k) * 10.0 ** rng.integers(-3, 4, k)
+                c[rng.random(k) < 0.3] = 0.0  # some coefficients zero (some rows empty)
+                coefs.append(c if rng.random() < 0.8 else float(c[0]) if k else 0.0)
+            b = rng.normal(size=k) * 10.0 ** rng.integers(-3, 4, k)
+            rows.add(cell, *coefs, b)
+            cols = (cell, cell + 1, n + cell, n + cell + 1)
+            for a in range(4):
+                ref_r.append(nr + np.arange(k))
+                ref_c.append(cols[a])
+                ref_v.append(np.broadcast_to(coefs[a], (k,)))
+            ref_b.append(b)
+            nr += k
+        rows.finish()
+        A = sp.coo_matrix((np.concatenate(ref_v), (np.concatenate(ref_r), np.concatenate(ref_c))),
+                          shape=(nr, 2 * n)).tocsr()
+        b = np.concatenate(ref_b)
+        big = np.maximum(np.maximum(abs(A).max(axis=1).toarray().ravel(), np.abs(b)), 1e-300)
+        A = (sp.diags(1.0 / big) @ A).tocsc().tocsr()  # (columns sorted in every row)
+        np.testing.assert_array_equal(rows.b, b / big)
+        for _z in range(3):
+            z = rng.normal(size=2 * n) * 10.0 ** rng.integers(-2, 3)
+            np.testing.assert_array_equal(rows.times(z), A @ z)
+        r, c, v = rows.entries()
+        got = sp.coo_matrix((v, (r, c)), shape=(nr, 2 * n)).tocsr()
+        got.sort_indices()
+        A.sort_indices()
+        np.testing.assert_array_equal(got.indptr, A.indptr)
+        np.testing.assert_array_equal(got.indices, A.indices)
+        np.testing.assert_array_equal(got.data, A.data)
+        coo = A.tocoo()
+        first = np.full(nr, n, dtype=np.int64)
+        np.minimum.at(first, coo.row, coo.col % n)
+        first[first == n] = 0
+        np.testing.assert_array_equal(rows.node, first)

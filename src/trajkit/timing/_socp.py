@@ -186,43 +186,64 @@ class GridSolution:
     history: list[float] = field(default_factory=list)  # time of every round [s]
 
 
-class _Rows:
-    """COO assembly of constraint rows ``A z (<= | =) b``."""
+class _StaticRows:
+    """The inequalities that do not change between rounds, in interval form: every
+    row ``coef[r] . (x_i, x_{i+1}, u_i, u_{i+1}) <= b[r]`` on its interval
+    ``i = cell[r]``, normalised (divided by its largest coefficient or
+    right-hand side: the set is unchanged), in the order they were added.
+    """
 
-    def __init__(self, nv: int) -> None:
-        self.nv = nv
-        self.r: list[np.ndarray] = []
-        self.c: list[np.ndarray] = []
-        self.v: list[np.ndarray] = []
-        self.b: list[np.ndarray] = []
-        self.n = 0
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self._cell: list[np.ndarray] = []
+        self._coef: list[np.ndarray] = []
+        self._b: list[np.ndarray] = []
+        self.size = 0
 
-    def add(self, cols: list[np.ndarray], vals: list[np.ndarray], rhs: np.ndarray) -> None:
-        """Rows ``sum_k vals[k] * z[cols[k]] (op) rhs``, all arrays of one length."""
-        m = rhs.size
-        if m == 0:
+    def add(self, cell: np.ndarray, c0, c1, c2, c3, rhs: np.ndarray) -> None:
+        """Rows on the intervals ``cell`` with the coefficients ``c0 .. c3`` (scalars
+        or arrays of the rows) on ``x_i, x_{i+1}, u_i, u_{i+1}``."""
+        k = rhs.size
+        if k == 0:
             return
-        rows = self.n + np.arange(m)
-        for cc, vv in zip(cols, vals):
-            self.r.append(rows)
-            self.c.append(np.broadcast_to(cc, (m,)))
-            self.v.append(np.broadcast_to(np.asarray(vv, dtype=float), (m,)))
-        self.b.append(rhs)
-        self.n += m
+        C = np.empty((k, 4))
+        for a, c in enumerate((c0, c1, c2, c3)):
+            C[:, a] = c
+        self._cell.append(np.asarray(cell, dtype=np.int64))
+        self._coef.append(C)
+        self._b.append(np.asarray(rhs, dtype=float))
+        self.size += k
 
-    def matrix(self, normalise: bool = False) -> tuple[sp.csc_matrix, np.ndarray]:
-        """The rows as a sparse matrix and right-hand side; ``normalise`` divides every
-        row by its largest coefficient (inequalities only: the set is unchanged)."""
-        if self.n == 0:
-            return sp.csc_matrix((0, self.nv)), np.zeros(0)
-        A = sp.coo_matrix((np.concatenate(self.v), (np.concatenate(self.r), np.concatenate(self.c))),
-                          shape=(self.n, self.nv)).tocsr()
-        b = np.concatenate(self.b)
-        if normalise:  # by the largest of the coefficients and the right-hand side
-            big = np.maximum(np.maximum(abs(A).max(axis=1).toarray().ravel(), np.abs(b)), 1e-300)
-            A = sp.diags(1.0 / big) @ A
-            b = b / big
-        return A.tocsc(), b
+    def finish(self) -> None:
+        """Stack and normalise the rows (each multiplied by the reciprocal of its
+        largest magnitude, the right-hand side divided by it); ``node``: the
+        first node a row involves, 0 for a row without a coefficient."""
+        if self.size:
+            cell = np.concatenate(self._cell)
+            C = np.concatenate(self._coef)
+            b = np.concatenate(self._b)
+        else:
+            cell, C, b = np.zeros(0, dtype=np.int64), np.zeros((0, 4)), np.zeros(0)
+        big = np.maximum(np.maximum(np.abs(C).max(axis=1, initial=0.0), np.abs(b)), 1e-300)
+        self.coef = C * (1.0 / big)[:, None]
+        self.b = b / big
+        self.cell = cell
+        nz = self.coef != 0.0
+        self.node = np.where(nz[:, 0] | nz[:, 2], cell, np.where(nz[:, 1] | nz[:, 3], cell + 1, 0))
+        n = self.n
+        self.cols = (cell, cell + 1, n + cell, n + cell + 1)
+
+    def times(self, z: np.ndarray) -> np.ndarray:
+        """``A z`` of the rows (in the order a sparse row product sums them)."""
+        C = self.coef
+        c0, c1, c2, c3 = self.cols
+        return C[:, 0] * z[c0] + C[:, 1] * z[c1] + C[:, 2] * z[c2] + C[:, 3] * z[c3]
+
+    def entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(row, column, value) of every nonzero coefficient (the cone program's matrix)."""
+        r, a = np.nonzero(self.coef)
+        cols = np.stack(self.cols, axis=1)
+        return r, cols[r, a], self.coef[r, a]
 
 
 def _near(Az: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -470,35 +491,6 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
                      np.concatenate([b, extra]), n)
 
 
-def _cell_rows(row: np.ndarray, col: np.ndarray, val: np.ndarray, nrows: int,
-               n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Rows on the columns ``x`` (0 .. n-1) and ``u`` (n .. 2n-1) of the nodes in the
-    interval form of :mod:`._ipm`: the interval of every row (its first node, the
-    last interval for a row on the end node alone) and its four coefficients on
-    ``(x_i, x_{i+1}, u_i, u_{i+1})``."""
-    node = col % n
-    first = _row_min(row, node, nrows, n)
-    cell = np.minimum(first, n - 2)
-    cell[first == n] = 0  # (a row without entries)
-    slot = (node - cell[row]) + 2 * (col >= n)
-    coef = np.zeros((nrows, 4))
-    coef[row, slot] = val  # (a row's columns are distinct: one entry per slot)
-    return cell, coef
-
-
-def _row_min(row: np.ndarray, val: np.ndarray, nrows: int, empty: int) -> np.ndarray:
-    """The smallest ``val`` of every row (``row`` sorted, as a CSR matrix's entries
-    run; ``empty`` for a row without entries)."""
-    out = np.full(nrows, empty, dtype=np.int64)
-    if row.size and (row[1:] < row[:-1]).any():  # (not sorted: entry by entry)
-        np.minimum.at(out, row, val)
-    elif row.size:
-        start = np.searchsorted(row, np.arange(nrows))
-        filled = np.bincount(row, minlength=nrows) > 0
-        out[filled] = np.minimum.reduceat(val, start[filled])
-    return out
-
-
 def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
                x_bar, u_bar, xv, nv, n, quad=None):
     """One round by the banded interior-point method (:mod:`._ipm`) on the
@@ -727,50 +719,40 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     # the rows that do not change between rounds: the nodes' and the intervals'
     # velocity, the path's speed cap, the joint accelerations of both legs, the
     # path acceleration (normalised inequalities) and the signs of c and d
-    ineq = _Rows(nv)
-    ineq.add([ix[inner]], [np.ones(inner.size)], xv[inner])
+    static = _StaticRows(n)
+    static.add(inner, 1.0, 0.0, 0.0, 0.0, xv[inner])
     # joint velocities in the middle of every interval too (x_mid as for the cap below;
     # q' there from its cubic Hermite interpolation)
     im = np.nonzero(np.isfinite(xv_mid))[0]
-    if im.size:
-        ineq.add([ix[im], ix[im + 1], iu[im], iu[im + 1]],
-                 [0.5 * np.ones(im.size), 0.5 * np.ones(im.size), 0.25 * D[im], -0.25 * D[im]],
-                 xv_mid[im])
+    static.add(im, 0.5, 0.5, 0.25 * D[im], -0.25 * D[im], xv_mid[im])
     # the path's speed cap also in the middle of every interval (the speed
     # between nodes, not only at them): x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4
     capm = np.minimum(p.x_cap[:-1], p.x_cap[1:])
     if p.x_cap_mid is not None:
         capm = np.minimum(capm, p.x_cap_mid)
     cm = np.nonzero(np.isfinite(capm))[0]
-    if cm.size:
-        ineq.add([ix[cm], ix[cm + 1], iu[cm], iu[cm + 1]],
-                 [0.5 * np.ones(cm.size), 0.5 * np.ones(cm.size), 0.25 * D[cm], -0.25 * D[cm]],
-                 capm[cm])
-    n_vel = ineq.n
+    static.add(cm, 0.5, 0.5, 0.25 * D[cm], -0.25 * D[cm], capm[cm])
+    n_vel = static.size
     # joint accelerations at the free nodes, both legs
     nn = np.repeat(inner, m)
     kk = np.tile(np.arange(m), inner.size)
     sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
-    ineq.add([ix[nn], iu[nn]], [sg * d2[nn, kk], sg * d1[nn, kk]], a_hi[nn, kk])
-    ineq.add([ix[nn], iu[nn]], [-sg * d2[nn, kk], -sg * d1[nn, kk]], a_lo[nn, kk])
+    static.add(nn, sg * d2[nn, kk], 0.0, sg * d1[nn, kk], 0.0, a_hi[nn, kk])
+    static.add(nn, -sg * d2[nn, kk], 0.0, -sg * d1[nn, kk], 0.0, a_lo[nn, kk])
     if math.isfinite(p.a_path):
-        ineq.add([iu[inner]], [np.ones(inner.size)], np.full(inner.size, p.a_path))
-        ineq.add([iu[inner]], [-np.ones(inner.size)], np.full(inner.size, p.a_path))
-    A_static, b_static = ineq.matrix(normalise=True)
-    A_static = A_static.tocsr()
-    st = A_static.tocoo()
+        static.add(inner, 0.0, 0.0, 1.0, 0.0, np.full(inner.size, p.a_path))
+        static.add(inner, 0.0, 0.0, -1.0, 0.0, np.full(inner.size, p.a_path))
+    static.finish()
+    b_static = static.b
     use_ipm = USE_IPM and _ipm.AVAILABLE
     # the path's acceleration with the curvature, as the method's quadratic rows
     quad = None
     if kn.size:
         ka = np.asarray(p.kappa)[kn] / p.a_path
         quad = (kn.astype(np.int64), ka * ka, np.full(kn.size, 1.0 / p.a_path**2))
-    if use_ipm:
-        s_cell, s_coef = _cell_rows(st.row, st.col, st.data, b_static.size, n)
     n_static = b_static.size
     # the node of every inequality (the first node it involves: screening around a node)
-    node_static = _row_min(st.row, st.col % n, n_static, n)
-    node_static[node_static == n] = 0
+    node_static = static.node
     # the signs of c and d
     both = np.concatenate([ic[free], idd])
     b_nn = np.zeros(both.size)
@@ -813,20 +795,26 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     # every inequality that a round may have: the static rows, then the jerk rows
     jcell = _jerk_cells(g, m, math.isfinite(p.j_path))
     jnode = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=np.int64)
-    n_jerk, j_rows, j_cols = _JerkRows.pattern(jcell, jnode, n)
+    n_jerk = jcell.size + jnode.size
     node_in = np.concatenate([node_static, jcell, jnode])
+
+    @functools.cache
+    def static_entries() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return static.entries()
 
     @functools.cache
     def layout() -> _Layout:
         """The cone program's sparsity pattern (made when the cone solver takes a round)."""
+        st_row, st_col, _ = static_entries()
+        _, j_rows, j_cols = _JerkRows.pattern(jcell, jnode, n)
         return _Layout(nv, [(n_eq, np.concatenate(eq_rows), np.concatenate(eq_cols)),
-                            (n_static + n_jerk, np.concatenate([st.row, n_static + j_rows]),
-                             np.concatenate([st.col, j_cols])),
+                            (n_static + n_jerk, np.concatenate([st_row, n_static + j_rows]),
+                             np.concatenate([st_col, j_cols])),
                             (both.size, np.arange(both.size), both),
                             (3 * nf + 3 * N, np.concatenate([cone_r, r2]), np.concatenate([cone_c, c2])),
                             acc_block], select=1)
     nn_values = -np.ones(both.size)
-    no_jerk = np.zeros(j_rows.size)
+    no_jerk = np.zeros(4 * jcell.size + jnode.size)  # (the jerk rows' entries)
 
     jerk_rounds = 0
     best = None
@@ -857,7 +845,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
 
         def ineq_times(zz: np.ndarray, jerk: _JerkRows | None = jerk) -> np.ndarray:
             """``A z`` of every inequality of the round."""
-            az = A_static @ zz
+            az = static.times(zz)
             return np.concatenate([az, jerk.times(zz) if jerk is not None else np.zeros(n_jerk)])
 
         cn_values = cone_values(sigma, rho)
@@ -878,16 +866,16 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             keep = np.ones(b_in_all.size, dtype=bool)
         if jerk is None:
             keep[n_static:] = False
-        values = [np.concatenate(eq_values), np.concatenate([st.data, jerk_values]), nn_values,
-                  cn_values, acc_values]
         ipm_round = use_ipm  # (the cone solver takes the round if the method fails)
         for screen in range(SCREEN_PASSES):
             if ipm_round:
-                z_new, t_new = _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values[1:],
+                z_new, t_new = _ipm_solve(static.cell, static.coef, b_in_all, keep, jerk, g, eq_values[1:],
                                           b_eq[6:], rest0, restN, D, wts, p, x_bar, u_bar, xv, nv, n,
                                           quad)
                 ipm_round = z_new is not None
             if not ipm_round:
+                values = [np.concatenate(eq_values), np.concatenate([static_entries()[2], jerk_values]),
+                          nn_values, cn_values, acc_values]
                 A = layout().matrix(values, keep)
                 b_in = b_in_all[keep]
                 b = np.concatenate([b_eq, b_in, b_nn, b_cone, b_acc])
