@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from . import _ipm
+from . import _ipm, _jerk_jit
 
 __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 
@@ -442,8 +442,32 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
     Every row of a free interval ``i`` has its coefficients on ``x_i, x_{i+1}, u_i,
     u_{i+1}`` (columns ``i, i + 1, n + i, n + i + 1``): the joints' jerk at both ends
     of the interval, both signs, then the path's jerk, then the rest intervals' bounds.
+    Compiled (:mod:`._jerk_jit`) where numba is available, else in numpy.
     """
     m = d1.shape[1]
+    if _jerk_jit.AVAILABLE:
+        C, b = _jerk_jit.jerk_rows(x_bar, u_bar, ecorr, np.ascontiguousarray(g, dtype=np.int64),
+                                   *(np.ascontiguousarray(a, dtype=float) for a in
+                                     (sig, d1, d2, d3, j_acc, j_dec, j_both, D)),
+                                   float(p.j_path), TINY_X)
+    else:
+        C, b = _jerk_coefs_numpy(p.j_path, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
+                                 j_acc, j_dec, j_both, D)
+    rest = np.array([sgn / max(1.0, ub) for _node, sgn, ub in rest_rows], dtype=float)
+    extra = np.array([ub / max(1.0, ub) for _node, _sgn, ub in rest_rows], dtype=float)
+    node = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=int)
+    return _JerkRows(C, _jerk_cells(g, m, math.isfinite(p.j_path)), rest, node,
+                     np.concatenate([b, extra]), n)
+
+
+def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.ndarray,
+                      g: np.ndarray, ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray,
+                      d1: np.ndarray, d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray,
+                      j_dec: np.ndarray, j_both: np.ndarray,
+                      D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The coefficients and right-hand sides of the joints' and the path's jerk rows
+    (normalised) of :func:`_jerk_rows`, in numpy (:func:`._jerk_jit.jerk_rows` is
+    the compiled twin)."""
     sq = np.sqrt(np.maximum(x_bar, TINY_X * max(float(x_bar.max()), TINY_X)))
     S = sq[g] + sq[g + 1] + 2.0 * ecorr[g]
     S = np.maximum(S, 0.5 * (sq[g] + sq[g + 1]))
@@ -470,10 +494,10 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
                 c = (-gi, c3 - gj, -w, c2 + w)
             coef.append(np.stack(c, axis=-1).reshape(-1, 4))
             rhs.append(r)
-    if math.isfinite(p.j_path):
-        f1 = 2.0 * p.j_path / S
-        gi1 = -p.j_path / (S * S * sq[g])
-        gj1 = -p.j_path / (S * S * sq[g + 1])
+    if math.isfinite(j_path):
+        f1 = 2.0 * j_path / S
+        gi1 = -j_path / (S * S * sq[g])
+        gj1 = -j_path / (S * S * sq[g + 1])
         r1 = f1 - gi1 * x_bar[g] - gj1 * x_bar[g + 1]
         for sgn in (1.0, -1.0):
             w1 = sgn / D[g]
@@ -482,13 +506,7 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
     C = np.concatenate(coef) if coef else np.zeros((0, 4))
     b = np.concatenate(rhs) if rhs else np.zeros(0)
     big = np.maximum(np.maximum(np.abs(C).max(axis=1, initial=0.0), np.abs(b)), 1e-300)
-    C = C / big[:, None]
-    b = b / big
-    rest = np.array([sgn / max(1.0, ub) for _node, sgn, ub in rest_rows], dtype=float)
-    extra = np.array([ub / max(1.0, ub) for _node, _sgn, ub in rest_rows], dtype=float)
-    node = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=int)
-    return _JerkRows(C, _jerk_cells(g, m, math.isfinite(p.j_path)), rest, node,
-                     np.concatenate([b, extra]), n)
+    return C / big[:, None], b / big
 
 
 def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
