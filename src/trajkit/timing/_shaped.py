@@ -65,7 +65,7 @@ JOINT_ORDERS = (1,)
 
 #: Tolerances of the linear programs (duality gap, absolute and relative, and
 #: feasibility): the programs only shape the path (the timing engine times it
-#: exactly); at the cone solver's default 1e-8 they stall (50-200 iterations,
+#: exactly); at the cone solver's default 1e-8 they stall (up to 200 iterations,
 #: most ending "almost solved"), at 1e-6 they solve in 18-29.
 LP_TOL = 1e-6
 
