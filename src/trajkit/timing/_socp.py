@@ -651,8 +651,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     vmax = np.broadcast_to(p.v_max, (n, m))
     a_hi, a_lo = _legs(sig, np.broadcast_to(p.a_acc, (n, m)), np.broadcast_to(p.a_dec, (n, m)))
     j_both = np.minimum(np.broadcast_to(p.j_acc, (n, m)), np.broadcast_to(p.j_dec, (n, m)))
-    j_acc = np.broadcast_to(p.j_acc, (n, m))
-    j_dec = np.broadcast_to(p.j_dec, (n, m))
+    # (full arrays, once: every round's jerk rows read them)
+    j_acc = np.ascontiguousarray(np.broadcast_to(p.j_acc, (n, m)), dtype=float)
+    j_dec = np.ascontiguousarray(np.broadcast_to(p.j_dec, (n, m)), dtype=float)
     rest0 = p.x0 == 0.0 and p.u0 == 0.0
     restN = p.xN == 0.0 and p.uN == 0.0
 
