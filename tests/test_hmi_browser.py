@@ -198,6 +198,10 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     # pause: the axes come to rest and stay; resume: they move again
     page.click("#btn-pause")
     _wait_state(page, "paused")
+    # (at rest once the stop ramp has run and the page has the last values: on a
+    # loaded machine that can take longer than any fixed wait)
+    until(page, "parseFloat(document.querySelector('#axes tr[data-axis=\"theta\"] .axis-vel')"
+                ".textContent) === 0")
     page.wait_for_timeout(200)
     p1 = _axis_value(page, "theta", "pos")
     page.wait_for_timeout(400)
