@@ -200,23 +200,29 @@ def test_compiled_sync_requested_duration_and_errors():
         plan_ptp_states(S, G, lim, duration=2.0)
 
 
-def test_sync_moves_on_when_step2_finds_no_profile(caplog):
-    """Asymmetric limits with a reversal: step 2 of axis 1 finds no profile of
-    the common duration 10 s set by axis 0 (its durations 6.91..13.87 s are a
-    gap of the step-2 families and of the cruise fallback); the common duration
-    moves up to one every axis fills, with a warning."""
+def test_sync_takes_the_end_of_a_blocked_interval_of_separate_legs(caplog):
+    """Separate legs: axis 1 cannot take any duration in (6.879, 13.867) s (to
+    lose its excess travel it must reverse twice, each time waiting for its
+    weak decel leg; proven in test_state_step2.py), and the minimum 10 s of
+    axis 0 lies in that interval. The compiled synchronisation finds it when
+    the axis' step 2 fails there, and the common duration is the interval's
+    end, without the search in 1 % steps of a step-2 failure."""
     S = [(0.0, 0.0, 0.0), (-0.37060783406439646, -0.540875349469885, 0.04914176271392083)]
     G = [(8.0, 0.0, 0.0), (-3.220893541416452, -0.8468465473234723, -0.06935750650130823)]
     lims = [AxisLimits(1.0, 1.0, 1.0),
             AxisLimits(0.8468465473234723, 0.3302788257239121, 19.796658314532166,
                        0.06935750650130823, 11.102447246912389)]
+    (lo, hi), = feasible_durations(S[1], G[1], lims[1]).blocked
+    assert lo == pytest.approx(6.8787155, abs=1e-6) and hi == pytest.approx(13.8674460, abs=1e-6)
     with caplog.at_level("WARNING", logger="trajkit.sync"):
         t = plan_ptp_states(S, G, lims)
     assert verify_trajectory(t).ok
-    mins = [feasible_durations(s, g, lim).minimum for s, g, lim in zip(S, G, lims)]
-    assert max(mins) == pytest.approx(10.0)
-    assert t.duration > 13.86
-    assert "step 2 found no profile" in caplog.text
+    assert feasible_durations(S[0], G[0], lims[0]).minimum == pytest.approx(10.0)
+    assert t.duration == pytest.approx(hi, rel=1e-12)
+    assert "step 2 found no profile" not in caplog.text
+    # a requested duration inside it is refused with the interval
+    with pytest.raises(InfeasibleError, match="blocked interval"):
+        plan_ptp_states(S, G, lims, duration=12.0)
 
 
 def test_phase_sums_are_correctly_rounded():

@@ -307,58 +307,93 @@ def sync_time(inp, Treq, status, dur, tmin, nph, nbr, shape, ph, blk, nblk):
     step 2 failed on an axis, which the caller plans again in Python; -5: a
     state of an axis is outside its row's bounds, which the caller checks
     again with its messages) and the axis index in ``T``'s place.
+
+    The blocked intervals of an axis with separate legs are probed by step 2
+    (see ``_kernel._blocks_probed``), which costs a step 2 per gap: they are
+    computed only for an axis whose step 2 fails at the common duration.
     """
     n = inp.shape[0]
     for i in range(n):
         if not _state_ok(inp[i]):
             return -5, float(i)
     ws = np.zeros(K.NWS)
-    # step 1 on every axis, with its blocked intervals
+    pending = np.zeros(n, dtype=np.bool_)
+    # step 1 on every axis, with its blocked intervals (separate legs: later)
     for i in range(n):
         row = inp[i]
         if not _goal_ok(row[4], row[5], row[6], row[7], row[8], row[9], row[10]):
             status[i] = ST_GOAL
             return -1, float(i)
-        _load(ws, inp, i, K.TASK_BLOCK, 0.0)
+        pending[i] = row[7] != row[9] or row[8] != row[10]
+        _load(ws, inp, i, K.TASK_MIN if pending[i] else K.TASK_BLOCK, 0.0)
         K.solve(ws)
         _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
         if status[i] != K.ST_OK:
             return -1, float(i)
-        nb = int(ws[K.OUT_NBLK])
-        nblk[i] = nb
-        for b in range(nb):
-            blk[i, b, 0] = ws[K.OUT_BLK + 2 * b]
-            blk[i, b, 1] = ws[K.OUT_BLK + 2 * b + 1]
-    T = 0.0
+        nblk[i] = 0
+        if not pending[i]:
+            _keep_blocks(ws, i, blk, nblk)
+    T0 = 0.0
     for i in range(n):
-        T = max(T, tmin[i])
-    if Treq == Treq:
-        if Treq < T * (1.0 - K.DURATION_RTOL):
-            return -2, T
-        for i in range(n):
-            for b in range(nblk[i]):
-                if blk[i, b, 0] < Treq < blk[i, b, 1]:
-                    return -3, float(i)
-        T = max(Treq, T)
-    else:
-        # the smallest duration feasible for every axis
-        for _ in range(SYNC_MAX_ROUNDS):
-            T2 = T
+        T0 = max(T0, tmin[i])
+    if Treq == Treq and Treq < T0 * (1.0 - K.DURATION_RTOL):
+        return -2, T0
+    for _ in range(n + 1):  # (each pass resolves the blocks of one more axis)
+        if Treq == Treq:
             for i in range(n):
                 for b in range(nblk[i]):
-                    if blk[i, b, 0] < T2 < blk[i, b, 1]:
-                        T2 = blk[i, b, 1]
-            if T2 == T:
+                    if blk[i, b, 0] < Treq < blk[i, b, 1]:
+                        return -3, float(i)
+            T = max(Treq, T0)
+        else:
+            # the smallest duration feasible for every axis
+            T = T0
+            for _ in range(SYNC_MAX_ROUNDS):
+                T2 = T
+                for i in range(n):
+                    for b in range(nblk[i]):
+                        if blk[i, b, 0] < T2 < blk[i, b, 1]:
+                            T2 = blk[i, b, 1]
+                if T2 == T:
+                    break
+                T = T2
+        # step 2 on every axis not at its own minimum
+        failed = -1
+        for i in range(n):
+            if T <= tmin[i] * (1.0 + K.DURATION_RTOL):
+                continue
+            _load(ws, inp, i, K.TASK_STEP2, T)
+            ws[K.OUT_TMIN] = tmin[i]
+            K.solve(ws)
+            _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
+            if status[i] != K.ST_OK:
+                failed = i
                 break
-            T = T2
-    # step 2 on every axis not at its own minimum
-    for i in range(n):
-        if T <= tmin[i] * (1.0 + K.DURATION_RTOL):
-            continue
-        _load(ws, inp, i, K.TASK_STEP2, T)
-        ws[K.OUT_TMIN] = tmin[i]
+        if failed < 0:
+            return 0, T
+        if not pending[failed]:
+            return -4, float(failed)
+        # the failed axis' blocked intervals: does T lie in one?
+        pending[failed] = False
+        _load(ws, inp, failed, K.TASK_BLOCK, 0.0)
         K.solve(ws)
-        _store(ws, i, status, dur, tmin, nph, nbr, shape, ph)
-        if status[i] != K.ST_OK:
-            return -4, float(i)
-    return 0, T
+        if ws[K.OUT_STATUS] != K.ST_OK:
+            return -4, float(failed)
+        _keep_blocks(ws, failed, blk, nblk)
+        inside = False
+        for b in range(nblk[failed]):
+            if blk[failed, b, 0] < T < blk[failed, b, 1]:
+                inside = True
+        if not inside:
+            return -4, float(failed)
+    return -4, 0.0
+
+
+@jit_raw
+def _keep_blocks(ws, i, blk, nblk):
+    """The blocked intervals of the solve in ``ws`` as axis ``i``'s."""
+    nb = int(ws[K.OUT_NBLK])
+    nblk[i] = nb
+    for b in range(nb):
+        blk[i, b, 0] = ws[K.OUT_BLK + 2 * b]
+        blk[i, b, 1] = ws[K.OUT_BLK + 2 * b + 1]

@@ -98,6 +98,11 @@ DURATION_RTOL = 1e-12
 #: Shape code (step 2, before the fixed-duration offset) of the cruise fallback.
 SHAPE_CRUISE_FALLBACK = 15
 
+#: Where in a gap between two valid step-1 durations step 2 is tried (fractions
+#: of the gap, in order) when separate legs leave the blocked intervals to be
+#: probed: the gap is feasible at the first profile found, blocked without one.
+PROBES = (0.5, 0.25, 0.75, 0.1, 0.9)
+
 #: Cruise velocities sampled by the step-2 fallback (then bisection).
 FALLBACK_SAMPLES = 33
 
@@ -132,7 +137,12 @@ _SFS = _SFC + NCF * NSF         # ... and its scratch
 IN_GENERAL = _SFS + SF_SCRATCH
 #: Scratch of the correctly rounded sum of a phase table (``_batch_states``).
 SUM_SCRATCH = IN_GENERAL + 1
-NWS = SUM_SCRATCH + NPH + 1
+#: The outputs kept while the blocked intervals are probed (separate legs),
+#: then the intervals found.
+_SAVE = SUM_SCRATCH + NPH + 1
+_NSAVE = OUT_PH + 3 * NPH - OUT_STATUS
+_FOUND = _SAVE + _NSAVE
+NWS = _FOUND + 2 * NBLK
 
 
 def workspace() -> np.ndarray:
@@ -326,7 +336,13 @@ def solve(ws):
     _emit(ws, out, keep, nb_best + n_best, nb_best, best_total, best_total, ts, js, as_)
     if task == TASK_MIN or task == TASK_VELOCITY:
         return
-    nblk = _blocks(valid, nvalid, best_total, ws)
+    legs_equal = lim[1] == lim[3] and lim[2] == lim[4]
+    nblk = 0
+    if legs_equal:
+        nblk = _blocks(valid, nvalid, best_total, ws)
+    elif task == TASK_BLOCK:
+        _blocks_probed(ws, valid, nvalid, best_total, start_inside, st0, lim, brk, bbuf, s1, best,
+                       res, W, vec, ivl, cfg, st, keep, out, ts, js, as_)
     if task == TASK_BLOCK:
         return
     # ---- step 2: exactly T (brake included)
@@ -336,8 +352,22 @@ def solve(ws):
         return
     if T <= best_total * (1.0 + DURATION_RTOL):
         return
-    _step2(ws, T, best_total, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+    if legs_equal:
+        _step2(ws, T, best_total, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+               ivl, cfg, st, keep, out, ts, js, as_)
+        return
+    # separate legs: step 2 first; where it finds no profile, the blocked
+    # intervals (probed) say whether the duration lies in one
+    ws[OUT_NBLK] = 0.0
+    _step2(ws, T, best_total, 0, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
            ivl, cfg, st, keep, out, ts, js, as_)
+    if ws[OUT_STATUS] != ST_NONE:
+        return
+    nblk = _blocks_probed(ws, valid, nvalid, best_total, start_inside, st0, lim, brk, bbuf, s1, best,
+                          res, W, vec, ivl, cfg, st, keep, out, ts, js, as_)
+    for b in range(nblk):
+        if ws[OUT_BLK + 2 * b] / ts < T < ws[OUT_BLK + 2 * b + 1] / ts:
+            ws[OUT_STATUS] = ST_BLOCKED
 
 
 @jit_raw
@@ -715,6 +745,51 @@ def _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1):
     s1[4] = st0[4]
     s1[5] = st0[5]
     return nb, tb
+
+
+@jit_raw
+def _blocks_probed(ws, valid, nvalid, tmin, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec,
+                   ivl, cfg, st, keep, out, ts, js, as_):
+    """Blocked intervals with separate legs: between two consecutive valid
+    step-1 durations a duration is feasible throughout or nowhere (every end
+    of a blocked interval is a valid step-1 duration), but with separate legs
+    step 1 also finds valid profiles whose durations lie inside the feasible
+    set (an acceleration held through a velocity reversal, where the leg's
+    bound changes), so the parity rule of :func:`_blocks` does not hold.
+    Each gap is decided by step 2 at the points :data:`PROBES`: feasible at
+    the first profile found, blocked where it finds none (its families miss
+    some durations with separate legs, see the docs' known limits). The
+    outputs written before (the minimum's profile) are kept; the intervals
+    go to ``OUT_BLK`` (their count returned)."""
+    sort_ascending(valid, nvalid)
+    m = merge_equal(valid, nvalid, BLOCK_MERGE_RTOL)
+    for k in range(_NSAVE):
+        ws[_SAVE + k] = ws[OUT_STATUS + k]
+    found = ws[_FOUND:_FOUND + 2 * NBLK]
+    nblk = 0
+    for i in range(m - 1):
+        if nblk >= NBLK:
+            break
+        lo = valid[i]
+        hi = valid[i + 1]
+        blocked = True
+        for f in PROBES:
+            ws[OUT_STATUS] = ST_OK
+            _step2(ws, lo + f * (hi - lo), tmin, 0, start_inside, st0, lim, brk, bbuf, s1, best,
+                   res, W, vec, ivl, cfg, st, keep, out, ts, js, as_)
+            if ws[OUT_STATUS] != ST_NONE:
+                blocked = False
+                break
+        if blocked:
+            found[2 * nblk] = lo * ts
+            found[2 * nblk + 1] = hi * ts
+            nblk += 1
+    for k in range(_NSAVE):
+        ws[OUT_STATUS + k] = ws[_SAVE + k]
+    for k in range(2 * nblk):
+        ws[OUT_BLK + k] = found[k]
+    ws[OUT_NBLK] = nblk
+    return nblk
 
 
 @jit_raw

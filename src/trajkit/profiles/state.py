@@ -546,8 +546,9 @@ def _fail(ws, s, g, limits, what):
         # the fixed-duration gap of asymmetric limits (docs/state-profiles.md)
         raise InfeasibleError(
             f"no profile found {what}{name} from state {s!r} to {g!r} within the limits: with "
-            "separate accel/decel limits this duration may lie in a blocked interval that "
-            "feasible_durations does not report; a longer duration may be feasible")
+            "separate accel/decel limits the fixed-duration search misses some durations of "
+            "profiles that reverse (it found profiles elsewhere between the same step-1 "
+            "durations); a longer duration may be feasible")
     raise InfeasibleError(
         f"no profile found {what}{name} from state {s!r} to {g!r} within the limits "
         "(please report this input)")
@@ -597,7 +598,10 @@ def feasible_durations(start: Sequence[float], goal: Sequence[float],
     -------
     DurationSet
         Step 1 of the planner: the durations of every valid profile of the
-        shape enumeration bound the feasible set (ruckig's *block*).
+        shape enumeration bound the feasible set (ruckig's *block*). With
+        separate accel/decel limits each gap between two consecutive valid
+        durations is tried by the fixed-duration search (at five points) and
+        reported blocked where it finds no profile (docs/state-profiles.md).
     """
     limits, s, g = _prepare(start, goal, limits)
     ws = _run(s, g, limits, K.TASK_BLOCK)
