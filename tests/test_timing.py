@@ -80,6 +80,31 @@ def test_joint_space_line_equals_phase_synchronised_ptp(seed):
     assert np.abs(qd).max() <= 1e-12 and np.abs(qdd).max() <= 1e-9
 
 
+@pytest.mark.parametrize("use_ipm", [True, False])
+@pytest.mark.parametrize("v_max", [10.0, 1e3, 1e5, math.inf])
+def test_joint_space_line_with_a_velocity_limit_it_never_reaches(v_max, use_ipm, monkeypatch):
+    """A velocity limit far above the speed the move reaches (the jerk and
+    acceleration limits decide), or none: the same optimum, with the
+    interior-point method and with the cone solver (which the engine uses
+    without numba). (The grid problems' time unit once came from the velocity
+    limit alone after the first solve: a move of 0.53 s came out 1.5-4.5x
+    longer; and without a velocity limit the cone solver got NaN rows.)"""
+    from trajkit.timing import _socp
+
+    monkeypatch.setattr(_socp, "USE_IPM", use_ipm)
+    lims = [AxisLimits(v_max, 316.45870010214634, 373.9616730563067),
+            AxisLimits(v_max, 200.0, 500.0)]
+    start, goal = np.array([496.7016214576301, 0.0]), np.array([498.4740072829493, 0.5])
+    finite = [AxisLimits(min(v_max, 1e30), lm.a_max, lm.j_max) for lm in lims]
+    ref = plan_ptp(start, goal, finite, sync="phase").duration
+    for path in (LinearJointPath(start, goal), None):
+        tm = (plan_path_timing(path, lims) if path is not None
+              else plan_waypoints(np.array([start, goal]), lims).segments[0])
+        assert ref * (1 - 1e-9) <= tm.duration <= ref * 1.005, (v_max, tm.duration, ref)
+        assert tm.time_scale == 1.0 and tm.info["converged"]
+        assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+
+
 def test_one_joint_alone_is_its_seven_phase_optimum():
     """Only joint 2 of 3 moves: the engine's time is the 7-phase optimum of that joint."""
     lim = AxisLimits(1.2, 5.0, 40.0, a_max_decel=3.0, j_max_decel=25.0)
@@ -290,6 +315,15 @@ def test_spline_waypoints_stop_where_the_spline_would_leave_a_joint_range():
     (dict(waypoints=[[0.0, 0.0], [5.0, 0.0]],
           limits=[AxisLimits(1, 2, 10, position_min=-1, position_max=1)] * 2),
      r"waypoints\[1\] 5\.0 is outside the position range \[-1\.0, 1\.0\]"),
+    (dict(waypoints=[[0.0, 0.0], [1e300, 0.0]]),
+     r"waypoints\[1\] 1e\+300 on axis 0 is outside the supported range: \|position\| must be at most"),
+    (dict(waypoints=[[0.0, 0.0], [1e-200, 0.0], [1e-199, 0.0]]),
+     r"waypoints\[1\] is 1e-200 from the waypoint before it, below the supported step 1e-100"),
+    (dict(waypoints=[[0.0, 0.0], [1.0, 0.0], [1.0, 1e-13]]),
+     r"waypoints\[2\] is 1e-13 from the waypoint before it, below the supported step 1\.0.*e-12"),
+    (dict(limits=[AxisLimits(1, 1e-35, 10)] * 2), r"a_max 1e-35.* is outside the supported range"),
+    (dict(limits=[AxisLimits(1e6, 1e-3, 1e6)] * 2),
+     r"v_max j_max / a_max\^2 1e\+18.* is outside the supported range"),
 ])
 def test_waypoint_errors_name_the_field(bad, match):
     args = dict(waypoints=[[0.0, 0.0], [1.0, 0.5]], limits=[AxisLimits(1, 2, 10)] * 2, blend=0.1,
@@ -297,6 +331,41 @@ def test_waypoint_errors_name_the_field(bad, match):
     args.update(bad)
     with pytest.raises(InvalidInputError, match=match):
         plan_waypoints(args["waypoints"], args["limits"], blend=args["blend"], shape=args["shape"])
+
+
+def test_waypoints_hostile_inputs_get_a_typed_error_or_a_valid_motion():
+    """Random waypoints and limits over 240 decades (magnitudes, near-duplicate
+    waypoints, separate legs, no velocity limit, tiny to huge blends): every
+    call returns a motion that ends at the last waypoint or raises an
+    InvalidInputError / InfeasibleError, without any other exception or a
+    numpy warning (those turned into errors here)."""
+    import warnings
+
+    from trajkit.errors import TrajkitError
+
+    rng = np.random.default_rng(41)
+    planned = refused = 0
+    for _ in range(120):
+        n, m = int(rng.integers(2, 5)), int(rng.integers(1, 3))
+        scale = 10.0 ** rng.uniform(-120, 120) if rng.random() < 0.5 else 10.0 ** rng.uniform(-4, 4)
+        W = rng.standard_normal((n, m)) * scale
+        if rng.random() < 0.2:
+            W[1] = W[0] + rng.standard_normal(m) * scale * 10.0 ** rng.uniform(-16, -8)
+        e = rng.uniform(-40, 40, (m, 5)) if rng.random() < 0.3 else rng.uniform(-2, 2, (m, 5))
+        lims = [AxisLimits(math.inf if rng.random() < 0.2 else 10.0 ** r[0], *(10.0 ** r[1:]))
+                for r in e]
+        blend = float(10.0 ** rng.uniform(-12, 2)) if rng.random() < 0.5 else 0.0
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            try:
+                tm = plan_waypoints(W, lims, blend=blend)
+            except TrajkitError:
+                refused += 1
+                continue
+        planned += 1
+        end = tm.sample([tm.duration]).position[0]
+        assert np.allclose(end, W[-1], rtol=1e-9, atol=1e-9 * np.abs(W).max())
+    assert planned >= 10 and refused >= 10
 
 
 def test_engine_input_errors():

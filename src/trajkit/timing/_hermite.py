@@ -14,6 +14,8 @@ phase: ``tau = (6 D / J)^(1/3)``, ``J = sqrt(a^3 / (6 D))``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["hermite_pieces"]
@@ -72,8 +74,10 @@ def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
             continue
         a = max(float(a), 0.0)
         if a > 0.0:
-            Jr = float(np.sqrt(a ** 3 / (6.0 * D[i])))
-            tr = float((6.0 * D[i] / Jr) ** (1.0 / 3.0))
+            # one jerk phase from rest to acceleration a over the distance D:
+            # D = a t^2 / 6 (the ratio first: no cube of a to under- or overflow)
+            tr = math.sqrt(6.0 * (float(D[i]) / a))
+            Jr = a / tr
         else:  # no acceleration at the neighbour node: constant speed is impossible from rest
             raise ValueError(f"grid interval {i} at rest has no acceleration")
         dur[2 * i], jerk[2 * i] = tr, Jr  # from rest up, or down to rest: jerk > 0 both

@@ -224,7 +224,9 @@ class _StaticRows:
             b = np.concatenate(self._b)
         else:
             cell, C, b = np.zeros(0, dtype=np.int64), np.zeros((0, 4)), np.zeros(0)
-        big = np.maximum(np.maximum(np.abs(C).max(axis=1, initial=0.0), np.abs(b)), 1e-300)
+        # (an infinite right-hand side, a limit that is not there, stays infinite)
+        bf = np.where(np.isfinite(b), np.abs(b), 0.0)
+        big = np.maximum(np.maximum(np.abs(C).max(axis=1, initial=0.0), bf), 1e-300)
         self.coef = C * (1.0 / big)[:, None]
         self.b = b / big
         self.cell = cell
@@ -354,13 +356,15 @@ def _time_scale(p: GridProblem) -> float:
     L = float(p.s[-1] - p.s[0])
     n, m = p.d1.shape
     a1 = np.max(np.abs(p.d1), axis=0)
+
+    def least(lim):  # every joint's limit (per joint or per node and joint): its least
+        return np.broadcast_to(lim, (n, m)).min(axis=0)
+
     with np.errstate(divide="ignore"):
-        v = np.min(np.where(a1 > 0, np.broadcast_to(p.v_max, (n, m)).min(axis=0) / a1, np.inf))
-        a = np.min(np.where(a1 > 0, np.minimum(p.a_acc, p.a_dec).min(axis=0) / a1, np.inf)
-                   if np.ndim(p.a_acc) == 1 else np.inf)
-        j = np.min(np.where(a1 > 0, np.minimum(p.j_acc, p.j_dec).min(axis=0) / a1, np.inf)
-                   if np.ndim(p.j_acc) == 1 else np.inf)
-    v = min(v, float(np.max(np.sqrt(p.x_cap))), p.a_path * math.inf if False else v)
+        v = np.min(np.where(a1 > 0, least(p.v_max) / a1, np.inf))
+        a = np.min(np.where(a1 > 0, least(np.minimum(p.a_acc, p.a_dec)) / a1, np.inf))
+        j = np.min(np.where(a1 > 0, least(np.minimum(p.j_acc, p.j_dec)) / a1, np.inf))
+    v = min(v, float(np.max(np.sqrt(p.x_cap))))
     cands = [L / v if v > 0 and math.isfinite(v) else 0.0,
              math.sqrt(L / a) if a > 0 and math.isfinite(a) else 0.0,
              (L / j) ** (1.0 / 3.0) if j > 0 and math.isfinite(j) else 0.0,

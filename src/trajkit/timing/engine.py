@@ -52,6 +52,7 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from ..profiles import plan_move
 from ..profiles._pieces import eval_pieces
+from ..profiles._range import check_limits_range
 from . import _checks
 from ._hermite import hermite_pieces
 from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, solve_grid
@@ -307,6 +308,7 @@ def _limit_arrays(limits: Sequence[AxisLimits], m: int):
     for k, lm in enumerate(limits):
         if not isinstance(lm, AxisLimits):
             raise InvalidInputError(f"limits[{k}] must be an AxisLimits, got {type(lm).__name__}")
+        check_limits_range(lm, states=True)
         lims.append(lm)
     v = np.array([lm.v_max for lm in lims])
     aa = np.array([lm.a_max for lm in lims])
@@ -1062,16 +1064,23 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         vcap = np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1)
     vcap = np.minimum(vcap, cap)
     n = s.size
+    rest0 = start_speed == 0.0 and start_accel == 0.0
+    restN = end_speed == 0.0 and end_accel == 0.0
     # the work has to be worth it: a motion that cannot be shorter than MAX_DURATION
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):
         floor = float(np.sum(np.diff(s) / np.maximum(vcap[:-1], vcap[1:])))
+        if rest0 and restN:
+            # every joint moves its distance from rest to rest: at least the
+            # time of its bang-bang acceleration and of its jerk alone
+            dq = np.abs(q[-1] - q[0])
+            floor = max(floor, float(np.max(2.0 * np.sqrt(dq / alim))),
+                        float(np.max(np.cbrt(32.0 * dq / jlim))))
     if not floor <= MAX_DURATION:
         raise InvalidInputError(
             f"the motion along this path would take at least {floor:.3g} s, more than the "
-            f"{MAX_DURATION:g} s the path timing supports (a speed cap or limit far too low)")
+            f"{MAX_DURATION:g} s the path timing supports (a speed cap or limit far too low "
+            "for its length)")
     x_cap = cap ** 2  # lowered locally where the check finds the cap exceeded
-    rest0 = start_speed == 0.0 and start_accel == 0.0
-    restN = end_speed == 0.0 and end_accel == 0.0
 
     best: _Best | None = None
     sol: GridSolution | None  # the solution kept; None for the fallback timing

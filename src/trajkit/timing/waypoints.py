@@ -28,6 +28,7 @@ from scipy.interpolate import CubicSpline
 from .._validate import check_array, check_finite, check_positive
 from ..errors import InvalidInputError
 from ..limits import AxisLimits
+from ..profiles._range import DISTANCE_ABS_MIN, POSITION_MAX, check_limits_range
 from ..sync import plan_ptp
 from ._shaped import ShapedJointPath, shaped_path
 from .engine import PathTiming, plan_path_timing
@@ -39,6 +40,11 @@ __all__ = ["BlendedJointPath", "SplineJointPath", "ShapedJointPath", "SHAPES", "
 
 #: Most waypoints of one call.
 MAX_WAYPOINTS = 10_000
+
+#: Smallest step between consecutive distinct waypoints, as a fraction of the
+#: path's chord length (the splines' parameter must resolve every step); at
+#: least ``DISTANCE_ABS_MIN`` too.
+STEP_RTOL_MIN = 1e-12
 
 #: The engine times a straight joint line from rest to rest within this
 #: fraction of the phase-synchronised PTP optimum (tested): a stretch is run
@@ -424,8 +430,13 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     for k, lm in enumerate(lims):
         if not isinstance(lm, AxisLimits):
             raise InvalidInputError(f"limits[{k}] must be an AxisLimits, got {type(lm).__name__}")
+        check_limits_range(lm, states=True)
         for i in range(pts.shape[0]):
             lm.check_position(pts[i, k], f"waypoints[{i}]")
+            if not (abs(pts[i, k]) <= POSITION_MAX):
+                raise InvalidInputError(
+                    f"waypoints[{i}] {float(pts[i, k])!r} on axis {lm.name if lm.name is not None else k} "
+                    f"is outside the supported range: |position| must be at most {POSITION_MAX!r}")
     if shape not in SHAPES:
         raise InvalidInputError(f"shape must be one of {', '.join(map(repr, SHAPES))}, got {shape!r}")
     if shape == "lines":
@@ -441,6 +452,18 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
     # stops: the ends and every reversal
     seg = np.diff(pts, axis=0)
     seglen = np.linalg.norm(seg, axis=1)
+    # (the steps' lengths without underflow, for the check)
+    big = np.max(np.abs(seg), axis=1)
+    step = big * np.linalg.norm(seg / big[:, None], axis=1)
+    step_min = max(DISTANCE_ABS_MIN, STEP_RTOL_MIN * float(np.sum(step)))
+    short = ~(step >= step_min)
+    if short.any():
+        i = int(np.argmax(short))
+        rows = np.nonzero(keep)[0]
+        raise InvalidInputError(
+            f"waypoints[{rows[i + 1]}] is {float(step[i])!r} from the waypoint before it, below "
+            f"the supported step {step_min!r} (the larger of {DISTANCE_ABS_MIN!r} and "
+            f"{STEP_RTOL_MIN!r} times the path's chord length): merge the two waypoints")
     dirs = seg / seglen[:, None]
     turn = np.arccos(np.clip(np.sum(dirs[:-1] * dirs[1:], axis=1), -1.0, 1.0))
     stops = [0] + [i + 1 for i, a in enumerate(turn) if a > REVERSAL_ANGLE] + [pts.shape[0] - 1]
