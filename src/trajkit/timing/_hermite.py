@@ -9,7 +9,7 @@ through both states exactly when
 
 (the first line is a quadratic in tau with one positive root whenever the
 states can be joined). An interval that starts or ends at rest is one jerk
-phase: ``tau = (6 D / J)^(1/3)``, ``J = sqrt(a^3 / (6 D))``.
+phase: ``tau = sqrt(6 D / a)``, ``J = a / tau`` (``D = a tau^2 / 6``).
 """
 
 from __future__ import annotations
