@@ -720,6 +720,16 @@ class _Limits:
     kappa: np.ndarray | None
     cap: np.ndarray | None
     cap_fn: Callable[[np.ndarray], np.ndarray] | None
+    #: the joints' velocity scale of the rest test (REST_RTOL): the limit, or where
+    #: there is none, the largest speed the joint reaches (None: the limit)
+    vrest: np.ndarray | None = None
+
+
+def _rest_scale(vlim: np.ndarray, d1: np.ndarray, st: np.ndarray) -> np.ndarray:
+    """The joints' velocity scale of the rest test: ``vlim``, and where it is
+    infinite, the largest ``|q'|`` times the largest path speed of the states ``st``."""
+    reach = np.max(np.abs(d1), axis=0) * float(np.max(st[:, 1], initial=0.0))
+    return np.where(np.isfinite(vlim), vlim, np.where(reach > 0.0, reach, 1.0))
 
 
 def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None):
@@ -763,7 +773,7 @@ def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None)
     # ends at rest is the end of a braking, one that starts there speeds up)
     prod = qd * qdd
     aqd = np.abs(qd)
-    at_rest = aqd <= REST_RTOL * lim.vlim
+    at_rest = aqd <= REST_RTOL * (lim.vlim if lim.vrest is None else lim.vrest)
     if at_rest.any():
         rest_row = at_rest.any(axis=1)
         if mid is None:  # (only the pieces with a joint at rest)
@@ -827,7 +837,7 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
     jerk = np.ascontiguousarray(jerk, dtype=f64)
     piece = np.ascontiguousarray(piece, dtype=np.int64)
     dt = np.ascontiguousarray(dt, dtype=f64)
-    tol = REST_RTOL * lim.vlim
+    tol = REST_RTOL * (lim.vlim if lim.vrest is None else lim.vrest)
     empty = np.zeros(0)
     none2 = np.zeros((0, m))
     mid = np.zeros((k, m))
@@ -1145,7 +1155,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 break
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
             lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                          cap_fn if callable(speed) else None)
+                          cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
             use, cell, rv, ra, rj, rs, _ = _check(s, der, t, st, jk, lim,
                                                   exact if cheap else _Interp(s, der, breaks, left))
             k = _uniform_scale(use)
@@ -1228,7 +1238,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
         # the final check, denser than the rounds' (any excess left: a uniform slow-down)
         lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                      cap_fn if callable(speed) else None)
+                      cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left)
         src = exact if exact is not None else corrected
