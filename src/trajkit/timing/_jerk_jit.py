@@ -2,7 +2,8 @@
 
 Every round of the grid problem (:mod:`._socp`) linearises the joints' jerk
 at both ends of every free interval around the previous round's node states
-(both signs, the leg from the sign of ``qdot * qddot`` there), and the
+(both signs; the leg where ``qdot * qddot`` has one sign at both ends of the
+interval, else the tighter of both), and the
 path's jerk; :func:`jerk_rows` writes those rows, normalised, in one pass
 over the intervals and joints, in the order and with the operations of the
 numpy formulation (``_socp._jerk_rows_numpy``): the same rows to a few ulps
@@ -79,11 +80,13 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
             xj = x_bar[i + 1]
             nd = i + e
             for k in range(m):
-                qdd = d2[nd, k] * x_bar[nd] + d1[nd, k] * u_bar[nd]
-                speeding = sig[nd, k] * qdd
-                if speeding > 0.0:
+                # the leg of the interval: where the joint speeds up (slows down)
+                # at both of its ends, else (a leg change inside) the tighter of both
+                sp0 = sig[i, k] * (d2[i, k] * x_bar[i] + d1[i, k] * u_bar[i])
+                sp1 = sig[i + 1, k] * (d2[i + 1, k] * x_bar[i + 1] + d1[i + 1, k] * u_bar[i + 1])
+                if sp0 > 0.0 and sp1 > 0.0:
                     jl = j_acc[nd, k]
-                elif speeding < 0.0:
+                elif sp0 < 0.0 and sp1 < 0.0:
                     jl = j_dec[nd, k]
                 else:
                     jl = j_both[nd, k]

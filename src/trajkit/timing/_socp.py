@@ -482,9 +482,14 @@ def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr
     si, sj = sq[g][:, None], sq[g + 1][:, None]
     coef: list[np.ndarray] = []  # (r, 4) each
     rhs: list[np.ndarray] = []
+    # the leg of each interval: where the joint speeds up (slows down) at both of
+    # its ends, else (a leg change inside) the tighter of both
+    sp0 = sig[ends[0]] * qdd_bar[ends[0]]
+    sp1 = sig[ends[1]] * qdd_bar[ends[1]]
+    up = (sp0 > 0) & (sp1 > 0)
+    down = (sp0 < 0) & (sp1 < 0)
     for e, nd in enumerate(ends):
-        speeding = sig[nd] * qdd_bar[nd]
-        jl = np.where(speeding > 0, j_acc[nd], np.where(speeding < 0, j_dec[nd], j_both[nd]))
+        jl = np.where(up, j_acc[nd], np.where(down, j_dec[nd], j_both[nd]))
         f = 2.0 * jl / S[:, None]
         gi = -jl / (S2 * si)
         gj = -jl / (S2 * sj)
