@@ -39,6 +39,23 @@ def _random_limits(rng, m, asym=True):
     return out
 
 
+def _wide_limits(rng, m):
+    """Limits of ``m`` joints drawn wide: acceleration 0.1-100, jerk 0.3-30 times
+    it, velocity 0.1-1e4 or none (within the supported shape ratio), separate
+    legs within a factor 3 on some joints."""
+    lims = []
+    for _ in range(m):
+        a = 10.0 ** rng.uniform(-1, 2)
+        j = a * 10.0 ** rng.uniform(-0.5, 1.5)
+        v = 10.0 ** rng.uniform(-1, 4) if rng.random() < 0.7 else math.inf
+        if v < math.inf and not 1e-9 <= v * j / a**2 <= 1e9:
+            v = math.inf
+        ad = a * 10.0 ** rng.uniform(-0.5, 0.5) if rng.random() < 0.4 else a
+        jd = j * 10.0 ** rng.uniform(-0.5, 0.5) if rng.random() < 0.4 else j
+        lims.append(AxisLimits(v, a, j, ad, jd))
+    return lims
+
+
 def _dense_use(timing, n_per_piece=200):
     """Largest |joint v|, |a|, |j| over limit, from the exact path derivatives on dense
     points of every piece (both ends of each piece with its own jerk)."""
@@ -91,16 +108,7 @@ def test_joint_space_line_with_wide_limits_equals_phase_synchronised_ptp():
     rng = np.random.default_rng(808)
     for _ in range(sweep_size(30)):
         m = int(rng.integers(1, 7))
-        lims = []
-        for _k in range(m):
-            a = 10.0 ** rng.uniform(-1, 2)
-            j = a * 10.0 ** rng.uniform(-0.5, 1.5)
-            v = 10.0 ** rng.uniform(-1, 4) if rng.random() < 0.7 else math.inf
-            if v < math.inf and not 1e-9 <= v * j / a**2 <= 1e9:
-                v = math.inf
-            ad = a * 10.0 ** rng.uniform(-0.5, 0.5) if rng.random() < 0.4 else a
-            jd = j * 10.0 ** rng.uniform(-0.5, 0.5) if rng.random() < 0.4 else j
-            lims.append(AxisLimits(v, a, j, ad, jd))
+        lims = _wide_limits(rng, m)
         start = rng.uniform(-1.0, 1.0, m)
         goal = start + rng.uniform(-2.0, 2.0, m) * 10.0 ** rng.uniform(-1.5, 0.5)
         finite = [AxisLimits(min(lm.v_max, 1e30), lm.a_max, lm.j_max, lm.a_max_decel,
@@ -122,16 +130,7 @@ def test_waypoints_with_separate_legs_need_no_uniform_slow_down():
     worst = 1.0
     for _ in range(25):
         m, n = int(rng.integers(1, 7)), int(rng.integers(3, 7))
-        lims = []
-        for _k in range(m):
-            a = 10.0 ** rng.uniform(-1, 2)
-            j = a * 10.0 ** rng.uniform(-0.5, 1.5)
-            v = 10.0 ** rng.uniform(-1, 4) if rng.random() < 0.7 else math.inf
-            if v < math.inf and not 1e-9 <= v * j / a**2 <= 1e9:
-                v = math.inf
-            ad = a * 10.0 ** rng.uniform(-0.5, 0.5) if rng.random() < 0.4 else a
-            jd = j * 10.0 ** rng.uniform(-0.5, 0.5) if rng.random() < 0.4 else j
-            lims.append(AxisLimits(v, a, j, ad, jd))
+        lims = _wide_limits(rng, m)
         W = np.cumsum(rng.uniform(-1.0, 1.0, (n, m)), axis=0)
         tm = plan_waypoints(W, lims, blend=float(rng.choice([0.0, 0.05])))
         worst = max(worst, max(sg.time_scale for sg in tm.segments))
