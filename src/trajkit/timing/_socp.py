@@ -604,6 +604,55 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
     u[flat & (np.abs(u) * (p.s[-1] - p.s[0]) <= SNAP_U_RTOL * np.maximum(cap, 1e-300))] = 0.0
 
 
+#: A grid interval shorter than this fraction of its longer neighbour is short
+#: (the twin node just before a path breakpoint): its node states are settled.
+SHORT_INTERVAL = 1e-2
+
+
+def _settle_short(sol: GridSolution, p: GridProblem) -> None:
+    """Make every short interval's node speeds those of one constant-jerk piece.
+
+    The node relation holds only to the solver's tolerance, and less where a
+    node was put on its speed cap; the two pieces of an interval then differ
+    in jerk by that error over the interval's duration squared, which a short
+    interval turns into a jerk far above the limit. With the accelerations
+    ``a0, a1`` kept, one jerk joins the states exactly when
+    ``v1 - v0 = (a0 + a1) tau / 2``, with ``tau`` from
+    ``D = v1 tau - (a0 + 2 a1) tau^2 / 6`` (from the end) or
+    ``D = v0 tau + (2 a0 + a1) tau^2 / 6`` (from the start). The first node's
+    speed is set from the second's; where that would pass the first node's
+    speed cap, the second's from the first (within its cap), else nothing is
+    changed. The change moves into the long neighbour interval, divided by its
+    duration squared.
+    """
+    D = np.diff(p.s)
+    N = D.size
+    if N < 3:
+        return
+    longer = np.maximum(np.concatenate([[0.0], D[:-1]]), np.concatenate([D[1:], [0.0]]))
+    x, u = sol.x, sol.u
+    cap = p.x_cap
+    for i in np.nonzero(D < SHORT_INTERVAL * longer)[0]:
+        if i == 0 or i == N - 1:  # a given end state (or a rest interval)
+            continue
+        a0, a1, d = float(u[i]), float(u[i + 1]), float(D[i])
+        v1 = math.sqrt(max(x[i + 1], 0.0))
+        disc = v1 * v1 - 2.0 * (a0 + 2.0 * a1) * d / 3.0
+        if v1 > 0.0 and disc >= 0.0:
+            tau = 2.0 * d / (v1 + math.sqrt(disc))
+            v0 = v1 - 0.5 * (a0 + a1) * tau
+            if v0 > 0.0 and v0 * v0 <= cap[i]:
+                x[i] = v0 * v0
+                continue
+        v0 = math.sqrt(max(x[i], 0.0))
+        disc = v0 * v0 + 2.0 * (2.0 * a0 + a1) * d / 3.0
+        if v0 > 0.0 and disc >= 0.0:
+            tau = 2.0 * d / (v0 + math.sqrt(disc))
+            v1 = v0 + 0.5 * (a0 + a1) * tau
+            if v1 > 0.0 and v1 * v1 <= cap[i + 1]:
+                x[i + 1] = v1 * v1
+
+
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
                init: tuple[np.ndarray, np.ndarray] | None = None,
                settled: bool = False, near: bool = False) -> GridSolution:
@@ -639,6 +688,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
     sol.u = sol.u * L / as_
     sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
     _snap_to_caps(sol, p)
+    _settle_short(sol, p)
     sol.time *= T0
     sol.jerk_free_time *= T0
     sol.history = [t * T0 for t in sol.history]
