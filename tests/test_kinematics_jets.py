@@ -129,6 +129,45 @@ def test_joint_path_derivatives_equal_those_of_the_inverse_kinematics(case):
                                            err_msg=f"{name} piece {k} ({piece.kind}) order {order}")
 
 
+@pytest.mark.parametrize("name", ["arm6", "ur5", "panda"])
+@pytest.mark.parametrize("turn", [120.0, 150.0, 170.0])
+def test_joint_path_derivatives_in_a_tight_corner_blend(name, turn):
+    """A sharp corner with a 10 mm zone gets a blend of 0.1-1.3 mm radius: the
+    derivatives there equal those of the inverse kinematics (Richardson-extrapolated
+    central differences on steps of a twentieth of the radius and half that)."""
+    robot = _robot(name)
+    q0 = {"arm6": np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1]),
+          "ur5": np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0]),
+          "panda": np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])}[name]
+    p = robot.fk(q0)
+    a = p.position + np.array([0.1, 0.0, 0.0])
+    th = np.radians(180.0 - turn)
+    b = a + 0.1 * np.array([-np.cos(th), np.sin(th), 0.0])
+    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(a, p.rotation)), 0.5, zone=0.01, label="A"),
+                                 Lin(CartesianTarget(Pose(b, p.rotation)), 0.5, label="B")])
+    k = next(i for i, pc in enumerate(jp.pieces) if pc.kind == "blend")
+    radius = jp.pieces[k].feature
+    assert 1e-4 < radius < 2e-3  # a tight blend
+    lo, hi = jp.offsets[k], jp.offsets[k + 1]
+    s = lo + (hi - lo) * np.array([0.25, 0.4, 0.5, 0.6, 0.75])
+    q, d1, d2, d3 = jp.derivatives(s)
+
+    def central(h):
+        e = h * np.arange(-2.0, 3.0)
+        qs = np.stack([jp.ik(si + e, np.full(e.size, k), jp.seeds(si + e)) for si in s])
+        return ((qs[:, 3] - qs[:, 1]) / (2 * h),
+                (qs[:, 3] - 2 * qs[:, 2] + qs[:, 1]) / h**2,
+                (qs[:, 4] - 2 * qs[:, 3] + 2 * qs[:, 1] - qs[:, 0]) / (2 * h**3))
+
+    h = radius / 20.0
+    coarse, fine = central(h), central(h / 2.0)
+    for order, got in enumerate((d1, d2, d3)):
+        ref = fine[order] + (fine[order] - coarse[order]) / 3.0  # the h^2 term removed
+        scale = np.abs(ref).max()
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-4 * scale,
+                                   err_msg=f"{name}, {turn} deg: derivative {order + 1}")
+
+
 def test_a_redundant_arm_keeps_the_stencil_of_the_inverse_kinematics():
     robot = _robot("panda")
     q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from arms import load_arm
 from conftest import sweep_size
 
 from trajkit.errors import UnreachableError
@@ -170,6 +171,53 @@ def test_random_blended_chains_keep_joint_jerk(model):
             assert smp.tool_speed.max() == pytest.approx(v, rel=1e-12)
     assert ok >= n, (ok, n)
     assert worst > 0.05  # the sweep really exercises the joint jerk
+
+
+@pytest.mark.parametrize("name, turn, zone", [("arm6", 170.0, 0.003), ("ur5", 170.0, 0.003),
+                                             ("ur5", 150.0, 0.01), ("panda", 150.0, 0.01)])
+def test_tight_corner_blends_keep_joint_limits(name, turn, zone):
+    """A sharp corner with a small zone: a blend of 0.05-0.5 mm radius, whose joint
+    derivatives change over a few micrometres (the arms' own derivatives and the
+    redundant arm's differences of the inverse kinematics both have to resolve it)."""
+    robot = default_arm6() if name == "arm6" else load_arm(name)
+    q0 = {"arm6": np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1]),
+          "ur5": np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0]),
+          "panda": np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])}[name]
+    p = robot.fk(q0)
+    a = p.position + np.array([0.1, 0.0, 0.0])
+    th = np.radians(180.0 - turn)
+    b = a + 0.1 * np.array([-np.cos(th), np.sin(th), 0.0])
+    run = run_motions(robot, [Lin(CartesianTarget(Pose(a, p.rotation)), 3.0, zone=zone, label="A"),
+                              Lin(CartesianTarget(Pose(b, p.rotation)), 3.0, label="B")], q0)
+    chain = next(sg.chain for sg in run.segments if sg.kind == "CP")
+    assert min(pc.feature for pc in chain.path.pieces) < 1e-3  # the blend is tight
+    r = cp_jerk_ratio(run, 2e-4)
+    assert (r <= 1 + JERK_RTOL).all(), r
+    assert r.max() > 0.9  # the joint jerk limits the motion
+    _check_vel_acc(robot, run.sample(run.times(2e-4)))
+
+
+def test_cells_the_grid_refinement_leaves_unresolved_are_checked_exactly(monkeypatch):
+    """With the grid refinement cut short (six passes instead of twelve) the
+    interpolated derivatives miss a tight blend's joint jerk between the nodes
+    (the motion then ran 19 % over the limit); the final check evaluates the
+    true derivatives in every cell left unresolved, and the motion keeps its
+    limits."""
+    from trajkit.timing import engine
+
+    monkeypatch.setattr(engine, "GRID_PASSES", 6)
+    robot = default_arm6()
+    q0 = np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1])
+    p = robot.fk(q0)
+    a = p.position + np.array([0.1, 0.0, 0.0])
+    b = a + 0.1 * np.array([-np.cos(np.radians(10.0)), np.sin(np.radians(10.0)), 0.0])
+    run = run_motions(robot, [Lin(CartesianTarget(Pose(a, p.rotation)), 3.0, zone=0.003, label="A"),
+                              Lin(CartesianTarget(Pose(b, p.rotation)), 3.0, label="B")], q0)
+    tm = next(sg.chain for sg in run.segments if sg.kind == "CP").timing
+    assert tm.info["verified_points"] > 1000
+    r = cp_jerk_ratio(run, 2e-4)
+    assert (r <= 1 + JERK_RTOL).all(), r
+    _check_vel_acc(robot, run.sample(run.times(2e-4)))
 
 
 def test_blend_is_curvature_continuous_and_arc_length_exact():

@@ -35,6 +35,7 @@ from ._pieces import (
     blended_orientation,
     constant_point,
     sub_path,
+    sub_path_derivatives,
 )
 from ._rotations import matrix_from_quat, quat_from_matrix, rotation_angle, slerp
 from .motion import Circ, JointTarget
@@ -311,7 +312,9 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
         cap, reason = v, ""
         if sp["angle"] > 0 and w_max * path.length / sp["angle"] < v:
             cap, reason = w_max * path.length / sp["angle"], "orientation speed"
-        pieces.append(Piece("path", s1 - s0, sub_path(path, s0, s1), qa, qb, cap, i, 1.0, reason, v))
+        pieces.append(Piece("path", s1 - s0, sub_path(path, s0, s1), qa, qb, cap, i, 1.0, reason, v,
+                            feature=path.radius if isinstance(path, Arc3) else math.inf,
+                            derivatives=sub_path_derivatives(path, s0)))
         if i in blends:
             r = blends[i]
             nxt = specs[i + 1]
@@ -326,7 +329,8 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
             ori = blended_orientation(sp["quat0"], sp["quat1"], path.length, s1,
                                       nxt["quat0"], nxt["quat1"], nxt["path"].length, r, bz.length)
             pieces.append(Piece("blend", bz.length, bz.point, qb, qn, cap_b, i, 1.0, "",
-                                quat_fn=ori))
+                                quat_fn=ori, feature=1.0 / bz.peak_curvature
+                                if bz.peak_curvature > 0.0 else math.inf, derivatives=bz.derivatives))
     return pieces
 
 

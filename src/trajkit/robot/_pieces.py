@@ -18,7 +18,7 @@ from ..paths.base import Path
 from . import _bezier_jit
 from ._rotations import SLERP_SMALL_ANGLE, rotation_angle, slerp
 
-__all__ = ["Piece", "BezierBlend", "BLEND_TABLE"]
+__all__ = ["Piece", "BezierBlend", "BLEND_TABLE", "sub_path_derivatives"]
 
 #: Intervals of the arc-length table of a blend curve (each integrated by
 #: Gauss-Legendre quadrature, then inverted by Newton steps: the arc-length
@@ -208,8 +208,12 @@ class BezierBlend:
                 continue
             break
         if chosen is not None:
-            _, ctrl, handle = chosen
+            peak, ctrl, handle = chosen
+        else:
+            peak = self._peak_curvature(ctrl)
         self.ctrl = ctrl
+        #: Largest curvature of the blend [1/m] (on the probe points).
+        self.peak_curvature = peak
         self.handle = handle
         edges = np.linspace(0.0, 1.0, BLEND_TABLE + 1)
         seg = self._integral(edges[:-1], edges[1:])
@@ -269,6 +273,37 @@ class BezierBlend:
                                          np.ascontiguousarray(s.ravel()))[0]
         return self._eval(self.ctrl, self.u_of_s(s))
 
+    def derivatives(self, s: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Positions and their first three derivatives in arc length at ``s`` (n,) [m].
+
+        Exact in the curve parameter ``u``: with ``B', B'', B'''`` the curve's
+        derivatives in ``u`` and ``sigma = |B'|`` (``ds/du``),
+        ``p' = B' / sigma``, ``p'' = N / sigma^3`` with ``N = B'' sigma - B' sigma'``,
+        ``p''' = (N' / sigma^3 - 3 N sigma' / sigma^4) / sigma`` with
+        ``N' = B''' sigma - B' sigma''``.
+
+        Returns
+        -------
+        p, d1, d2, d3 : ndarray, shape (n, 3)
+            [m], [1], [1/m], [1/m^2].
+        """
+        s = np.atleast_1d(np.asarray(s, dtype=np.float64)).ravel()
+        if _bezier_jit.AVAILABLE:
+            p, u = _bezier_jit.points_at(self.ctrl, self._u, self._cum, _GL_X, _GL_W, BLEND_NEWTON,
+                                         np.ascontiguousarray(s))
+        else:
+            u = self.u_of_s(s)
+            p = self._eval(self.ctrl, u)
+        b1, b2, b3 = (self._eval(self.ctrl, u, k) for k in (1, 2, 3))
+        sig = np.linalg.norm(b1, axis=1)[:, None]
+        d12 = np.sum(b1 * b2, axis=1)[:, None]
+        sig1 = d12 / sig
+        sig2 = (np.sum(b2 * b2, axis=1)[:, None] + np.sum(b1 * b3, axis=1)[:, None]) / sig \
+            - d12 * sig1 / sig**2
+        num = b2 * sig - b1 * sig1
+        num1 = b3 * sig - b1 * sig2
+        return p, b1 / sig, num / sig**3, (num1 / sig**3 - 3.0 * num * sig1 / sig**4) / sig
+
 
 class Piece:
     """One piece of a chain.
@@ -295,11 +330,19 @@ class Piece:
         The programmed speed [m/s] (default ``cap``).
     quat_fn : callable, optional
         ``quat_fn(s (n,)) -> (n, 4)`` replacing the slerp from ``q0`` to ``q1``.
+    feature : float, optional
+        Radius of the piece's tightest curvature [m] (inf for a line): the
+        length over which its geometry turns, which numerical derivatives
+        along the piece have to resolve.
+    derivatives : callable, optional
+        ``derivatives(s (n,)) -> (p, p', p'', p''')`` (each (n, 3)): the
+        positions and their exact derivatives in ``s``.
     """
 
     def __init__(self, kind: str, length: float, point, q0: np.ndarray, q1: np.ndarray,
                  cap: float, motion: int, tool_rate: float, cap_reason: str = "",
-                 programmed: float | None = None, quat_fn=None) -> None:
+                 programmed: float | None = None, quat_fn=None, feature: float = math.inf,
+                 derivatives=None) -> None:
         self.kind = kind
         self.length = float(length)
         self._point = point
@@ -311,10 +354,20 @@ class Piece:
         self.cap_reason = cap_reason
         self.programmed = cap if programmed is None else programmed
         self.quat_fn = quat_fn
+        self.feature = float(feature)
+        self._derivatives = derivatives
         self.angle = rotation_angle(q0, q1)
 
     def point(self, s: np.ndarray) -> np.ndarray:
         return self._point(np.clip(s, 0.0, self.length))
+
+    def derivatives(self, s: np.ndarray):
+        """``(p, p', p'', p''')`` (each (n, 3)) at ``s`` (n,), exact; None when the
+        piece has no closed form for them."""
+        if self._derivatives is None:
+            return None
+        return self._derivatives(np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0,
+                                         self.length))
 
     def quat(self, s: np.ndarray) -> np.ndarray:
         if self.quat_fn is not None:
@@ -382,6 +435,29 @@ def slerp_any(q0: np.ndarray, q1: np.ndarray, u: np.ndarray) -> np.ndarray:
     sn = math.sin(th)
     out = (np.sin((1 - uu) * th) / sn)[:, None] * a + (np.sin(uu * th) / sn)[:, None] * b
     return out / np.linalg.norm(out, axis=1)[:, None]
+
+
+def sub_path_derivatives(path: Path, a: float):
+    """``derivatives`` callable (see :class:`Piece`) of a line or a circular arc
+    ``path`` from its arc length ``a`` on; None for another path."""
+    from ..paths.arc import Arc3
+    from ..paths.line import Line
+
+    if isinstance(path, Line):
+        def line(s: np.ndarray):
+            z = np.zeros((s.size, 3))
+            at = np.clip(a + s, 0.0, path.length)
+            return path.point(at), path.tangent(at), z, z.copy()
+        return line
+    if isinstance(path, Arc3):
+        def arc(s: np.ndarray):
+            at = np.clip(a + s, 0.0, path.length)
+            p = path.point(at)
+            t = path.tangent(at)
+            r2 = path.radius**2
+            return p, t, (path.centre - p) / r2, -t / r2
+        return arc
+    return None
 
 
 def constant_point(p: np.ndarray):
