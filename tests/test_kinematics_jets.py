@@ -22,6 +22,7 @@ from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_x, rot_z
 from trajkit.kinematics.scara import default_scara
 from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
+from trajkit.robot.models import PalletizerRobot
 
 
 def _robot(name):
@@ -29,6 +30,8 @@ def _robot(name):
         return default_arm6()
     if name == "scara":
         return default_scara()
+    if name == "palletizer":
+        return PalletizerRobot()
     return load_arm(name)
 
 
@@ -39,7 +42,7 @@ def _fit(e, samples, deg):
     return c / E ** np.arange(4)[:, None]
 
 
-@pytest.mark.parametrize("name", ["arm6", "scara", "ur5", "panda"])
+@pytest.mark.parametrize("name", ["arm6", "scara", "ur5", "panda", "palletizer"])
 def test_forward_kinematics_on_jets_has_the_taylor_coefficients_of_the_motion(name):
     robot = _robot(name)
     m = robot.n_joints
@@ -48,6 +51,8 @@ def test_forward_kinematics_on_jets_has_the_taylor_coefficients_of_the_motion(na
         qj = rng.uniform(-1.0, 1.0, size=(4, m))
         if name == "scara":
             qj[0, 2] = 0.1  # the quill inside its stroke
+        if name == "palletizer":
+            qj[0, 1:3] = (1.0, 1.2)  # height and reach inside their strokes
         pos, rot = robot.fk_jet(qj[None])
         e = np.linspace(-0.02, 0.02, 41)
         poses = [robot.fk(qj[0] + qj[1] * x + qj[2] * x**2 + qj[3] * x**3) for x in e]

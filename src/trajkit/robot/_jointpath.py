@@ -3,24 +3,27 @@
 The chain's pieces (lines, arcs, corner blends, orientation-only turns) give
 the tool pose at every path parameter ``s``; the joints are the inverse
 kinematics of that pose, on the branch the chain started on (each solution
-seeded from a table of joints walked along the path). The derivatives
-``dq/ds``, ``d2q/ds2``, ``d3q/ds3`` at a point are finite differences of the
-exact inverse kinematics on a small stencil (step :data:`STENCIL_STEP` times
-the robot's length scale, at most :data:`FEATURE_STEP` times the radius of the
-piece's tightest curvature) around that point, never across a junction of two
-pieces (a one-sided stencil there and at the path's ends): the numerical
-derivative of the kinematics, not of a sampled grid.
+seeded from a table of joints walked along the path).
+
+The tool pose's own derivatives at a point: the positions' in closed form
+where the piece has them (lines, arcs, corner blends), the rest (the
+orientations) by differences of the closed-form poses on a small stencil
+(step :data:`STENCIL_STEP` times the robot's length scale) inside the piece,
+never across a junction of two pieces (a one-sided stencil there and at the
+path's ends).
 
 A robot that offers its forward kinematics on Taylor series (``fk_jet``, see
-:mod:`trajkit.kinematics._jets`) and is not redundant gets the derivatives
-from the kinematics instead: one inverse kinematics per point, then the
+:mod:`trajkit.kinematics._jets`) and is not redundant gets the joints'
+derivatives from the kinematics: one inverse kinematics per point, then the
 joints' Taylor coefficients order by order through the Jacobian and the
-exact higher-order terms of the forward kinematics. The tool path's own
-derivatives are exact where the piece has them in closed form (the
-positions on lines, arcs and corner blends); the rest (the orientations) are
-differences of the closed-form poses on the stencils. A point where the
-Jacobian is singular (a stretched arm) gets the differences of the inverse
-kinematics.
+exact higher-order terms of the forward kinematics. Another robot (a
+redundant arm, whose null-space motion comes from the seeds) gets central
+differences of the inverse kinematics along the tool pose's cubic Taylor
+polynomial at the point: the joints along it have the path's first three
+derivatives, and the stencil's truncation error comes from the kinematics
+alone, not from the path's higher derivatives (a tight corner blend's change
+over micrometres). A point where the Jacobian is singular (a stretched arm)
+gets differences of the inverse kinematics on the path itself.
 """
 
 from __future__ import annotations
@@ -39,8 +42,8 @@ __all__ = ["ChainJointPath", "STENCIL_STEP"]
 #: Step of the derivative stencils, as a fraction of the robot's length scale.
 STENCIL_STEP = 1e-4
 
-#: ... and, for the differences of the inverse kinematics (a redundant arm, a
-#: singular point), at most this fraction of the radius of the piece's tightest
+#: ... and, for the differences of the inverse kinematics on the path at a
+#: singular point, at most this fraction of the radius of the piece's tightest
 #: curvature: their truncation error goes with the fourth power of the step over
 #: that radius (the joints' third derivative in a corner blend of 0.76 mm
 #: radius: 0.6 % off at an eighth of it, within 2e-5 at a fiftieth, where the
@@ -235,19 +238,18 @@ class ChainJointPath:
     # ---- the JointPath protocol
     def derivatives(self, s: np.ndarray):
         s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length)
-        n = s.size
         if self._fk_jet is not None:
             return self._jet_derivatives(s)
-        pts, k, hk, fwd, bwd, centre = self._stencil(s, self.h)
-        q_all = self._stencil_ik(pts, k)
-        q = q_all[np.arange(n), centre]
-        d = self._differences(q_all, hk, fwd, bwd)
-        return q, d[0], d[1], d[2]
+        return self._taylor_differences(s)
 
-    def _jet_derivatives(self, s: np.ndarray):
+    def _pose_taylor(self, s: np.ndarray):
+        """Taylor coefficients 0..3 of the tool pose along the path at ``s`` (n,): the
+        pieces ``k`` (n,), the stencil steps (n,), positions (n, 4, 3) and rotations
+        (n, 4, 3, 3). The positions' in closed form where the piece has them (a tight
+        blend's would need steps far below the stencil's), the rest by differences of
+        the closed-form poses on stencils of :data:`STENCIL_STEP` (they turn over the
+        piece's length)."""
         n = s.size
-        # (the stencils serve the orientations, and the positions of a piece without
-        # closed-form derivatives: they turn over the piece's length)
         pts, k, hk, fwd, bwd, centre = self._stencil(s, self.h, tight=False)
         pos, rot = self.poses(pts.ravel(), np.repeat(k, 7))
         pos = pos.reshape(n, 7, 3)
@@ -263,14 +265,41 @@ class ChainJointPath:
             fact *= order
             pj[:, order] = dp / fact
             rj[:, order] = dr / fact
-        # the positions' derivatives in closed form where the piece has them (a tight
-        # blend's need steps far below the stencil's)
         for i in np.unique(k):
             got = self.pieces[i].derivatives(s[k == i] - self.offsets[i]) \
                 if hasattr(self.pieces[i], "derivatives") else None
             if got is not None:
                 sel = k == i
                 pj[sel, 0], pj[sel, 1], pj[sel, 2], pj[sel, 3] = got[0], got[1], 0.5 * got[2], got[3] / 6.0
+        return k, hk, pj, rj
+
+    def _taylor_differences(self, s: np.ndarray):
+        """``q`` and its first three derivatives at ``s`` (n,) by differences of the
+        inverse kinematics along the tool pose's cubic Taylor polynomial at each
+        point (central 7-point stencils; the rotations made orthonormal, which
+        changes them at fourth order only). The polynomial has the path's first three
+        derivatives, so the joints along it have the path's too, while its own
+        higher derivatives vanish: the stencil's truncation error comes from the
+        kinematics alone, not from a tight blend's rapidly changing curvature."""
+        n = s.size
+        k, _, pj, rj = self._pose_taylor(s)
+        # (the polynomial is not bound to the piece: the full step everywhere)
+        hk = np.full(n, self.h)
+        e = hk[:, None] * np.arange(-3.0, 4.0)[None, :]  # (n, 7)
+        powers = np.stack([np.ones_like(e), e, e * e, e * e * e], axis=-1)  # (n, 7, 4)
+        pos = np.einsum("nso,nod->nsd", powers, pj)
+        rot = np.einsum("nso,nodc->nsdc", powers, rj)
+        u, _, vt = np.linalg.svd(rot)
+        rot = u @ vt
+        seeds = self.seeds(np.clip((s[:, None] + e).ravel(), 0.0, self.length))
+        kk = np.repeat(k, 7)
+        q_all = self._ik_at(pos.reshape(-1, 3), rot.reshape(-1, 3, 3), kk, seeds).reshape(n, 7, -1)
+        none = np.zeros(n, dtype=bool)
+        d = self._differences(q_all, hk, none, none)
+        return q_all[:, 3], d[0], d[1], d[2]
+
+    def _jet_derivatives(self, s: np.ndarray):
+        k, _, pj, rj = self._pose_taylor(s)
         q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s))
         compiled = getattr(self.robot, "joint_taylor_many", None)
         got = None if compiled is None else compiled(q, pj, rj)

@@ -15,6 +15,7 @@ import numpy as np
 
 from .._validate import check_array
 from ..errors import InvalidInputError, UnreachableError
+from ..kinematics import _jets
 from ..kinematics.base import PRISMATIC, REVOLUTE, Pose, RobotModel, rot_z
 
 __all__ = ["PalletizerRobot", "robot_by_name", "ROBOT_NAMES"]
@@ -55,6 +56,17 @@ class PalletizerRobot(RobotModel):
         """Tool pose of joints ``(theta [rad], z [m], r [m], d [rad])``."""
         x, y, z, yaw = self.model.pose_from_joints(check_array(q, "joints", ndim=1, size=4)).tolist()
         return Pose(np.array([x, y, z]), rot_z(yaw))
+
+    def fk_jet(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Forward kinematics of joint jets: ``q`` (n, N, 4) Taylor coefficients of the
+        joints (N <= 4) -> those of the tool position (n, N, 3) [m] and rotation
+        (n, N, 3, 3): ``(r cos theta, r sin theta, z)`` and the yaw ``theta + d``
+        (see :mod:`trajkit.kinematics._jets`)."""
+        c, s = _jets.cos_sin(q[:, :, 0])
+        pos = _jets.scale(q[:, :, 2], np.stack([c, s, np.zeros_like(c)], axis=-1))
+        pos[:, :, 2] += q[:, :, 1]
+        rot = _jets.axis_motion(q[:, :, 0] + q[:, :, 3], np.array([0.0, 0.0, 1.0]))
+        return pos, rot
 
     def config_of(self, q: Any) -> str:
         return PALLETIZER_CONFIG
