@@ -291,7 +291,10 @@ class ChainJointPath:
         rot = np.einsum("nso,nodc->nsdc", powers, rj)
         u, _, vt = np.linalg.svd(rot)
         rot = u @ vt
-        seeds = self.seeds(np.clip((s[:, None] + e).ravel(), 0.0, self.length))
+        # (the seeds' spline continued past the path's ends: a redundant arm's
+        # null-space motion comes from them, and a clipped seed would kink it)
+        at = (s[:, None] + e).ravel()
+        seeds = self.seeds(at) if self._seed is None else self._seed(at)
         kk = np.repeat(k, 7)
         q_all = self._ik_at(pos.reshape(-1, 3), rot.reshape(-1, 3, 3), kk, seeds).reshape(n, 7, -1)
         none = np.zeros(n, dtype=bool)
