@@ -289,8 +289,9 @@ class ChainJointPath:
         powers = np.stack([np.ones_like(e), e, e * e, e * e * e], axis=-1)  # (n, 7, 4)
         pos = np.einsum("nso,nod->nsd", powers, pj)
         rot = np.einsum("nso,nodc->nsdc", powers, rj)
-        u, _, vt = np.linalg.svd(rot)
-        rot = u @ vt
+        # one Newton-Schulz step to the nearest rotation (the polynomial leaves SO(3) at
+        # fourth order in the step only; the step squares that)
+        rot = 0.5 * rot @ (3.0 * np.eye(3) - np.swapaxes(rot, -1, -2) @ rot)
         # (the seeds' spline continued past the path's ends: a redundant arm's
         # null-space motion comes from them, and a clipped seed would kink it)
         at = (s[:, None] + e).ravel()
