@@ -33,6 +33,14 @@ DATA = EXAMPLES / "data"
 
 #: Relative tolerance of the measured jerk against j_max (IK rounding only).
 JERK_RTOL = 1e-5
+
+#: The same at 0.2 ms, where the IK rounding over dt^3 is 16 times that at 0.5 ms
+#: (up to about 3e-5 of the smallest jerk limits).
+JERK_RTOL_FINE = 1e-4
+
+#: The joints' jerk from the planner's own pieces and the true path derivatives
+#: (no differences) may exceed the limit by this much (the check's resolution).
+EXACT_RTOL = 1e-6
 LIMIT_RTOL = 1e-9
 
 
@@ -50,6 +58,23 @@ def cp_jerk_ratio(run, dt):
         t = np.append(np.arange(0.0, sg.duration, dt), sg.duration + dt * np.arange(3))
         q = sg.chain.sample(t)["q"]  # holds still after the end, as the robot does
         out = np.maximum(out, np.abs(np.diff(q, 3, axis=0)).max(axis=0) / dt**3 / jmax)
+    return out
+
+
+def exact_jerk_ratio(run, per_piece=12):
+    """Largest |q'''| / j_max per joint over the CP segments from the timing's pieces
+    and the joint path's true derivatives (``joint_states``), ``per_piece`` points in
+    every piece, both of its ends included."""
+    jmax = _jmax(run.robot)
+    out = np.zeros(run.robot.n_joints)
+    frac = np.linspace(0.0, 1.0, per_piece)
+    for sg in run.segments:
+        if sg.kind != "CP":
+            continue
+        tm = sg.chain.timing
+        t = (tm.t[:-1, None] + np.diff(tm.t)[:, None] * frac[None, :]).ravel()
+        t = np.minimum(t, np.nextafter(np.repeat(tm.t[1:], per_piece), -np.inf))
+        out = np.maximum(out, np.abs(tm.joint_states(t)[3]).max(axis=0) / jmax)
     return out
 
 
@@ -194,8 +219,9 @@ def test_tight_corner_blends_keep_joint_limits(name, turn, zone):
     chain = next(sg.chain for sg in run.segments if sg.kind == "CP")
     assert min(pc.feature for pc in chain.path.pieces) < 1e-3  # the blend is tight
     r = cp_jerk_ratio(run, 2e-4)
-    assert (r <= 1 + JERK_RTOL).all(), r
+    assert (r <= 1 + JERK_RTOL_FINE).all(), r
     assert r.max() > 0.9  # the joint jerk limits the motion
+    assert (exact_jerk_ratio(run) <= 1 + EXACT_RTOL).all()
     _check_vel_acc(robot, run.sample(run.times(2e-4)))
 
 
@@ -264,9 +290,31 @@ def test_random_sharp_corner_chains_keep_joint_limits(model):
             continue
         ok += 1
         r = cp_jerk_ratio(run, 2e-4)
-        assert (r <= 1 + JERK_RTOL).all(), r
+        assert (r <= 1 + JERK_RTOL_FINE).all(), r
+        ex = exact_jerk_ratio(run)
+        assert (ex <= 1 + EXACT_RTOL).all(), ex
         _check_vel_acc(robot, run.sample(run.times(2e-4)))
     assert ok >= n, (ok, n)
+
+
+def test_the_final_check_sees_a_corner_blends_largest_joint_jerk():
+    """A palletizer chain (drawn by a random sweep of sharp corners) whose joint C
+    reaches its jerk limit in a 2 mm corner blend: the final check corrects the
+    interpolated derivatives with the true ones at three points of every cell near
+    a limit. (With the middle alone it missed the largest jerk by 4e-5 of the
+    limit.)"""
+    robot = PalletizerRobot()
+    q0 = np.array([0.6977468525172985, 0.7398585013621891, 1.0792915874848192, 0.8255918350393978])
+    rot = rot_z(1.5233386875566963)
+    pts = [(0.7410723080779102, 0.6426535577330879, 0.009676281958022765),
+           (0.8289585897815283, 0.5948293621534725, 0.0022327988023384546),
+           (0.9395569737155591, 0.6543466638351326, 0.0)]
+    mots = [Lin(CartesianTarget(Pose(np.array([x, y, 0.7623152905362041]), rot)), 1.0754544884697612,
+                zone=zone, label=f"m{i}") for i, (x, y, zone) in enumerate(pts)]
+    run = run_motions(robot, mots, q0)
+    ex = exact_jerk_ratio(run)
+    assert ex[2] > 0.9999  # joint C at its limit
+    assert (ex <= 1 + EXACT_RTOL).all(), ex
 
 
 def test_cells_the_grid_refinement_leaves_unresolved_are_checked_exactly(monkeypatch):
@@ -288,7 +336,8 @@ def test_cells_the_grid_refinement_leaves_unresolved_are_checked_exactly(monkeyp
     tm = next(sg.chain for sg in run.segments if sg.kind == "CP").timing
     assert tm.info["verified_points"] > 1000
     r = cp_jerk_ratio(run, 2e-4)
-    assert (r <= 1 + JERK_RTOL).all(), r
+    assert (r <= 1 + JERK_RTOL_FINE).all(), r
+    assert (exact_jerk_ratio(run) <= 1 + EXACT_RTOL).all()
     _check_vel_acc(robot, run.sample(run.times(2e-4)))
 
 
