@@ -24,9 +24,10 @@ Steps:
    and the problem solved again (:data:`MAX_TIGHTEN` times). The final check
    is denser (:data:`FINAL_CHECK_PER_PIECE`, then a zoom on the pieces close
    to a limit); on a path without cheap derivatives it evaluates the true
-   derivatives at :data:`VERIFY_POINTS` of every cell where it comes within
-   :data:`VERIFY_ABOVE` of a limit and corrects the interpolation there
-   (``_Corrected``). The checks run compiled (:mod:`trajkit.timing._checks`)
+   derivatives at the middle of every cell where it comes within
+   :data:`VERIFY_ABOVE` of a limit, at every point of :data:`VERIFY_POINTS`
+   where it then comes within :data:`VERIFY_FULL_ABOVE`, and corrects the
+   interpolation there (``_Corrected``). The checks run compiled (:mod:`trajkit.timing._checks`)
    when numba is installed. Any excess left is removed by slowing the whole
    motion down uniformly (time scaled by ``k``: velocities / k, accelerations
    / k^2, jerks / k^3), which always succeeds.
@@ -142,10 +143,13 @@ ZOOM_LEVELS = 4
 VERIFY_ABOVE = 1e-2
 
 #: Points (fractions of a cell) where the true derivatives are evaluated (each
-#: costs an inverse kinematics and the derivatives of the path at that point).
-#: With the middle alone the corrected interpolation still missed a joint's
-#: largest jerk by 4e-5 of its limit in a corner blend; with three, by 1e-7.
+#: costs an inverse kinematics and the derivatives of the path at that point):
+#: first the middle of every cell within VERIFY_ABOVE of a limit, then all
+#: three in the cells still within VERIFY_FULL_ABOVE. With the middle alone
+#: the corrected interpolation missed a joint's largest jerk in a corner blend
+#: by 4e-5 of its limit; with all three, by 1e-7.
 VERIFY_POINTS = (0.25, 0.5, 0.75)
+VERIFY_FULL_ABOVE = 1e-3
 
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
@@ -622,23 +626,34 @@ class _Corrected(_Interp):
         m = der[1].shape[1]
         self.err = np.zeros((s_grid.size - 1, len(VERIFY_POINTS), 3, m))
         self.done = np.zeros(s_grid.size - 1, dtype=bool)
+        self.full = np.zeros(s_grid.size - 1, dtype=bool)
         self.evaluated = 0
 
-    def add(self, cells: np.ndarray) -> int:
-        """Evaluate the true derivatives in ``cells`` (those not done yet); how many cells."""
+    def add(self, cells: np.ndarray, full: bool = False) -> int:
+        """Evaluate the true derivatives in ``cells``: at the middle (those not done
+        yet; the error at the other points of :data:`VERIFY_POINTS` set from the
+        parabola through it, so that the correction is that parabola), or with
+        ``full`` at every point (those not full yet). Returns how many cells."""
         cells = np.unique(cells)
-        cells = cells[~self.done[cells]]
+        cells = cells[~(self.full if full else self.done)[cells]]
         if not cells.size:
             return 0
-        w = np.asarray(VERIFY_POINTS)
+        w = np.asarray(VERIFY_POINTS) if full else np.array([0.5])
         s0, s1 = self.s[cells], self.s[cells + 1]
         S = (s0[:, None] * (1.0 - w[None, :]) + s1[:, None] * w[None, :]).ravel()
         _, t1, t2, t3 = self.path.derivatives(S)
         _, (i1, i2, i3) = self._base(S)
         k, npt = cells.size, w.size
+        vp = np.asarray(VERIFY_POINTS)
         for order, (tv, iv) in enumerate(((t1, i1), (t2, i2), (t3, i3))):
-            self.err[cells, :, order, :] = (tv - iv).reshape(k, npt, -1)
+            e = (tv - iv).reshape(k, npt, -1)
+            if full:
+                self.err[cells, :, order, :] = e
+            else:  # the parabola 4 e w (1 - w) through the middle's error
+                self.err[cells, :, order, :] = (4.0 * vp * (1.0 - vp))[None, :, None] * e
         self.done[cells] = True
+        if full:
+            self.full[cells] = True
         self.evaluated += S.size
         return int(cells.size)
 
@@ -1275,6 +1290,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if corrected is not None:
             # the true derivatives in the cells that come close to a limit, then again
             if corrected.add(_c[worst > 1.0 - VERIFY_ABOVE]):
+                use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+            # ... and at every point of VERIFY_POINTS where that comes very close
+            if corrected.add(_c[worst > 1.0 - VERIFY_FULL_ABOVE], full=True):
                 use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
