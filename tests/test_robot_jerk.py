@@ -341,6 +341,29 @@ def test_cells_the_grid_refinement_leaves_unresolved_are_checked_exactly(monkeyp
     _check_vel_acc(robot, run.sample(run.times(2e-4)))
 
 
+def test_blend_derivatives_are_those_of_its_points():
+    """The corner blend's closed-form derivatives in arc length against central
+    differences of its points (Richardson-extrapolated), a tight blend and a wide one."""
+    for ta, tb, radius in (([1.0, 0.0, 0.0], [-0.94, 0.34, 0.0], 0.003),
+                           ([1.0, 0.0, 0.0], [0.3, 0.9, 0.3], 0.04)):
+        ta, tb = np.array(ta) / np.linalg.norm(ta), np.array(tb) / np.linalg.norm(tb)
+        bz = BezierBlend(np.zeros(3), ta, radius * (ta + tb), tb, radius)
+        s = bz.length * np.array([0.1, 0.3, 0.5, 0.7, 0.9])
+        p, d1, d2, d3 = bz.derivatives(s)
+        np.testing.assert_allclose(p, bz.point(s), rtol=0, atol=1e-15)
+
+        def central(h, bz=bz, s=s):
+            pts = np.stack([bz.point(s + k * h) for k in (-2, -1, 0, 1, 2)])
+            return ((pts[3] - pts[1]) / (2 * h), (pts[3] - 2 * pts[2] + pts[1]) / h**2,
+                    (pts[4] - 2 * pts[3] + 2 * pts[1] - pts[0]) / (2 * h**3))
+
+        h = 0.02 * (1.0 / bz.peak_curvature)
+        coarse, fine = central(h), central(h / 2)
+        for got, c, f in zip((d1, d2, d3), coarse, fine):
+            ref = f + (f - c) / 3.0
+            np.testing.assert_allclose(got, ref, rtol=0, atol=1e-5 * np.abs(ref).max())
+
+
 def test_blend_is_curvature_continuous_and_arc_length_exact():
     rng = np.random.default_rng(5)
     for _ in range(20):

@@ -14,7 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from ..paths.arc import Arc3
 from ..paths.base import Path
+from ..paths.line import Line
 from . import _bezier_jit
 from ._rotations import SLERP_SMALL_ANGLE, rotation_angle, slerp
 
@@ -440,9 +442,6 @@ def slerp_any(q0: np.ndarray, q1: np.ndarray, u: np.ndarray) -> np.ndarray:
 def sub_path_derivatives(path: Path, a: float):
     """``derivatives`` callable (see :class:`Piece`) of a line or a circular arc
     ``path`` from its arc length ``a`` on; None for another path."""
-    from ..paths.arc import Arc3
-    from ..paths.line import Line
-
     if isinstance(path, Line):
         def line(s: np.ndarray):
             z = np.zeros((s.size, 3))
