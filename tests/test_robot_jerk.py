@@ -317,6 +317,38 @@ def test_the_final_check_sees_a_corner_blends_largest_joint_jerk():
     assert (ex <= 1 + EXACT_RTOL).all(), ex
 
 
+@pytest.mark.parametrize("case", ["reversal", "tight", "orientation"])
+def test_corners_a_zone_cannot_blend_stop_exactly(case):
+    """A zone asks for a blend, but the corner cannot have one: a reversal of the
+    path, a corner whose blend would turn within micrometres (179 deg with a 0.1 mm
+    zone), a motion that only turns the tool. The motion stops exactly there (the
+    chain is planned in parts) and keeps every limit. (Planned as one chain, the
+    joint path had a kink there: a step of the joint accelerations, 39,000 and
+    41,000 times the jerk limit by differences.)"""
+    robot = default_arm6()
+    q0 = np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1])
+    p = robot.fk(q0)
+    a = p.position + np.array([0.1, 0.0, 0.0])
+    turned = rot_z(0.5) @ p.rotation
+    pose = {"reversal": [Pose(a, p.rotation), Pose(a - [0.1, 0.0, 0.0], p.rotation)],
+            "tight": [Pose(a, p.rotation),
+                      Pose(a + 0.1 * np.array([-np.cos(np.radians(1.0)), np.sin(np.radians(1.0)), 0.0]),
+                           p.rotation)],
+            "orientation": [Pose(a, p.rotation), Pose(a, turned), Pose(a + [0.0, 0.1, 0.0], turned)]}[case]
+    zone = {"reversal": 0.01, "tight": 1e-4, "orientation": 0.01}[case]
+    mots = [Lin(CartesianTarget(ps), 1.0, zone=zone if k < len(pose) - 1 else 0.0, label=f"m{k}")
+            for k, ps in enumerate(pose)]
+    run = run_motions(robot, mots, q0)
+    cps = [sg for sg in run.segments if sg.kind == "CP"]
+    assert len(cps) == len(pose)  # one stop at every corner
+    for sg, ps in zip(cps, pose):
+        dp, da = robot.fk(sg.q_end).distance(ps)
+        assert dp < 1e-9 and da < 1e-9
+    assert (cp_jerk_ratio(run, 5e-4) <= 1 + JERK_RTOL).all()
+    assert (exact_jerk_ratio(run) <= 1 + EXACT_RTOL).all()
+    _check_vel_acc(robot, run.sample(run.times(1e-3)))
+
+
 def test_cells_the_grid_refinement_leaves_unresolved_are_checked_exactly(monkeypatch):
     """With the grid refinement cut short (six passes instead of twelve) the
     interpolated derivatives miss a tight blend's joint jerk between the nodes

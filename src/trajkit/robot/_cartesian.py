@@ -40,7 +40,7 @@ from ._pieces import (
 from ._rotations import matrix_from_quat, quat_from_matrix, rotation_angle, slerp
 from .motion import Circ, JointTarget
 
-__all__ = ["CartesianChain", "plan_chain"]
+__all__ = ["CartesianChain", "chain_stops", "plan_chain"]
 
 #: Fraction of the velocity limit above which a joint counts as "at its velocity limit"
 #: in a run's summary.
@@ -97,6 +97,14 @@ SMOOTH_CURVATURE = 1e-9
 
 #: Tangent turn above which a corner cannot be blended (reversal) [rad].
 MAX_BLEND_TURN = math.pi - 1e-3
+
+#: A corner is passed as an exact stop instead where the circle tangent to both
+#: pieces at the zone's distance from the corner (the blend turns tighter still)
+#: has a radius below this fraction of the robot's length scale: a near reversal
+#: with a small zone (179 deg and 0.1 mm: a 0.9 um circle) would make a blend
+#: turning within micrometres, which the joints pass at a crawl and the path
+#: timing cannot resolve.
+BLEND_RADIUS_MIN = 1e-4
 
 
 @dataclass
@@ -269,6 +277,43 @@ def _orientation_rate(spec: dict) -> np.ndarray:
     return axis * th / path.length
 
 
+def _corner(robot: RobotModel, a: dict, b: dict) -> float | None:
+    """How the chain passes from spec ``a`` into spec ``b``: the radius of their
+    corner blend [m], 0 where they join smoothly (tangent, curvature and orientation
+    rate continuous), None where the motion has to stop (a zone of 0, an
+    orientation-only motion, a reversal, or a blend tighter than BLEND_RADIUS_MIN)."""
+    if a["zone"] <= 0 or a["path"] is None or b["path"] is None:
+        return None
+    ta = a["path"].tangent(a["path"].length)
+    tb = b["path"].tangent(0.0)
+    turn = angle_between_tangents(ta, tb)
+    if turn > MAX_BLEND_TURN:
+        return None
+    if turn < SMOOTH_TURN and np.linalg.norm(
+            curvature_vector(a["path"], a["path"].length)
+            - curvature_vector(b["path"], 0.0)) <= SMOOTH_CURVATURE and np.linalg.norm(
+            _orientation_rate(a) - _orientation_rate(b)) <= SMOOTH_ORIENTATION_RATE:
+        return 0.0
+    r = min(a["zone"], 0.5 * a["path"].length, 0.5 * b["path"].length)
+    # the tangent circle's radius r cot(turn / 2), below the minimum (no division:
+    # a tangent-continuous join, turn 0, has none)
+    if r * math.cos(0.5 * turn) < BLEND_RADIUS_MIN * robot.length_scale * math.sin(0.5 * turn):
+        return None
+    return r
+
+
+def chain_stops(robot: RobotModel, q0: np.ndarray, motions: Sequence[Any],
+                labels: Sequence[str]) -> list[int]:
+    """Indices ``i`` of the LIN/CIRC ``motions`` (all but the last with a zone > 0,
+    starting at joints ``q0``) after which the motion stops exactly although the
+    zone asks for a blend: an orientation-only motion next to a path, a reversal
+    of the path (> MAX_BLEND_TURN), or a corner whose blend would be tighter than
+    BLEND_RADIUS_MIN of the robot's length scale. The chain is planned in parts
+    split there (the joint path has a kink at such a corner)."""
+    specs = _base_pieces(robot, q0, motions, labels)
+    return [i for i in range(len(specs) - 1) if _corner(robot, specs[i], specs[i + 1]) is None]
+
+
 def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
     w_max = robot.orientation_speed
     n = len(specs)
@@ -277,20 +322,9 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
     trim1 = [0.0] * n
     blends: dict[int, float] = {}
     for i in range(n - 1):
-        a, b = specs[i], specs[i + 1]
-        if a["zone"] <= 0 or a["path"] is None or b["path"] is None:
+        r = _corner(robot, specs[i], specs[i + 1])
+        if not r:  # a smooth join (or a stop, which chain_stops splits the chain at)
             continue
-        ta = a["path"].tangent(a["path"].length)
-        tb = b["path"].tangent(0.0)
-        turn = angle_between_tangents(ta, tb)
-        if turn > MAX_BLEND_TURN:
-            continue
-        if turn < SMOOTH_TURN and np.linalg.norm(
-                curvature_vector(a["path"], a["path"].length)
-                - curvature_vector(b["path"], 0.0)) <= SMOOTH_CURVATURE and np.linalg.norm(
-                _orientation_rate(a) - _orientation_rate(b)) <= SMOOTH_ORIENTATION_RATE:
-            continue  # tangent, curvature and orientation rate continuous: no blend needed
-        r = min(a["zone"], 0.5 * a["path"].length, 0.5 * b["path"].length)
         trim1[i] = r
         trim0[i + 1] = r
         blends[i] = r

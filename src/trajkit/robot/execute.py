@@ -17,7 +17,7 @@ from ..kinematics.base import RobotModel
 from ..limits import AxisLimits
 from ..sync import plan_ptp
 from ..trajectory import Trajectory
-from ._cartesian import SLOWDOWN_RTOL, VEL_USE, CartesianChain, Slowdown, plan_chain
+from ._cartesian import SLOWDOWN_RTOL, VEL_USE, CartesianChain, Slowdown, chain_stops, plan_chain
 from ._rotations import quat_from_matrix
 from .motion import Circ, JointTarget, Lin, Ptp, Wait
 
@@ -434,16 +434,20 @@ def run_motions(robot: RobotModel, motions: Sequence[Any], start: Any) -> RobotR
             j = i
             while j + 1 < len(motions) and isinstance(motions[j + 1], (Lin, Circ)) and motions[j].zone > 0:
                 j += 1
-            group = motions[i:j + 1]
-            chain = plan_chain(robot, q, group, [g.label for g in group], list(range(i, j + 1)))
-            if chain is not None:
-                segments.append(Segment("CP", t, chain.duration, list(range(i, j + 1)),
-                                        q, chain.q_end, chain=chain))
-                for sd in chain.slowdowns:
-                    sd.motion += i
-                slowdowns += chain.slowdowns
-                t += chain.duration
-                q = chain.q_end
+            # (split where the zone cannot be blended: the motion stops there)
+            cuts = [i + c for c in chain_stops(robot, q, motions[i:j + 1],
+                                               [g.label for g in motions[i:j + 1]])]
+            for a, b in zip([i] + [c + 1 for c in cuts], cuts + [j]):
+                group = motions[a:b + 1]
+                chain = plan_chain(robot, q, group, [g.label for g in group], list(range(a, b + 1)))
+                if chain is not None:
+                    segments.append(Segment("CP", t, chain.duration, list(range(a, b + 1)),
+                                            q, chain.q_end, chain=chain))
+                    for sd in chain.slowdowns:
+                        sd.motion += a
+                    slowdowns += chain.slowdowns
+                    t += chain.duration
+                    q = chain.q_end
             i = j + 1
         else:
             raise InvalidInputError(f"motion {i} has unknown type {type(m).__name__}")

@@ -343,13 +343,21 @@ def _speed_cap(speed: Any, s: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- grid
+def _twins(L: float, breaks: np.ndarray) -> np.ndarray:
+    """The twin node of every breakpoint: :data:`BREAK_TWIN` of a starting cell
+    before it, and inside the piece that ends there (at most a quarter of it)."""
+    h = L / GRID_START
+    prev = np.concatenate([[0.0], breaks[:-1]])
+    return breaks - np.minimum(BREAK_TWIN * h, 0.25 * (breaks - prev))
+
+
 def _initial_grid(L: float, breaks: np.ndarray) -> np.ndarray:
     base = np.linspace(0.0, L, GRID_START + 1)
     h = L / GRID_START
     ends = h * np.geomspace(END_FIRST, 0.5, END_NODES)
     # a breakpoint gets a twin just before it: the joint path's third derivative
     # may step there, and the twin carries the incoming piece's values
-    twins = breaks - BREAK_TWIN * h
+    twins = _twins(L, breaks)
     pts = np.concatenate([base, ends, L - ends, breaks, twins])
     pts = np.unique(np.clip(pts, 0.0, L))
     # nodes of the regular grid too close to a breakpoint or its twin are dropped
@@ -438,6 +446,7 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
     there).
     """
     breaks = np.zeros(0) if breaks is None else breaks
+    twins = _twins(float(path.length), breaks)
     pending = np.zeros((0, 2))  # the cells split last, not checked since
     for _ in range(GRID_PASSES):
         if s.size >= GRID_MAX:
@@ -466,7 +475,11 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         e2 = np.max(np.abs(i2 - m2) * (vcap**2)[:, None] / alim, axis=1)
         e3 = np.max(np.abs(i3 - m3) * (vcap**3)[:, None] / jlim, axis=1)
         split = np.maximum(np.maximum(e1, e2), e3) > rtol
-        split &= ~np.isin(s[1:], breaks)  # the twin interval before a breakpoint stays whole
+        # the twin interval before a breakpoint stays whole (it interpolates towards
+        # the values after the breakpoint; the checks take those from before it)
+        if breaks.size:
+            at = np.minimum(np.searchsorted(breaks, s[1:]), breaks.size - 1)
+            split &= ~((s[1:] == breaks[at]) & (s[:-1] == twins[at]))
         if not split.any():
             pending = np.zeros((0, 2))
             break
@@ -1086,7 +1099,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         return _speed_cap(speed, ss)
 
     breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
-    breaks = breaks[(breaks > 0.0) & (breaks < L)]
+    breaks = np.unique(breaks[(breaks > 0.0) & (breaks < L)])
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
         s = np.unique(np.concatenate([s, _cap_edges(cap_fn, L)]))
