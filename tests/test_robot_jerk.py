@@ -48,6 +48,27 @@ def _jmax(robot):
     return np.array([min(lim.j_max, lim.j_max_decel) for lim in robot.limits])
 
 
+#: Start joints of the arms in the corner tests: clear of singularities.
+HOME = {"arm6": np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1]),
+        "ur5": np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0]),
+        "panda": np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]),
+        "palletizer": np.array([0.3, 1.0, 1.2, 0.0])}
+
+
+def _robot(name):
+    return {"scara": default_scara, "arm6": default_arm6,
+            "palletizer": PalletizerRobot}.get(name, lambda: load_arm(name))()
+
+
+def _random_start(robot, rng):
+    """Joints drawn at 35-65 % of every joint's range (the SCARA's elbow bent)."""
+    q0 = np.array([lim.position_min + (lim.position_max - lim.position_min) * rng.uniform(0.35, 0.65)
+                   for lim in robot.limits])
+    if robot.name == "scara":
+        q0[1] = abs(q0[1]) + 0.3  # away from the stretched-arm singularity
+    return q0
+
+
 def cp_jerk_ratio(run, dt):
     """Largest |third difference of IK joints| / dt^3 / j_max per joint over the CP segments."""
     jmax = _jmax(run.robot)
@@ -163,7 +184,7 @@ def _random_chain(robot, rng, q0, v):
 
 @pytest.mark.parametrize("model", ["scara", "arm6", "palletizer"])
 def test_random_blended_chains_keep_joint_jerk(model):
-    robot = {"scara": default_scara, "arm6": default_arm6, "palletizer": PalletizerRobot}[model]()
+    robot = _robot(model)
     rng = np.random.default_rng({"scara": 11, "arm6": 12, "palletizer": 13}[model])
     n = sweep_size(3)
     ok = 0
@@ -171,10 +192,7 @@ def test_random_blended_chains_keep_joint_jerk(model):
     for case in range(4 * n):
         if ok >= n:
             break
-        q0 = np.array([lim.position_min + (lim.position_max - lim.position_min) * rng.uniform(0.35, 0.65)
-                       for lim in robot.limits])
-        if model == "scara":
-            q0[1] = abs(q0[1]) + 0.3  # away from the stretched-arm singularity
+        q0 = _random_start(robot, rng)
         v = float(rng.uniform(0.1, 1.0))
         mots = _random_chain(robot, rng, q0, v)
         try:
@@ -205,11 +223,8 @@ def test_tight_corner_blends_keep_joint_limits(name, turn, zone):
     """A sharp corner with a small zone: a blend of 0.05-0.5 mm radius, whose joint
     derivatives change over a few micrometres (the arms' own derivatives and the
     redundant arm's differences of the inverse kinematics both have to resolve it)."""
-    robot = {"arm6": default_arm6, "palletizer": PalletizerRobot}.get(name, lambda: load_arm(name))()
-    q0 = {"arm6": np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1]),
-          "ur5": np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0]),
-          "panda": np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]),
-          "palletizer": np.array([0.3, 1.0, 1.2, 0.0])}[name]
+    robot = _robot(name)
+    q0 = HOME[name]
     p = robot.fk(q0)
     a = p.position + np.array([0.1, 0.0, 0.0])
     th = np.radians(180.0 - turn)
@@ -266,8 +281,7 @@ def test_random_sharp_corner_chains_keep_joint_limits(model):
     every joint's jerk, acceleration and velocity within its limit, measured on the
     inverse kinematics at 0.2 ms. (With the blends' derivatives taken by
     differences, 130 of 248 such chains went over a jerk limit, up to 52 times.)"""
-    robot = {"scara": default_scara, "arm6": default_arm6,
-             "palletizer": PalletizerRobot}.get(model, lambda: load_arm(model))()
+    robot = _robot(model)
     rng = np.random.default_rng({"scara": 21, "arm6": 22, "palletizer": 23, "ur5": 24, "panda": 25}[model])
     n = sweep_size(3)
     ok = 0
@@ -275,14 +289,11 @@ def test_random_sharp_corner_chains_keep_joint_limits(model):
         if ok >= n:
             break
         if model == "panda":
-            q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]) + rng.uniform(-0.2, 0.2, 7)
+            q0 = HOME["panda"] + rng.uniform(-0.2, 0.2, 7)
         elif model == "ur5":
-            q0 = np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0]) + rng.uniform(-0.3, 0.3, 6)
+            q0 = HOME["ur5"] + rng.uniform(-0.3, 0.3, 6)
         else:
-            q0 = np.array([lim.position_min + (lim.position_max - lim.position_min) * rng.uniform(0.35, 0.65)
-                           for lim in robot.limits])
-            if model == "scara":
-                q0[1] = abs(q0[1]) + 0.3
+            q0 = _random_start(robot, rng)
         mots = _sharp_chain(robot, rng, q0)
         try:
             run = run_motions(robot, mots, q0)
@@ -326,7 +337,7 @@ def test_corners_a_zone_cannot_blend_stop_exactly(case):
     joint path had a kink there: a step of the joint accelerations, 39,000 and
     41,000 times the jerk limit by differences.)"""
     robot = default_arm6()
-    q0 = np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1])
+    q0 = HOME["arm6"]
     p = robot.fk(q0)
     a = p.position + np.array([0.1, 0.0, 0.0])
     turned = rot_z(0.5) @ p.rotation
@@ -359,7 +370,7 @@ def test_cells_the_grid_refinement_leaves_unresolved_are_checked_exactly(monkeyp
 
     monkeypatch.setattr(engine, "GRID_PASSES", 6)
     robot = default_arm6()
-    q0 = np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1])
+    q0 = HOME["arm6"]
     p = robot.fk(q0)
     a = p.position + np.array([0.1, 0.0, 0.0])
     b = a + 0.1 * np.array([-np.cos(np.radians(10.0)), np.sin(np.radians(10.0)), 0.0])

@@ -266,8 +266,7 @@ class ChainJointPath:
             pj[:, order] = dp / fact
             rj[:, order] = dr / fact
         for i in np.unique(k):
-            got = self.pieces[i].derivatives(s[k == i] - self.offsets[i]) \
-                if hasattr(self.pieces[i], "derivatives") else None
+            got = self.pieces[i].derivatives(s[k == i] - self.offsets[i])
             if got is not None:
                 sel = k == i
                 pj[sel, 0], pj[sel, 1], pj[sel, 2], pj[sel, 3] = got[0], got[1], 0.5 * got[2], got[3] / 6.0
