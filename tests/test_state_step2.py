@@ -45,13 +45,15 @@ def _check(prof, lim):
 
 
 def test_search_order_tries_every_pair_once():
-    all_pairs = {(stage, sgn) for stage in range(S.STAGE_EQUAL + 1) for sgn in (1.0, -1.0)}
+    all_pairs = {(stage, sgn) for stage in range(S.STAGE_HOLD2 + 1) for sgn in (1.0, -1.0)}
     margins = (0.0, -0.0, 1e-12, -1e-12, 0.3, -0.3, 2.0, -2.0, 1e300)
     for m1, m2 in itertools.product(margins, repeat=2):
         order = [tuple(S._step2_pair(k, m1, m2)) for k in range(S.STEP2_PAIRS)]
         assert len(order) == len(all_pairs) and set(order) == all_pairs, (m1, m2, order)
-        # the equal-jerk families (the most expensive) come last
-        assert {p[0] for p in order[-2:]} == {S.STAGE_EQUAL}
+        # the equal-jerk families (the most expensive polynomials) come next to last,
+        # the sampled holds last
+        assert {p[0] for p in order[-4:-2]} == {S.STAGE_EQUAL}
+        assert {p[0] for p in order[-2:]} == {S.STAGE_HOLD2}
         # the first pair is a cruise, of the class the margins' signs give
         stage, sgn = order[0]
         if m1 > 0.0 and not m2 > 0.0:
@@ -229,6 +231,47 @@ def test_blocked_intervals_of_separate_legs():
             with pytest.raises(BlockedDurationError) as err:
                 plan_state_to_state(s, g, lim, duration=T)
             assert err.value.interval == (lo, hi)
+
+
+#: Moves with separate legs whose fixed durations need a hold at a free level where the
+#: velocity reverses, or a second cruise: (start, goal, limits, durations, family).
+#: Each duration was reported blocked before those families (the first from its
+#: minimum up to 16.507 s); a mixed-integer oracle (a time grid, the leg of each
+#: step by binaries) found motions at 14.0, 15.0 and 16.15 s for the first.
+REVERSAL_HOLDS = [
+    ((-7.5819, 6.9015, -0.9094), (-10.9409, 0.1484, 1.8614),
+     (7.8765, 2.4022, 1.1439, 4.1584, 0.3493), (12.98, 13.2, 14.0, 15.0, 15.94, 16.15, 16.3),
+     ("hold1_acc1", "hold3")),
+    ((0.041607372320091894, -0.237104985766932, 0.0),
+     (0.041607372320091894, 0.19389004644125424, 0.133435692666076),
+     (0.273053606119807, 3.0720242027919946, 0.3294044135755663, 9.627592901076335,
+      0.8993501658285952), (1.7636, 1.78), ("hold1",)),
+    ((-0.3028801458259431, -0.48820339913741484, -0.10484711658468232),
+     (-0.3028801458259431, 0.11892347211995313, -0.33973149134677566),
+     (0.5275623987114426, 0.8750339644784393, 0.3248979706937659, 4.197393377882646,
+      0.17094791701833906), (6.89, 7.28, 7.77), ("cruise_cruise",)),
+]
+
+
+@pytest.mark.parametrize("s, g, L, durations, families", REVERSAL_HOLDS)
+def test_fixed_durations_through_a_reversal_with_separate_legs(s, g, L, durations, families):
+    """A hold at a free acceleration while the velocity reverses (the leg, and
+    with it the jerk limit, changes inside the hold or the ramp next to it), a
+    hold at a free level together with one at the limit, and a cruise at the
+    start's velocity before the cruise of ramp 2: step 2 finds each such motion
+    of exactly the duration asked for (checked by the independent exact
+    check), and no duration between the minimum and them is reported blocked."""
+    lim = AxisLimits(*L)
+    fd = feasible_durations(s, g, lim)
+    assert all(hi < durations[0] or lo > durations[-1] for lo, hi in fd.blocked), fd
+    seen = set()
+    for T in durations:
+        assert fd.contains(T)
+        q = plan_state_to_state(s, g, lim, duration=T)
+        assert q.duration == pytest.approx(T, rel=1e-12)
+        _check(q, lim)
+        seen.add(q.family.split()[-1])
+    assert seen & set(families), seen
 
 
 N_ENDS = sweep_size(400)

@@ -117,6 +117,17 @@ S2_NN, S2_AN, S2_NA, S2_AA, S2_H1, S2_H3 = 4, 5, 6, 7, 8, 9
 # down (ruckig's a3 != 0 profiles): c3 = ae (MH1: c1 free, MH2: hold at c1 = L1)
 # or c1 = a0 (MH3: c3 free, MH4: hold at c3 = L3); and every ramp at a reduced jerk
 S2_MH1, S2_MH2, S2_MH3, S2_MH4, S2_JF = 10, 11, 12, 13, 14
+# step 2, the last stage (STAGE_HOLD2): a hold at a free c1 with the hold at
+# c3 = L3 (HH1), a hold at a free c3 with the hold at c1 = L1 (HH3), and the holds
+# at a free c1 / c3 of ramp 2 through a velocity reversal (H1X, H3X); searched
+# on the exact residual (:func:`_hold2`). HH1/HH3 are reported under the codes
+# C_HH1/C_HH3 (free in the fixed-duration context), H1X/H3X as H1/H3.
+S2_HH1, S2_HH3, S2_H1X, S2_H3X = 16, 17, 18, 19
+C_HH1, C_HH3 = 0, 1
+# ... and, where ramp 1 starts (ramp 4 ends) at a = 0, a second cruise there: at the
+# start's velocity before ramp 1 (the goal's after ramp 4), with the cruise of ramp 2
+# (C_DC; :func:`_delay_cruise`)
+C_DC = 2
 # step 1, NONE with equal jerks everywhere: parameter w = c1 - c3 (c1^2 - c3^2 is
 # fixed by the velocity), w R(w) is a quartic (ruckig's NONE quartic)
 S_NONEW = 15
@@ -135,11 +146,18 @@ ALL_NEAREST = 2.0
 # first profile of the duration found ends the search; the likeliest pair
 # first, see _step2_pair): a cruise at a free velocity (UDDU), a hold at a free
 # acceleration, a cruise at an inflection (UDUD), equal jerks on every ramp
-STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL = 0, 1, 2, 3
+STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL, STAGE_HOLD2 = 0, 1, 2, 3, 4
 
-#: (stage, direction) pairs of step 2 (4 stages x 2 directions), searched in the
+#: (stage, direction) pairs of step 2 (5 stages x 2 directions), searched in the
 #: order of :func:`_step2_pair`.
-STEP2_PAIRS = 8
+STEP2_PAIRS = 10
+
+#: Samples of the exact residual per sign branch in step 2's last stage.
+HOLD2_SAMPLES = 24
+
+#: Bisection steps locating the end of a sign branch between two samples (to
+#: 2**-40 of their distance).
+EDGE_STEPS = 40
 
 #: Fixed-point rounds of the cruise-velocity estimate that orders step 2's search.
 CRUISE_ESTIMATE_ROUNDS = 3
@@ -953,6 +971,317 @@ def _plausible_cruise(cfg, c1, c3):
 
 
 @jit_raw
+def _quad_branch(a, b, c, s):
+    """Root ``(-b + s sqrt(b^2 - 4ac)) / 2a`` of ``a x^2 + b x + c`` (the linear
+    root for ``a = 0`` and ``s = 1``), computed without cancellation; NaN when
+    there is none."""
+    if a == 0.0:
+        return -c / b if (s > 0.0 and b != 0.0) else math.nan
+    disc = b * b - 4.0 * a * c
+    if not (disc >= 0.0):
+        return math.nan
+    sq = math.sqrt(disc)
+    q = -0.5 * (b + math.copysign(sq, b))  # the root of larger magnitude times a
+    # q / a carries the sign -sign(b) of the square root, c / q the other one
+    if (s > 0.0) == (math.copysign(1.0, b) < 0.0):
+        return q / a
+    return c / q if q != 0.0 else math.nan
+
+
+@jit_raw
+def _ramp_time(cfg, work):
+    """The ramps' duration of the template, affine in the corners: ``(b, d1, dz,
+    d3)`` with ``T_ramps = b + d1 c1 + dz z + d3 c3`` (:func:`_durations`)."""
+    b = _durations(cfg, work, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return (b, _durations(cfg, work, 1.0, 0.0, 0.0, 0.0, 0.0) - b,
+            _durations(cfg, work, 0.0, 0.0, 1.0, 0.0, 0.0) - b,
+            _durations(cfg, work, 0.0, 0.0, 0.0, 1.0, 0.0) - b)
+
+
+@jit_raw
+def _hold2_unknowns(cfg, shape, u, sa, sb, lin):
+    """(c1, t1, z, c3, t3) of a shape of :func:`_hold2` at parameter ``u`` on the
+    sign branch ``(sa, sb)``; NaN where the branch has no real value.
+
+    The duration of the ramps is affine in the corners, ``lin = (b, d1, dz,
+    d3)`` of :func:`_ramp_time`; with the velocity equations (``ve = F + E``,
+    or ``F = z^2 kz`` and ``ve = z^2 kze + E`` through a reversal) and the
+    duration ``T`` the remaining unknowns are linear or roots of a quadratic.
+    """
+    T = cfg[TT]
+    b, d1, dz, d3 = lin
+    ve = cfg[VE]
+    kz = _kz(cfg)
+    kze = _kze(cfg)
+    nan = math.nan
+    if shape == S2_HH1 or shape == S2_HH3:
+        hh1 = shape == S2_HH1
+        c1 = u if hh1 else cfg[L1]
+        c3 = cfg[L3] if hh1 else u
+        F0 = _F(cfg, c1, 0.0)
+        E0 = _E(cfg, c3, 0.0)
+        if not (M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH):
+            # t1 + t3 = R, c1 t1 + c3 t3 = G
+            R = T - (b + d1 * c1 + d3 * c3)
+            G = ve - F0 - E0
+            if c1 == c3 or sa < 0.0:
+                return nan, nan, nan, nan, nan
+            t1 = (G - c3 * R) / (c1 - c3)
+            return c1, t1, 0.0, c3, R - t1
+        if c1 == 0.0 or c3 == 0.0:
+            return nan, nan, nan, nan, nan
+        # t1 = (z^2 kz - F0) / c1, t3 = (ve - z^2 kze - E0) / c3, the duration T
+        z = _quad_branch(kz / c1 - kze / c3, dz,
+                         b + d1 * c1 + d3 * c3 - F0 / c1 + (ve - E0) / c3 - T, sa)
+        if sb < 0.0 or not (z == z):
+            return nan, nan, nan, nan, nan
+        return c1, (z * z * kz - F0) / c1, z, c3, (ve - z * z * kze - E0) / c3
+    z = u
+    h = 0.5 * (cfg[K1] + cfg[K2P])
+    P0 = cfg[VS] - 0.5 * cfg[AS] * cfg[AS] * cfg[K1]  # F(c1, 0) = P0 + h c1^2
+    aek = 0.5 * cfg[AE] * cfg[AE] * cfg[K4]
+    kc3 = _kc3(cfg)
+    sg = cfg[SG2]
+    if shape == S2_H1X:
+        # c3 from the end velocity (no hold), then c1 (hold t1) from the duration
+        if kc3 == 0.0:
+            return nan, nan, nan, nan, nan
+        q = (z * z * kze + sg * aek - ve) / (sg * kc3)
+        if not (q >= 0.0):
+            return nan, nan, nan, nan, nan
+        c3 = sb * math.sqrt(q)
+        c1 = _quad_branch(d1 - h, b + dz * z + d3 * c3 - T, z * z * kz - P0, sa)
+        if not (c1 == c1) or c1 == 0.0:
+            return nan, nan, nan, nan, nan
+        return c1, (z * z * kz - P0 - h * c1 * c1) / c1, z, c3, 0.0
+    # S2_H3X: c1 from the reversal (no hold), then c3 (hold t3) from the duration
+    if h == 0.0:
+        return nan, nan, nan, nan, nan
+    q = (z * z * kz - P0) / h
+    if not (q >= 0.0):
+        return nan, nan, nan, nan, nan
+    c1 = sa * math.sqrt(q)
+    c3 = _quad_branch(d3 + sg * kc3, b + d1 * c1 + dz * z - T, ve - z * z * kze - sg * aek, sb)
+    if not (c3 == c3) or c3 == 0.0:
+        return nan, nan, nan, nan, nan
+    return c1, 0.0, z, c3, (ve - z * z * kze - _E(cfg, c3, 0.0)) / c3
+
+
+@jit_raw
+def _hold2_resid(cfg, shape, u, sa, sb, lin):
+    c1, t1, z, c3, t3 = _hold2_unknowns(cfg, shape, u, sa, sb, lin)
+    if not (t1 == t1 and t3 == t3):
+        return math.nan
+    return walk(cfg, c1, t1, z, c3, t3, 0.0)[0] - cfg[PE]
+
+
+@jit_raw
+def _branch_edge(cfg, shape, x0, f0, x1, f1, sa, sb, lin):
+    """Where exactly one of ``f0``, ``f1`` is NaN: the end of the branch between
+    ``x0`` and ``x1`` by bisection; returns the interval from that end to the
+    finite sample, with both values (in the order of ``x0``, ``x1``)."""
+    good = x1 if f1 == f1 else x0
+    fgood = f1 if f1 == f1 else f0
+    bad = x0 if f1 == f1 else x1
+    for _ in range(EDGE_STEPS):
+        mid = 0.5 * (good + bad)
+        if mid == good or mid == bad:
+            break
+        fm = _hold2_resid(cfg, shape, mid, sa, sb, lin)
+        if fm == fm:
+            good = mid
+            fgood = fm
+        else:
+            bad = mid
+    if f1 == f1:
+        return good, fgood, x1, f1
+    return x0, f0, good, fgood
+
+
+@jit_raw
+def _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
+    """Step 2's last stage on one template: the holds the earlier stages leave out.
+
+    A hold at a free ``c1`` together with the hold at ``c3 = L3`` (and the
+    mirror case), and the holds at a free level of ramp 2 through a velocity
+    reversal (the leg changes inside ramp 2), each also with ramp 1 (a free
+    ``c1``) or ramp 4 (a free ``c3``) running the other way (its jerk's sign
+    flipped by a negative ``K1`` / ``K4``: the algebra is the same), so that
+    the hold lies below the start's acceleration (above the goal's). Each
+    shape has one parameter
+    ``u`` (``c1``, ``c3`` or the reversal acceleration ``z``) and up to two
+    sign branches; the exact position residual is sampled at
+    :data:`HOLD2_SAMPLES` points of ``u`` per branch, every sign change refined
+    by regula falsi (Illinois) and offered (the exact check decides). A root
+    the samples do not bracket (a double root) is missed: this costs a
+    profile, never a violation.
+    """
+    mode = int(cfg[MODE])
+    cross = M_ZFIRST <= mode <= M_ZBOTH
+    tol = POLISH_RTOL * (abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]) + 1e-300)
+    k1 = cfg[K1]
+    k4 = cfg[K4]
+    for job in range(2 * (S2_H3X - S2_HH1 + 1)):
+        shape = S2_HH1 + job // 2
+        # flip: ramp 1 (shapes with a free c1) or ramp 4 (free c3) the other way,
+        # so that the hold lies below the start's (above the goal's) acceleration
+        flip = job % 2 == 1
+        if not cross and shape >= S2_H1X:
+            continue
+        if flip and ((shape == S2_HH1 or shape == S2_H1X) and k1 == 0.0
+                     or (shape == S2_HH3 or shape == S2_H3X) and k4 == 0.0):
+            continue
+        cfg[K1] = -k1 if flip and (shape == S2_HH1 or shape == S2_H1X) else k1
+        cfg[K4] = -k4 if flip and (shape == S2_HH3 or shape == S2_H3X) else k4
+        if shape == S2_HH1:
+            if not (abs(cfg[L3]) < math.inf) or cfg[L3] == 0.0:
+                continue
+            lo, hi = cfg[C1LO], cfg[C1HI]
+            if flip:
+                lo, hi = min(cfg[C3LO], cfg[L3]), cfg[AS]
+            code = C_HH1
+        elif shape == S2_HH3:
+            if not (abs(cfg[L1]) < math.inf) or cfg[L1] == 0.0:
+                continue
+            lo, hi = cfg[C3LO], cfg[C3HI]
+            if flip:
+                lo, hi = cfg[AE], max(cfg[C1HI], cfg[L1])
+            code = C_HH3
+        else:
+            lo, hi = min(cfg[C3LO], 0.0), max(cfg[C1HI], 0.0)
+            code = S2_H1 if shape == S2_H1X else S2_H3
+        if not (abs(lo) < math.inf and abs(hi) < math.inf and hi > lo):
+            continue
+        lin = _ramp_time(cfg, work)
+        for br in range(4):
+            sa = 1.0 if br % 2 == 0 else -1.0
+            sb = 1.0 if br < 2 else -1.0
+            if (shape == S2_HH1 or shape == S2_HH3) and sb < 0.0:
+                continue
+            if (shape == S2_HH1 or shape == S2_HH3) and not cross and sa < 0.0:
+                continue
+            x0 = lo
+            f0 = _hold2_resid(cfg, shape, x0, sa, sb, lin)
+            for i in range(1, HOLD2_SAMPLES):
+                x1 = lo + (hi - lo) * i / (HOLD2_SAMPLES - 1)
+                f1 = _hold2_resid(cfg, shape, x1, sa, sb, lin)
+                a, fa, bb, fb = x0, f0, x1, f1
+                if (f0 == f0) != (f1 == f1):
+                    # the branch ends between the samples (a radicand crosses zero,
+                    # where two branches meet): its last value is the bracket's end
+                    a, fa, bb, fb = _branch_edge(cfg, shape, x0, f0, x1, f1, sa, sb, lin)
+                if fa == fa and fb == fb and (fa == 0.0 or fa * fb < 0.0):
+                    x = a
+                    if fa != 0.0:
+                        side = 0
+                        for _ in range(BRANCH_ROOT_ITER):
+                            x = (a * fb - bb * fa) / (fb - fa)
+                            if not (a < x < bb):
+                                x = 0.5 * (a + bb)
+                                if not (a < x < bb):
+                                    break
+                            fx = _hold2_resid(cfg, shape, x, sa, sb, lin)
+                            if abs(fx) <= tol or not (fx == fx):
+                                break
+                            a, fa, bb, fb, side = illinois(x, fx, a, fa, bb, fb, side)
+                    c1, t1, z, c3, t3 = _hold2_unknowns(cfg, shape, x, sa, sb, lin)
+                    if t1 == t1 and t3 == t3 and _plausible(cfg, c1, t1, c3, t3, 0.0):
+                        offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, 0.0, sgn, st,
+                              lim, best, res, scratch, code)
+                        if res[R_T] < math.inf:
+                            cfg[K1] = k1
+                            cfg[K4] = k4
+                            return
+                x0 = x1
+                f0 = f1
+    cfg[K1] = k1
+    cfg[K4] = k4
+
+
+@jit_raw
+def _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch, end):
+    """Step 2's two cruises on one template whose ramp 1 starts at ``a = 0``
+    (``end = 0``; ramp 4 ends there for ``end = 1``): a cruise of ``t0`` at the
+    start's velocity before ramp 1 (after ramp 4 at the goal's) and the cruise
+    ``tc`` of ramp 2 at ``vc``.
+
+    For a corner ``c1`` (``c3`` from the end velocity, both sign branches) the
+    durations and the end position are linear in ``t0`` and ``tc``: ``t0 + tc
+    = T - T_ramps`` and ``v0 t0 + vc tc = p_e - p_ramps``. The corners form a
+    one-parameter family of such profiles (nothing left to solve for), so
+    :data:`HOLD2_SAMPLES` values of ``c1`` are tried, each with non-negative
+    ``t0`` and ``tc`` offered (the exact check decides).
+    """
+    if end == 0:
+        if cfg[AS] != 0.0 or npre + 1 > NPH:
+            return
+        vd = cfg[VS]
+    else:
+        if cfg[AE] != 0.0 or nsuf + 1 > NPH:
+            return
+        vd = cfg[VE]
+    lo, hi = cfg[C1LO], cfg[C1HI]
+    if not (abs(lo) < math.inf and abs(hi) < math.inf and hi > lo) or _kc3(cfg) <= 0.0:
+        return
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
+    T = cfg[TT]
+    rho = _rho1(cfg)
+    g = _g(cfg)
+    sg = cfg[SG2]
+    aek = 0.5 * cfg[AE] * cfg[AE] * cfg[K4]
+    eps = -PLAUSIBLE_RTOL * (1.0 + abs(T))
+    for i in range(HOLD2_SAMPLES):
+        c1 = lo + (hi - lo) * (i + 0.5) / HOLD2_SAMPLES
+        F = _F(cfg, c1, 0.0)
+        vc = rho * F
+        if vc == vd:
+            continue
+        z = 0.0
+        if cross:
+            rz = F / _kz(cfg)
+            if not (rz >= 0.0):
+                continue
+            z = cfg[SZ] * math.sqrt(rz)
+        r3 = (g * vc + sg * aek - cfg[VE]) / (sg * _kc3(cfg))
+        if not (r3 >= 0.0):
+            continue
+        for b in range(2):
+            s3 = 1.0 if b == 0 else -1.0
+            if cfg[S3] != 0.0 and s3 != cfg[S3]:
+                continue
+            c3 = s3 * math.sqrt(r3)
+            p0, t_r = walk(cfg, c1, 0.0, z, c3, 0.0, 0.0)
+            R = T - t_r
+            t0 = (cfg[PE] - p0 - vc * R) / (vd - vc)
+            tc = R - t0
+            if not (t0 >= eps and tc >= eps and _plausible(cfg, c1, 0.0, c3, 0.0, tc)):
+                continue
+            t0 = max(t0, 0.0)
+            if end == 0:
+                pre[npre, 0] = t0
+                pre[npre, 1] = 0.0
+                pre[npre, 2] = 0.0
+                offer(cfg, work, pre, npre + 1, suf, nsuf, c1, 0.0, z, c3, 0.0, tc, sgn, st,
+                      lim, best, res, scratch, C_DC)
+            else:
+                for k in range(nsuf, 0, -1):
+                    suf[k, 0] = suf[k - 1, 0]
+                    suf[k, 1] = suf[k - 1, 1]
+                    suf[k, 2] = suf[k - 1, 2]
+                suf[0, 0] = t0
+                suf[0, 1] = 0.0
+                suf[0, 2] = 0.0
+                offer(cfg, work, pre, npre, suf, nsuf + 1, c1, 0.0, z, c3, 0.0, tc, sgn, st,
+                      lim, best, res, scratch, C_DC)
+                for k in range(nsuf):
+                    suf[k, 0] = suf[k + 1, 0]
+                    suf[k, 1] = suf[k + 1, 1]
+                    suf[k, 2] = suf[k + 1, 2]
+            if res[R_T] < math.inf:
+                return
+
+
+@jit_raw
 def solve_shape(cfg, work, shape, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch,
                 vals, coef, roots, ivl, dscr):
     """Every root of one shape of one template, each offered as a candidate."""
@@ -1281,6 +1610,15 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
                 cfg[k] = save[k]
             return
         mode = int(cfg[MODE])
+        if stage == STAGE_HOLD2:
+            if mode != M_MID:
+                _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
+            if mode != M_MID and mode != M_SINGLE and mode != M_ZSINGLE:
+                for end in range(2):
+                    if not (res[R_T] < math.inf):
+                        _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                                      scratch, end)
+            return
         if stage == STAGE_EQUAL and mode == M_ZERO and (
                 cfg[S3] == 0.0 or (cfg[K1] == max(lim[2], lim[4]) and cfg[K4] == cfg[K1])):
             # equal jerk on every ramp, at the tighter of both legs' limits
@@ -1586,7 +1924,8 @@ def _hold_suffix(suf, pe, ve, ae, A1, K1_, A2, K2_):
 def _front(pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km):
     """Run B (a > 0, v rising from vA): hypothesis ``hb`` -> (ok, npre, ps, vs, as, AB, KB,
     KB2, mode_b, vc_pos). ``mode_b``: 1 when the reversal lies in ramp 2's first half
-    (then KB applies before it, KB2 after)."""
+    (then KB applies before it, KB2 after); 2 when it lies in a hold at a free ``c1``
+    (ramp 1 at ``K2``, KB after it; hypothesis 5, step 2 only)."""
     ps, vs, as_ = pA, vA, aA
     npre = npA
     if vs >= 0.0:
@@ -1605,6 +1944,8 @@ def _front(pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km):
     if hb == 4:  # reversal in the hold at c1 (fixed prefix, ends at v = 0)
         ok, npre, ps, aend = _hold_prefix(pre, npA, ps, vs, as_, A1, K1_, A2, K2_)
         return ok, npre, ps, 0.0, aend, A1, K1_, K1_, 0, True
+    if hb == 5:  # (step 2) reversal in a hold at a free c1: ramp 1 slowing (K2), the rest speeding
+        return True, npre, ps, vs, as_, min(A1, A2), K1_, K1_, 2, True
     return True, npre, ps, vs, as_, Am, Km, Km, 0, True
 
 
@@ -1612,7 +1953,8 @@ def _front(pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km):
 def _back(suf, sufd, nsD, pD, vD, aD, hc, vc_pos, A1, K1_, A2, K2_, Am, Km):
     """Run C (a < 0, v falling to vD): hypothesis ``hc`` -> (ok, nsuf, pe, ve, ae, AC, KC,
     KC2, mode_c). ``mode_c``: 1 when the reversal lies in ramp 2's second half (KC before
-    it, KC2 after)."""
+    it, KC2 after); 2 when it lies in a hold at a free ``c3`` (ramp 4 at KC2;
+    hypothesis 5, step 2 only)."""
     pe, ve, ae = pD, vD, aD
     nsuf = 0
     ok = True
@@ -1634,6 +1976,8 @@ def _back(suf, sufd, nsD, pD, vD, aD, hc, vc_pos, A1, K1_, A2, K2_, Am, Km):
             ae = az
     elif hc == 2:  # reversal in ramp 2's second half (0 -> c3)
         AC, KC, KC2, mode_c = A1, K2_, K1_, 1
+    elif hc == 5:  # (step 2) reversal in a hold at a free c3: ramp 4 speeding (KC2)
+        AC, KC, KC2, mode_c = min(A1, A2), K2_, K1_, 2
     elif hc == 4:  # reversal in the hold at c3 (fixed suffix from v = 0)
         ok, nsuf, pe, ae = _hold_suffix(suf, pe, ve, ae, A1, K1_, A2, K2_)
         ve = 0.0
@@ -1649,7 +1993,9 @@ def _one_run(pre, suf, sufd, npA, nsD, ps, vs, as_, pe, ve, ae, h, sign, A1, K1_
              Km):
     """A single run (the acceleration keeps the sign ``sign`` between the forced
     prefix and suffix): hypothesis ``h`` -> (ok, npre, nsuf, ps, vs, as, pe, ve, ae,
-    A_before, K_before, A_after, K_after, crossing_in_ramp2)."""
+    A_before, K_before, A_after, K_after, where): where the velocity reversal lies: 0 nowhere
+    or no leg change, 1 in ramp 2, 2 in a hold at a free ``c1`` (ramp 1 before it), 3 in
+    a hold at a free ``c3`` (ramp 4 after it); 2 and 3 for step 2 only)."""
     npre = npA
     nsuf = 0
     rising = sign > 0.0  # a > 0: v rises
@@ -1663,7 +2009,7 @@ def _one_run(pre, suf, sufd, npA, nsD, ps, vs, as_, pe, ve, ae, h, sign, A1, K1_
         else:
             A, K = A2, K2_
         nsuf = _copy(suf, 0, sufd, nsD)
-        return ok, npre, nsuf, ps, vs, as_, pe, ve, ae, A, K, A, K, False
+        return ok, npre, nsuf, ps, vs, as_, pe, ve, ae, A, K, A, K, 0
     if (rising and v_last <= 0.0) or (not rising and v_first <= 0.0):
         ok = h == 0
         if rising:
@@ -1671,36 +2017,40 @@ def _one_run(pre, suf, sufd, npA, nsD, ps, vs, as_, pe, ve, ae, h, sign, A1, K1_
         else:
             A, K = A1, K1_
         nsuf = _copy(suf, 0, sufd, nsD)
-        return ok, npre, nsuf, ps, vs, as_, pe, ve, ae, A, K, A, K, False
+        return ok, npre, nsuf, ps, vs, as_, pe, ve, ae, A, K, A, K, 0
     # the velocity changes sign inside the run: slowing before, speeding after
     if h == 0:  # in the first ramp (fixed point)
         az = _az_from_start(as_, vs, K2_, sign)
         if not (az == az) or az < as_:
-            return False, npre, 0, ps, vs, as_, pe, ve, ae, A1, K1_, A1, K1_, False
+            return False, npre, 0, ps, vs, as_, pe, ve, ae, A1, K1_, A1, K1_, 0
         npre = _push(pre, npre, as_, az, K2_)
         ps, vs, _ = integrate(pre, npA, npre, ps, vs, as_)
         nsuf = _copy(suf, 0, sufd, nsD)
-        return True, npre, nsuf, ps, 0.0, az, pe, ve, ae, A1, K1_, A1, K1_, False
+        return True, npre, nsuf, ps, 0.0, az, pe, ve, ae, A1, K1_, A1, K1_, 0
     if h == 1:  # in the last ramp (fixed point)
         az = _az_from_end(ae, ve, K1_, sign)
         if not (az == az):
-            return False, npre, 0, ps, vs, as_, pe, ve, ae, A2, K2_, A2, K2_, False
+            return False, npre, 0, ps, vs, as_, pe, ve, ae, A2, K2_, A2, K2_, 0
         nsuf = _push(suf, 0, az, ae, K1_)
         _, pe, ve = _before(suf, 0, nsuf, pe, ve)
         nsuf = _copy(suf, nsuf, sufd, nsD)
-        return True, npre, nsuf, ps, vs, as_, pe, ve, az, A2, K2_, A2, K2_, False
+        return True, npre, nsuf, ps, vs, as_, pe, ve, az, A2, K2_, A2, K2_, 0
     if h == 4:  # in the hold at c1 (rising run: prefix) or at c3 (falling run: suffix)
         if rising:
             ok, npre, ps, aend = _hold_prefix(pre, npA, ps, vs, as_, A1, K1_, A2, K2_)
             nsuf = _copy(suf, 0, sufd, nsD)
-            return ok, npre, nsuf, ps, 0.0, aend, pe, ve, ae, A1, K1_, A1, K1_, False
+            return ok, npre, nsuf, ps, 0.0, aend, pe, ve, ae, A1, K1_, A1, K1_, 0
         ok, nsuf, pe, ae = _hold_suffix(suf, pe, ve, ae, A1, K1_, A2, K2_)
         nsuf = _copy(suf, nsuf, sufd, nsD)
-        return ok, npre, nsuf, ps, vs, as_, pe, 0.0, ae, A2, K2_, A2, K2_, False
+        return ok, npre, nsuf, ps, vs, as_, pe, 0.0, ae, A2, K2_, A2, K2_, 0
     nsuf = _copy(suf, 0, sufd, nsD)
     if h == 2:  # in ramp 2
-        return True, npre, nsuf, ps, vs, as_, pe, ve, ae, A2, K2_, A1, K1_, True
-    return True, npre, nsuf, ps, vs, as_, pe, ve, ae, Am, Km, Am, Km, False
+        return True, npre, nsuf, ps, vs, as_, pe, ve, ae, A2, K2_, A1, K1_, 1
+    if h == 5:  # (step 2) in a hold at a free c1: ramp 1 slowing, ramp 2 on speeding
+        return True, npre, nsuf, ps, vs, as_, pe, ve, ae, min(A1, A2), K2_, A1, K1_, 2
+    if h == 6:  # (step 2) in a hold at a free c3: up to ramp 2 slowing, ramp 4 speeding
+        return True, npre, nsuf, ps, vs, as_, pe, ve, ae, A2, K2_, min(A1, A2), K1_, 3
+    return True, npre, nsuf, ps, vs, as_, pe, ve, ae, Am, Km, Am, Km, 0
 
 
 @jit_raw
@@ -1753,13 +2103,16 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
     if af > 0.0:
         nsD, pD, vD = _suffix_d(sufd, D, vf, af, K1_, K2_)
         aD = 0.0
+    # step 2 also tries a reversal inside a hold at a free level (hypotheses 5 and 6;
+    # the holds of minimum time are at a limit, where the fixed prefix/suffix take them)
+    nh = 5 if st0[6] != st0[6] else 6
     # ===== sign case (+, -): c1 >= 0 >= c3; run B (a > 0: v rises to vc), run C (a < 0)
-    for hb in range(0 if symmetric else 5):
+    for hb in range(0 if symmetric else nh):
         okb, npre, ps, vs, as_, AB, KB, KB2, mb, vc_pos = _front(
             pre, npA, pA, vA, aA, hb, A1, K1_, A2, K2_, Am, Km)
         if not okb:
             continue
-        for hc in range(5):
+        for hc in range(nh if not symmetric else 5):
             okc, nsuf, pe, ve, ae, AC, KC, KC2, mc = _back(
                 suf, sufd, nsD, pD, vD, aD, hc, vc_pos, A1, K1_, A2, K2_, Am, Km)
             if not okc:
@@ -1773,37 +2126,39 @@ def direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st):
             else:
                 mode, k2q, sz = M_ZERO, KB, 1.0
             # holds: at c1 before a reversal in ramp 2 (leg of B), at c3 after one (leg of C)
-            c1hi = min(AB, _c1_bound(V, vs, as_, KB))
-            c3lo = -min(AC, _c3_bound(V, ve, ae, KC2 if mc == 1 else KC))
-            k4 = KC2 if mc == 1 else KC
-            _setcfg(cfg, ps, vs, as_, pe, ve, ae, KB, KB, KC, k2q, k4, mode, AB, -AC, V,
+            k1 = K2_ if mb == 2 else KB  # a reversal in the hold at c1: ramp 1 slowing
+            c1hi = min(AB, _c1_bound(V, vs, as_, k1))
+            c3lo = -min(AC, _c3_bound(V, ve, ae, KC if mc == 0 else KC2))
+            k4 = KC if mc == 0 else KC2
+            _setcfg(cfg, ps, vs, as_, pe, ve, ae, k1, KB, KC, k2q, k4, mode, AB, -AC, V,
                     max(as_, 0.0), c1hi, c3lo, min(ae, 0.0), -1.0, sz, KC2)
             _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res)
     # ===== sign case (+, +): c1 >= c3 >= 0: one run with a >= 0 (needs af >= 0)
     if af >= 0.0:
-        for he in range(5):
+        for he in range(nh + 1 if not symmetric else 5):
             ok, npre, nsuf, ps, vs, as_, pe, ve, ae, Ab, Kb, Aa, Ka, cr = _one_run(
                 pre, suf, sufd, npA, 0, pA, vA, aA, D, vf, af, he, 1.0,
                 A1, K1_, A2, K2_, Am, Km)
             if not ok:
                 continue
-            mode = M_ZSINGLE if cr else M_SINGLE
+            mode = M_ZSINGLE if cr == 1 else M_SINGLE
             c1hi = min(Ab, _c1_bound(V, vs, as_, Kb))
-            _setcfg(cfg, ps, vs, as_, pe, ve, ae, Kb, Kb, Ka, Ka, Ka, mode, Ab, Aa, V,
-                    max(as_, 0.0), c1hi, 0.0, ae, 1.0, 1.0, Ka)
+            # (a reversal in the hold at c1: ramp 2 on speeding)
+            _setcfg(cfg, ps, vs, as_, pe, ve, ae, Kb, Ka if cr == 2 else Kb, Ka, Ka, Ka, mode, Ab,
+                    Aa, V, max(as_, 0.0), c1hi, 0.0, ae, 1.0, 1.0, Ka)
             _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res)
     # ===== sign case (-, -): 0 >= c1 >= c3: one run with a <= 0 (needs a0 <= 0)
     if a0 <= 0.0:
-        for hf in range(5):
+        for hf in range(nh + 1 if not symmetric else 5):
             ok, npre, nsuf, ps, vs, as_, pe, ve, ae, Ab, Kb, Aa, Ka, cr = _one_run(
                 pre, suf, sufd, 0, nsD, p0, v0, a0, pD, vD, aD, hf, -1.0,
                 A1, K1_, A2, K2_, Am, Km)
             if not ok:
                 continue
-            mode = M_ZSINGLE if cr else M_SINGLE
+            mode = M_ZSINGLE if cr == 1 else M_SINGLE
             c3lo = -min(Aa, _c3_bound(V, ve, ae, Ka))
-            _setcfg(cfg, ps, vs, as_, pe, ve, ae, Kb, Kb, Ka, Ka, Ka, mode, -Ab, -Aa, V,
-                    as_, 0.0, c3lo, min(ae, 0.0), -1.0, -1.0, Ka)
+            _setcfg(cfg, ps, vs, as_, pe, ve, ae, Kb, Ka if cr == 2 else Kb, Ka, Ka, Ka, mode, -Ab,
+                    -Aa, V, as_, 0.0, c3lo, min(ae, 0.0), -1.0, -1.0, Ka)
             _solve(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res)
     if symmetric:
         return
@@ -1907,8 +2262,9 @@ def _step2_pair(k, m1, m2):
     family their signs predict, then the one with the smaller margin's sign
     flipped, the holds (both directions), the cruise with the other sign
     flipped, with both flipped, and last the equal-jerk families (the most
-    expensive). The first valid profile ends the search, so the order
-    changes only the work, never whether a profile is found.
+    expensive), then the holds of :func:`_hold2` (the last resort). The
+    first valid profile ends the search, so the order changes only the
+    work, never whether a profile is found.
     """
     up1 = m1 > 0.0
     up2 = m2 > 0.0
@@ -1925,7 +2281,9 @@ def _step2_pair(k, m1, m2):
         return _cruise_pair(up1 == small1, up2 != small1)
     if k == 5:
         return _cruise_pair(not up1, not up2)
-    return STAGE_EQUAL, (1.0 if k == 6 else -1.0)
+    if k < 8:
+        return STAGE_EQUAL, (1.0 if k == 6 else -1.0)
+    return STAGE_HOLD2, (1.0 if k == 8 else -1.0)
 
 
 @jit_raw

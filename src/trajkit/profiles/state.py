@@ -62,6 +62,8 @@ __all__ = [
 #: Names of the fixed-duration (step 2) shapes, after the step-1 ones.
 STEP2_NAMES = ("cruise", "acc0_cruise", "cruise_acc1", "acc0_cruise_acc1", "hold1", "hold3",
                "hold_mid", "acc0_hold_mid", "hold_mid_3", "hold_mid_acc1", "reduced_jerk")
+#: Names of the fixed-duration shapes of step 2's last stage (codes 0-2 of the fixed context).
+STEP2_HOLD_NAMES = ("hold1_acc1", "acc0_hold3", "cruise_cruise")
 
 #: A requested duration within this fraction of the minimum is the minimum.
 DURATION_RTOL = K.DURATION_RTOL
@@ -528,6 +530,8 @@ def _family_name(c: int) -> str:
     if fixed:
         if c == K.SHAPE_CRUISE_FALLBACK:
             return f"fixed {direction} velocity_change_cruise_velocity_change"
+        if c < len(STEP2_HOLD_NAMES):
+            return f"fixed {direction} {STEP2_HOLD_NAMES[c]}"
         return f"fixed {direction} {STEP2_NAMES[c - 4] if 4 <= c < 15 else '?'}"
     if c == 15:  # NONE with equal jerks (solved in w = c1 - c3)
         return f"{direction} none"
