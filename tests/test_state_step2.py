@@ -234,10 +234,12 @@ def test_blocked_intervals_of_separate_legs():
 
 
 #: Moves with separate legs whose fixed durations need a hold at a free level where the
-#: velocity reverses, or a second cruise: (start, goal, limits, durations, family).
-#: Each duration was reported blocked before those families (the first from its
-#: minimum up to 16.507 s); a mixed-integer oracle (a time grid, the leg of each
-#: step by binaries) found motions at 14.0, 15.0 and 16.15 s for the first.
+#: velocity reverses, a second cruise, or a cruise where the start's acceleration has
+#: been ramped to zero: (start, goal, limits, durations, family). Before those
+#: families each duration was reported blocked (the first move's from its minimum up
+#: to 16.507 s) or raised "no profile found" (the last); a mixed-integer oracle (a
+#: time grid, the leg of each step by binaries) found motions at 14.0, 15.0 and
+#: 16.15 s for the first.
 REVERSAL_HOLDS = [
     ((-7.5819, 6.9015, -0.9094), (-10.9409, 0.1484, 1.8614),
      (7.8765, 2.4022, 1.1439, 4.1584, 0.3493), (12.98, 13.2, 14.0, 15.0, 15.94, 16.15, 16.3),
@@ -250,6 +252,10 @@ REVERSAL_HOLDS = [
      (-0.3028801458259431, 0.11892347211995313, -0.33973149134677566),
      (0.5275623987114426, 0.8750339644784393, 0.3248979706937659, 4.197393377882646,
       0.17094791701833906), (6.89, 7.28, 7.77), ("cruise_cruise",)),
+    ((7.004951893634527, -1.9254256051452598, -0.265897342596525),
+     (7.004951893634527, 4.956530470493023, 2.1110668419945946),
+     (8.63068925516632, 4.584218390260918, 0.3676630578374718, 4.163557235420162,
+      0.9388338172283597), (5.67, 6.0, 6.595), ("cruise_shape",)),
 ]
 
 
@@ -257,8 +263,10 @@ REVERSAL_HOLDS = [
 def test_fixed_durations_through_a_reversal_with_separate_legs(s, g, L, durations, families):
     """A hold at a free acceleration while the velocity reverses (the leg, and
     with it the jerk limit, changes inside the hold or the ramp next to it), a
-    hold at a free level together with one at the limit, and a cruise at the
-    start's velocity before the cruise of ramp 2: step 2 finds each such motion
+    hold at a free level together with one at the limit, a cruise at the
+    start's velocity before the cruise of ramp 2, and a cruise where the
+    start's acceleration has been ramped to zero before a shape of step 1:
+    step 2 finds each such motion
     of exactly the duration asked for (checked by the independent exact
     check), and no duration between the minimum and them is reported blocked."""
     lim = AxisLimits(*L)

@@ -128,6 +128,9 @@ C_HH1, C_HH3 = 0, 1
 # start's velocity before ramp 1 (the goal's after ramp 4), with the cruise of ramp 2
 # (C_DC; :func:`_delay_cruise`)
 C_DC = 2
+# ... and a cruise at the start's velocity before ramp 1 (the goal's after ramp 4)
+# with a shape of step 1 (C_DS; :func:`_delay_step1`)
+C_DS = 3
 # step 1, NONE with equal jerks everywhere: parameter w = c1 - c3 (c1^2 - c3^2 is
 # fixed by the velocity), w R(w) is a quartic (ruckig's NONE quartic)
 S_NONEW = 15
@@ -1068,15 +1071,32 @@ def _hold2_unknowns(cfg, shape, u, sa, sb, lin):
 
 
 @jit_raw
-def _hold2_resid(cfg, shape, u, sa, sb, lin):
-    c1, t1, z, c3, t3 = _hold2_unknowns(cfg, shape, u, sa, sb, lin)
-    if not (t1 == t1 and t3 == t3):
-        return math.nan
-    return walk(cfg, c1, t1, z, c3, t3, 0.0)[0] - cfg[PE]
+def _h2_cand(cfg, work, kind, shape, u, sa, sb, lin, vd):
+    """(c1, t1, z, c3, t3, t0) of a shape of step 2's last stage at ``u`` on the
+    sign branch ``(sa, sb)`` (NaN where it has none). ``kind`` 0: the holds of
+    :func:`_hold2_unknowns` (``t0`` 0); 1: a step-1 shape (:func:`_unknowns`,
+    ``sa``, ``sb`` the signs of its square roots) after a cruise of ``t0`` at
+    ``vd`` before ramp 1 or after ramp 4 that fills the duration."""
+    if kind == 0:
+        c1, t1, z, c3, t3 = _hold2_unknowns(cfg, shape, u, sa, sb, lin)
+        return c1, t1, z, c3, t3, 0.0
+    c1, t1, z, c3, t3, _, rz, r3 = _unknowns(cfg, work, shape, u, sa, sb)
+    if not (rz >= 0.0 and r3 >= 0.0):
+        return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
+    return c1, t1, z, c3, t3, cfg[TT] - _durations(cfg, work, c1, t1, z, c3, t3)
 
 
 @jit_raw
-def _branch_edge(cfg, shape, x0, f0, x1, f1, sa, sb, lin):
+def _h2_resid(cfg, work, kind, shape, u, sa, sb, lin, vd):
+    """End-position residual of :func:`_h2_cand` (NaN where it has no value)."""
+    c1, t1, z, c3, t3, t0 = _h2_cand(cfg, work, kind, shape, u, sa, sb, lin, vd)
+    if not (t1 == t1 and t3 == t3 and t0 == t0):
+        return math.nan
+    return walk(cfg, c1, t1, z, c3, t3, 0.0)[0] + vd * t0 - cfg[PE]
+
+
+@jit_raw
+def _branch_edge(cfg, work, kind, shape, x0, f0, x1, f1, sa, sb, lin, vd):
     """Where exactly one of ``f0``, ``f1`` is NaN: the end of the branch between
     ``x0`` and ``x1`` by bisection; returns the interval from that end to the
     finite sample, with both values (in the order of ``x0``, ``x1``)."""
@@ -1087,7 +1107,7 @@ def _branch_edge(cfg, shape, x0, f0, x1, f1, sa, sb, lin):
         mid = 0.5 * (good + bad)
         if mid == good or mid == bad:
             break
-        fm = _hold2_resid(cfg, shape, mid, sa, sb, lin)
+        fm = _h2_resid(cfg, work, kind, shape, mid, sa, sb, lin, vd)
         if fm == fm:
             good = mid
             fgood = fm
@@ -1096,6 +1116,122 @@ def _branch_edge(cfg, shape, x0, f0, x1, f1, sa, sb, lin):
     if f1 == f1:
         return good, fgood, x1, f1
     return x0, f0, good, fgood
+
+
+@jit_raw
+def _insert_row(buf, n, k, t):
+    """Insert a phase of ``t`` at ``a = 0`` (zero jerk) before row ``k`` of ``buf[:n]``."""
+    for i in range(n, k, -1):
+        buf[i, 0] = buf[i - 1, 0]
+        buf[i, 1] = buf[i - 1, 1]
+        buf[i, 2] = buf[i - 1, 2]
+    buf[k, 0] = t
+    buf[k, 1] = 0.0
+    buf[k, 2] = 0.0
+
+
+@jit_raw
+def _remove_row(buf, n, k):
+    """Undo :func:`_insert_row` (``n`` rows before it)."""
+    for i in range(k, n):
+        buf[i, 0] = buf[i + 1, 0]
+        buf[i, 1] = buf[i + 1, 1]
+        buf[i, 2] = buf[i + 1, 2]
+
+
+@jit_raw
+def _delay_at(cfg, pre, npre, suf, nsuf, st, end):
+    """Where a cruise can wait at ``a = 0`` in the fixed prefix (``end = 0``: before
+    its row ``k``, ``k = npre`` before ramp 1 where it starts at ``a = 0``) or in
+    the fixed suffix (``end = 1``: before its row ``k``, ``k = 0`` after ramp 4
+    where it ends at ``a = 0``): ``(k, v)`` with the velocity there, ``(-1, 0)``
+    where there is no such point or no room for the phase."""
+    if end == 0:
+        if npre + 1 > NPH:
+            return -1, 0.0
+        k = npre if cfg[AS] == 0.0 else -1
+        for i in range(npre):
+            if k < 0 and pre[i, 2] == 0.0:
+                k = i
+        if k < 0:
+            return -1, 0.0
+        _, v, _ = integrate(pre, 0, k, st[0], st[1], st[2])
+        return k, v
+    if nsuf + 1 > NPH:
+        return -1, 0.0
+    k = 0 if cfg[AE] == 0.0 else -1
+    for i in range(nsuf):
+        if k < 0 and suf[i, 2] == 0.0:
+            k = i
+    if k < 0:
+        return -1, 0.0
+    _, v, _ = integrate(suf, 0, k, cfg[PE], cfg[VE], cfg[AE])
+    return k, v
+
+
+@jit_raw
+def _offer_delay(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, t0, end, k, sgn, st,
+                 lim, best, res, scratch, code):
+    """:func:`offer` with a cruise of ``t0`` at ``a = 0`` before row ``k`` of the
+    fixed prefix (``end = 0``) or suffix (``end = 1``; none for ``end < 0``)."""
+    if end < 0:
+        offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, best, res,
+              scratch, code)
+    elif end == 0:
+        _insert_row(pre, npre, k, t0)
+        offer(cfg, work, pre, npre + 1, suf, nsuf, c1, t1, z, c3, t3, tc, sgn, st, lim, best,
+              res, scratch, code)
+        _remove_row(pre, npre, k)
+    else:
+        _insert_row(suf, nsuf, k, t0)
+        offer(cfg, work, pre, npre, suf, nsuf + 1, c1, t1, z, c3, t3, tc, sgn, st, lim, best,
+              res, scratch, code)
+        _remove_row(suf, nsuf, k)
+
+
+@jit_raw
+def _scan(cfg, work, kind, shape, lo, hi, sa, sb, lin, vd, end, kd, pre, npre, suf, nsuf, sgn,
+          st, lim, best, res, scratch, code):
+    """The roots of one sign branch of a shape of step 2's last stage on ``[lo,
+    hi]``: the exact residual sampled at :data:`HOLD2_SAMPLES` points, a branch
+    end between two samples found by bisection, each sign change refined by
+    regula falsi (Illinois) and offered. True when a profile was found."""
+    tol = POLISH_RTOL * (abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]) + 1e-300)
+    eps = -PLAUSIBLE_RTOL * (1.0 + abs(cfg[TT]))
+    x0 = lo
+    f0 = _h2_resid(cfg, work, kind, shape, x0, sa, sb, lin, vd)
+    for i in range(1, HOLD2_SAMPLES):
+        x1 = lo + (hi - lo) * i / (HOLD2_SAMPLES - 1)
+        f1 = _h2_resid(cfg, work, kind, shape, x1, sa, sb, lin, vd)
+        a, fa, b, fb = x0, f0, x1, f1
+        if (f0 == f0) != (f1 == f1):
+            # the branch ends between the samples (a radicand crosses zero, where
+            # two branches meet): its last value is the bracket's end
+            a, fa, b, fb = _branch_edge(cfg, work, kind, shape, x0, f0, x1, f1, sa, sb, lin, vd)
+        if fa == fa and fb == fb and (fa == 0.0 or fa * fb < 0.0):
+            x = a
+            if fa != 0.0:
+                side = 0
+                for _ in range(BRANCH_ROOT_ITER):
+                    x = (a * fb - b * fa) / (fb - fa)
+                    if not (a < x < b):
+                        x = 0.5 * (a + b)
+                        if not (a < x < b):
+                            break
+                    fx = _h2_resid(cfg, work, kind, shape, x, sa, sb, lin, vd)
+                    if abs(fx) <= tol or not (fx == fx):
+                        break
+                    a, fa, b, fb, side = illinois(x, fx, a, fa, b, fb, side)
+            c1, t1, z, c3, t3, t0 = _h2_cand(cfg, work, kind, shape, x, sa, sb, lin, vd)
+            if (t1 == t1 and t3 == t3 and t0 >= eps
+                    and _plausible(cfg, c1, t1, c3, t3, 0.0)):
+                _offer_delay(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, 0.0,
+                             max(t0, 0.0), end, kd, sgn, st, lim, best, res, scratch, code)
+                if res[R_T] < math.inf:
+                    return True
+        x0 = x1
+        f0 = f1
+    return False
 
 
 @jit_raw
@@ -1118,7 +1254,6 @@ def _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
     """
     mode = int(cfg[MODE])
     cross = M_ZFIRST <= mode <= M_ZBOTH
-    tol = POLISH_RTOL * (abs(cfg[PE] - cfg[PS]) + abs(cfg[VS]) + abs(cfg[VE]) + 1e-300)
     k1 = cfg[K1]
     k4 = cfg[K4]
     for job in range(2 * (S2_H3X - S2_HH1 + 1)):
@@ -1160,50 +1295,21 @@ def _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
                 continue
             if (shape == S2_HH1 or shape == S2_HH3) and not cross and sa < 0.0:
                 continue
-            x0 = lo
-            f0 = _hold2_resid(cfg, shape, x0, sa, sb, lin)
-            for i in range(1, HOLD2_SAMPLES):
-                x1 = lo + (hi - lo) * i / (HOLD2_SAMPLES - 1)
-                f1 = _hold2_resid(cfg, shape, x1, sa, sb, lin)
-                a, fa, bb, fb = x0, f0, x1, f1
-                if (f0 == f0) != (f1 == f1):
-                    # the branch ends between the samples (a radicand crosses zero,
-                    # where two branches meet): its last value is the bracket's end
-                    a, fa, bb, fb = _branch_edge(cfg, shape, x0, f0, x1, f1, sa, sb, lin)
-                if fa == fa and fb == fb and (fa == 0.0 or fa * fb < 0.0):
-                    x = a
-                    if fa != 0.0:
-                        side = 0
-                        for _ in range(BRANCH_ROOT_ITER):
-                            x = (a * fb - bb * fa) / (fb - fa)
-                            if not (a < x < bb):
-                                x = 0.5 * (a + bb)
-                                if not (a < x < bb):
-                                    break
-                            fx = _hold2_resid(cfg, shape, x, sa, sb, lin)
-                            if abs(fx) <= tol or not (fx == fx):
-                                break
-                            a, fa, bb, fb, side = illinois(x, fx, a, fa, bb, fb, side)
-                    c1, t1, z, c3, t3 = _hold2_unknowns(cfg, shape, x, sa, sb, lin)
-                    if t1 == t1 and t3 == t3 and _plausible(cfg, c1, t1, c3, t3, 0.0):
-                        offer(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, 0.0, sgn, st,
-                              lim, best, res, scratch, code)
-                        if res[R_T] < math.inf:
-                            cfg[K1] = k1
-                            cfg[K4] = k4
-                            return
-                x0 = x1
-                f0 = f1
+            if _scan(cfg, work, 0, shape, lo, hi, sa, sb, lin, 0.0, -1, 0, pre, npre, suf, nsuf,
+                     sgn, st, lim, best, res, scratch, code):
+                cfg[K1] = k1
+                cfg[K4] = k4
+                return
     cfg[K1] = k1
     cfg[K4] = k4
 
 
 @jit_raw
 def _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch, end):
-    """Step 2's two cruises on one template whose ramp 1 starts at ``a = 0``
-    (``end = 0``; ramp 4 ends there for ``end = 1``): a cruise of ``t0`` at the
-    start's velocity before ramp 1 (after ramp 4 at the goal's) and the cruise
-    ``tc`` of ramp 2 at ``vc``.
+    """Step 2's two cruises on one template: a cruise of ``t0`` where the fixed
+    prefix passes ``a = 0`` or ramp 1 starts there (``end = 0``; in the fixed
+    suffix or at the end of ramp 4 for ``end = 1``, :func:`_delay_at`) and the
+    cruise ``tc`` of ramp 2 at ``vc``.
 
     For a corner ``c1`` (``c3`` from the end velocity, both sign branches) the
     durations and the end position are linear in ``t0`` and ``tc``: ``t0 + tc
@@ -1212,14 +1318,9 @@ def _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scra
     :data:`HOLD2_SAMPLES` values of ``c1`` are tried, each with non-negative
     ``t0`` and ``tc`` offered (the exact check decides).
     """
-    if end == 0:
-        if cfg[AS] != 0.0 or npre + 1 > NPH:
-            return
-        vd = cfg[VS]
-    else:
-        if cfg[AE] != 0.0 or nsuf + 1 > NPH:
-            return
-        vd = cfg[VE]
+    kd, vd = _delay_at(cfg, pre, npre, suf, nsuf, st, end)
+    if kd < 0:
+        return
     lo, hi = cfg[C1LO], cfg[C1HI]
     if not (abs(lo) < math.inf and abs(hi) < math.inf and hi > lo) or _kc3(cfg) <= 0.0:
         return
@@ -1256,28 +1357,45 @@ def _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scra
             tc = R - t0
             if not (t0 >= eps and tc >= eps and _plausible(cfg, c1, 0.0, c3, 0.0, tc)):
                 continue
-            t0 = max(t0, 0.0)
-            if end == 0:
-                pre[npre, 0] = t0
-                pre[npre, 1] = 0.0
-                pre[npre, 2] = 0.0
-                offer(cfg, work, pre, npre + 1, suf, nsuf, c1, 0.0, z, c3, 0.0, tc, sgn, st,
-                      lim, best, res, scratch, C_DC)
-            else:
-                for k in range(nsuf, 0, -1):
-                    suf[k, 0] = suf[k - 1, 0]
-                    suf[k, 1] = suf[k - 1, 1]
-                    suf[k, 2] = suf[k - 1, 2]
-                suf[0, 0] = t0
-                suf[0, 1] = 0.0
-                suf[0, 2] = 0.0
-                offer(cfg, work, pre, npre, suf, nsuf + 1, c1, 0.0, z, c3, 0.0, tc, sgn, st,
-                      lim, best, res, scratch, C_DC)
-                for k in range(nsuf):
-                    suf[k, 0] = suf[k + 1, 0]
-                    suf[k, 1] = suf[k + 1, 1]
-                    suf[k, 2] = suf[k + 1, 2]
+            _offer_delay(cfg, work, pre, npre, suf, nsuf, c1, 0.0, z, c3, 0.0, tc, max(t0, 0.0),
+                         end, kd, sgn, st, lim, best, res, scratch, C_DC)
             if res[R_T] < math.inf:
+                return
+
+
+@jit_raw
+def _delay_step1(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch, end):
+    """Step 2 on one template: a cruise that fills the duration where the fixed
+    prefix passes ``a = 0`` or ramp 1 starts there (``end = 0``; in the fixed
+    suffix or at the end of ramp 4 for ``end = 1``, :func:`_delay_at`), and a
+    shape of step 1 (none, acc0, acc1, acc0_acc1: :func:`_unknowns`), its
+    parameter scanned on the exact residual (:func:`_scan`; reported as
+    ``C_DS``)."""
+    kd, vd = _delay_at(cfg, pre, npre, suf, nsuf, st, end)
+    if kd < 0:
+        return
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
+    lin = (0.0, 0.0, 0.0, 0.0)
+    for shape in range(S_NONE, S_ACC01 + 1):
+        if (shape == S_ACC0 or shape == S_ACC01) and not (abs(cfg[L1]) < math.inf
+                                                           and cfg[L1] != 0.0):
+            continue
+        if (shape == S_ACC1 or shape == S_ACC01) and not (abs(cfg[L3]) < math.inf
+                                                           and cfg[L3] != 0.0):
+            continue
+        if shape == S_NONE and _kc3(cfg) <= 0.0:
+            continue
+        lo, hi = _domain0(cfg, shape)
+        if not (abs(lo) < math.inf and abs(hi) < math.inf and hi > lo):
+            continue
+        for b in range(2):
+            s3 = 1.0 if b == 0 else -1.0
+            if b == 1 and shape != S_NONE:
+                continue
+            if shape == S_NONE and cfg[S3] != 0.0 and s3 != cfg[S3]:
+                continue
+            if _scan(cfg, work, 1, shape, lo, hi, cfg[SZ] if cross else 1.0, s3, lin, vd, end,
+                     kd, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch, C_DS):
                 return
 
 
@@ -1613,11 +1731,14 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
         if stage == STAGE_HOLD2:
             if mode != M_MID:
                 _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
-            if mode != M_MID and mode != M_SINGLE and mode != M_ZSINGLE:
-                for end in range(2):
-                    if not (res[R_T] < math.inf):
-                        _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res,
-                                      scratch, end)
+            for end in range(2):
+                if mode != M_MID and mode != M_SINGLE and mode != M_ZSINGLE and not (
+                        res[R_T] < math.inf):
+                    _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                                  scratch, end)
+                if mode != M_MID and not (res[R_T] < math.inf):
+                    _delay_step1(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                                 scratch, end)
             return
         if stage == STAGE_EQUAL and mode == M_ZERO and (
                 cfg[S3] == 0.0 or (cfg[K1] == max(lim[2], lim[4]) and cfg[K4] == cfg[K1])):
