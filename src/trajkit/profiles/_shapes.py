@@ -156,7 +156,7 @@ STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL, STAGE_HOLD2 = 0, 1, 2, 
 STEP2_PAIRS = 10
 
 #: Samples of the exact residual per sign branch in step 2's last stage.
-HOLD2_SAMPLES = 24
+HOLD2_SAMPLES = 16
 
 #: Bisection steps locating the end of a sign branch between two samples (to
 #: 2**-40 of their distance).
