@@ -210,8 +210,9 @@ def test_fixed_duration_asymmetric_sweep(capsys):
     with capsys.disabled():
         print(f"\nasymmetric fixed durations: {n_req} requests, {n_none} without a profile, "
               f"{n_blocked} blocked")
-    # measured: 0 of 1,490 (this seed, 300 cases); 14 of 10,000 (seed 11, 2,000 cases)
-    assert n_none <= 0.003 * n_req
+    # measured: 0 of 1,490 (this seed, 300 cases); with benchmarks/state_step2_study.py
+    # (T = T_min f, f in [1, 3]) 4 of 11,992 (seed 2) and 1 of 8,000 (seed 11)
+    assert n_none <= 0.001 * n_req
 
 
 def test_velocity_interface_sweep():
