@@ -266,9 +266,9 @@ def test_fixed_durations_through_a_reversal_with_separate_legs(s, g, L, duration
     hold at a free level together with one at the limit, a cruise at the
     start's velocity before the cruise of ramp 2, and a cruise where the
     start's acceleration has been ramped to zero before a shape of step 1:
-    step 2 finds each such motion
-    of exactly the duration asked for (checked by the independent exact
-    check), and no duration between the minimum and them is reported blocked."""
+    step 2 finds each such motion of exactly the duration asked for (checked
+    by the independent exact check), and no duration between the minimum and
+    them is reported blocked."""
     lim = AxisLimits(*L)
     fd = feasible_durations(s, g, lim)
     assert all(hi < durations[0] or lo > durations[-1] for lo, hi in fd.blocked), fd

@@ -1240,47 +1240,23 @@ def _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
 
     A hold at a free ``c1`` together with the hold at ``c3 = L3`` (and the
     mirror case), and the holds at a free level of ramp 2 through a velocity
-    reversal (the leg changes inside ramp 2), each also with ramp 1 (a free
-    ``c1``) or ramp 4 (a free ``c3``) running the other way (its jerk's sign
-    flipped by a negative ``K1`` / ``K4``: the algebra is the same), so that
-    the hold lies below the start's acceleration (above the goal's). Each
-    shape has one parameter
+    reversal (the leg changes inside ramp 2). Each shape has one parameter
     ``u`` (``c1``, ``c3`` or the reversal acceleration ``z``) and up to two
-    sign branches; the exact position residual is sampled at
-    :data:`HOLD2_SAMPLES` points of ``u`` per branch, every sign change refined
-    by regula falsi (Illinois) and offered (the exact check decides). A root
-    the samples do not bracket (a double root) is missed: this costs a
-    profile, never a violation.
+    sign branches, each scanned on the exact residual (:func:`_scan`).
     """
-    mode = int(cfg[MODE])
-    cross = M_ZFIRST <= mode <= M_ZBOTH
-    k1 = cfg[K1]
-    k4 = cfg[K4]
-    for job in range(2 * (S2_H3X - S2_HH1 + 1)):
-        shape = S2_HH1 + job // 2
-        # flip: ramp 1 (shapes with a free c1) or ramp 4 (free c3) the other way,
-        # so that the hold lies below the start's (above the goal's) acceleration
-        flip = job % 2 == 1
+    cross = M_ZFIRST <= int(cfg[MODE]) <= M_ZBOTH
+    for shape in range(S2_HH1, S2_H3X + 1):
         if not cross and shape >= S2_H1X:
             continue
-        if flip and ((shape == S2_HH1 or shape == S2_H1X) and k1 == 0.0
-                     or (shape == S2_HH3 or shape == S2_H3X) and k4 == 0.0):
-            continue
-        cfg[K1] = -k1 if flip and (shape == S2_HH1 or shape == S2_H1X) else k1
-        cfg[K4] = -k4 if flip and (shape == S2_HH3 or shape == S2_H3X) else k4
         if shape == S2_HH1:
             if not (abs(cfg[L3]) < math.inf) or cfg[L3] == 0.0:
                 continue
             lo, hi = cfg[C1LO], cfg[C1HI]
-            if flip:
-                lo, hi = min(cfg[C3LO], cfg[L3]), cfg[AS]
             code = C_HH1
         elif shape == S2_HH3:
             if not (abs(cfg[L1]) < math.inf) or cfg[L1] == 0.0:
                 continue
             lo, hi = cfg[C3LO], cfg[C3HI]
-            if flip:
-                lo, hi = cfg[AE], max(cfg[C1HI], cfg[L1])
             code = C_HH3
         else:
             lo, hi = min(cfg[C3LO], 0.0), max(cfg[C1HI], 0.0)
@@ -1297,11 +1273,7 @@ def _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
                 continue
             if _scan(cfg, work, 0, shape, lo, hi, sa, sb, lin, 0.0, -1, 0, pre, npre, suf, nsuf,
                      sgn, st, lim, best, res, scratch, code):
-                cfg[K1] = k1
-                cfg[K4] = k4
                 return
-    cfg[K1] = k1
-    cfg[K4] = k4
 
 
 @jit_raw

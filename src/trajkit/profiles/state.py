@@ -62,7 +62,7 @@ __all__ = [
 #: Names of the fixed-duration (step 2) shapes, after the step-1 ones.
 STEP2_NAMES = ("cruise", "acc0_cruise", "cruise_acc1", "acc0_cruise_acc1", "hold1", "hold3",
                "hold_mid", "acc0_hold_mid", "hold_mid_3", "hold_mid_acc1", "reduced_jerk")
-#: Names of the fixed-duration shapes of step 2's last stage (codes 0-2 of the fixed context).
+#: Names of the fixed-duration shapes of step 2's last stage (codes 0-3 of the fixed context).
 STEP2_HOLD_NAMES = ("hold1_acc1", "acc0_hold3", "cruise_cruise", "cruise_shape")
 
 #: A requested duration within this fraction of the minimum is the minimum.
