@@ -157,6 +157,27 @@ def test_the_verifier_finds_a_broken_motion():
     assert verify_state_profile(p).ok
 
 
+def test_the_verifier_takes_a_brake_ending_at_a_reversal():
+    """A brake that ends where the velocity reverses (integrated to 1e-16 m/s,
+    not to zero) leaves the acceleration of the speeding leg: -5.89 m/s^2,
+    beyond the slowing leg's 2.43 but within the speeding one's 7.67. The
+    samples at that instant have no meaningful sign of v * a; the verifier
+    accepts the motion, and still refuses it with that acceleration held
+    where the velocity is clearly positive."""
+    lim = AxisLimits(2.988960718557596, 7.671486639116658, 23.462231297230435,
+                     2.428105754707435, 82.84571870417285)
+    p = plan_state_to_state((-1.571936214525773, 0.5137147037211093, -10.945710461386186),
+                            (-3.1704661792652584, 0.0, -0.34921713928685877), lim)
+    assert p.n_brake_phases == 1
+    v_end, a_end = p.state_at(p.brake_duration)[1:3]
+    assert abs(v_end) < 1e-12 and a_end < -lim.a_max_decel
+    assert verify_motion(p).ok
+    # the same acceleration entered while the axis still moves forward: slowing, too hard
+    bad = JerkMotion((0.0, 0.5, a_end), (0.05,), (0.0,), None, None)
+    rep = verify_motion(bad, limits=lim)
+    assert not rep.ok and "deceleration" in {v.quantity for v in rep.violations}
+
+
 # ------------------------------------------------------------------ imports
 PKG = pathlib.Path(__file__).resolve().parents[1] / "src" / "trajkit"
 #: The planning core: modules here must not import each other in a cycle

@@ -702,7 +702,7 @@ def _core(w, m, lim, rtol, n_samples, goal_rtol, bad_phase_checked=False):
         V = np.asarray(smp.velocity)
         A = np.asarray(smp.acceleration)
         J = np.asarray(smp.jerk)
-        _check_samples(w, lim, ts, P, V, A, J, p_scale)
+        _check_samples(w, lim, ts, P, V, A, J, p_scale, v_scale, a_scale)
         # samples against the independent integration (a wrong table would show
         # here); both place a sample time among boundaries that are sums of
         # rounded durations, so they may differ by a few ulp of T in time
@@ -738,9 +738,16 @@ def _integrate_at(start, v0, durs, jerks, a_enter, ts):
     return start + pos, vel
 
 
-def _check_samples(w, lim, ts, P, V, A, J, p_scale):
-    """Limit checks on dense samples (same leg semantics as the exact pass)."""
-    va = V * A
+def _check_samples(w, lim, ts, P, V, A, J, p_scale, v_scale, a_scale):
+    """Limit checks on dense samples (same leg semantics as the exact pass).
+
+    A sample whose velocity or acceleration lies within round-off of zero
+    (:data:`SLIVER_RTOL` of the motion's scales; e.g. the end of a brake at a
+    velocity reversal, integrated to 1e-16 m/s) has no meaningful sign of
+    ``v * a``: it gets the check of ``v * a == 0`` (the larger bound of both
+    legs), as the exact pass gives such slivers."""
+    noise = (np.abs(V) <= SLIVER_RTOL * v_scale) | (np.abs(A) <= SLIVER_RTOL * a_scale)
+    va = np.where(noise, 0.0, V * A)
     grow = va > 0.0
     shrink = va < 0.0
     checks = (
