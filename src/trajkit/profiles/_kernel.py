@@ -17,7 +17,8 @@ dispatch) and read the result back. Layout (indices are module constants):
 Inside, the problem is scaled by powers of two (exact) so that the
 reference jerk and acceleration are of order one, positions are taken
 relative to the start, the brake (:mod:`._brake`) brings the start state
-inside the limits, and step 1 (:mod:`._shapes`) / step 2 (:mod:`._step2`)
+inside the limits, and step 1 / step 2 (:func:`_step2` here, the shape families
+in :mod:`._shapes`, the closed forms of symmetric limits in :mod:`._symfast`)
 plan the rest.
 """
 
