@@ -38,6 +38,7 @@ from trajkit.timing.engine import (
     _evaluate_compiled,
     _Interp,
     _Limits,
+    _recheck,
     _use_of,
     _zoom,
 )
@@ -212,6 +213,38 @@ def test_check_and_zoom_agree(seed, source):
     for name in ("velocity", "acceleration", "jerk", "path_acceleration", "path_jerk", "path_speed"):
         assert_ulp_close(getattr(za, name), getattr(zb, name), err_msg=name)
     assert za.worst > 0.0
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("compiled", [True, False])
+def test_recheck_after_corrections_equals_a_full_check(seed, compiled):
+    """The final check's passes after ``_Corrected.add``: evaluating again only the
+    pieces in the cells whose derivatives changed gives what a full check gives
+    (the same samples through the same route: equal values, equal limit use)."""
+    rng, nodes, der, t, st, jerk, lim, path, breaks, left = _setup(20 + seed, curved=seed != 1,
+                                                                   capped=seed != 2)
+    corrected = _Corrected(path, nodes, der, breaks, left)
+    per_piece = 14
+    check = functools.partial(_check, compiled=compiled)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(engine, "_check", check)
+        res = check(nodes, der, t, st, jerk, lim, corrected, per_piece)
+        for full in (False, True):
+            cells = corrected.add(rng.choice(nodes.size - 1, nodes.size // 3, replace=False), full=full)
+            assert cells.size and np.all(np.diff(cells) > 0)
+            before = res
+            res = _recheck(res, cells, nodes, der, t, st, jerk, lim, corrected, per_piece)
+            ref = check(nodes, der, t, st, jerk, lim, corrected, per_piece)
+            for x, y in zip(res[1:], ref[1:]):
+                np.testing.assert_array_equal(x, y)
+            for name in ("velocity", "acceleration", "jerk", "path_acceleration", "path_jerk",
+                         "path_speed"):
+                np.testing.assert_array_equal(getattr(res[0], name), getattr(ref[0], name), err_msg=name)
+            # the corrections changed some samples (the recheck did something)
+            assert not np.array_equal(before[3], res[3])
+        # nothing changed: the result as it was
+        assert _recheck(res, np.zeros(0, dtype=int), nodes, der, t, st, jerk, lim, corrected,
+                        per_piece) is res
 
 
 def test_python_body_matches_numpy(monkeypatch):

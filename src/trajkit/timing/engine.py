@@ -513,11 +513,20 @@ def _node_states(s: np.ndarray, x: np.ndarray, u: np.ndarray, dur: np.ndarray, j
     first = np.ones(n_p, dtype=bool)
     first[1:] = interval[1:] != interval[:-1]
     st[:-1][first] = np.column_stack([s[interval[first]], v[interval[first]], a[interval[first]]])
-    for i in np.nonzero(~first)[0]:
-        p0, v0, a0 = st[i - 1]
+    # the later pieces of an interval from the piece before, all at once (an interval
+    # has two pieces at most, so this is one pass)
+    done = first.copy()
+    todo = np.nonzero(~first)[0]
+    while todo.size:
+        i = todo[done[todo - 1]]
+        p0, v0, a0 = st[i - 1, 0], st[i - 1, 1], st[i - 1, 2]
         h = dur[i - 1]
         jk = jerk[i - 1]
-        st[i] = (p0 + h * (v0 + h * (0.5 * a0 + h * jk / 6.0)), v0 + h * (a0 + 0.5 * h * jk), a0 + h * jk)
+        st[i, 0] = p0 + h * (v0 + h * (0.5 * a0 + h * jk / 6.0))
+        st[i, 1] = v0 + h * (a0 + 0.5 * h * jk)
+        st[i, 2] = a0 + h * jk
+        done[i] = True
+        todo = todo[~done[todo]]
     st[-1] = (s[-1], v[-1], a[-1])
     return t, st
 
@@ -642,15 +651,16 @@ class _Corrected(_Interp):
         self.full = np.zeros(s_grid.size - 1, dtype=bool)
         self.evaluated = 0
 
-    def add(self, cells: np.ndarray, full: bool = False) -> int:
+    def add(self, cells: np.ndarray, full: bool = False) -> np.ndarray:
         """Evaluate the true derivatives in ``cells``: at the middle (those not done
         yet; the error at the other points of :data:`VERIFY_POINTS` set from the
         parabola through it, so that the correction is that parabola), or with
-        ``full`` at every point (those not full yet). Returns how many cells."""
+        ``full`` at every point (those not full yet). Returns the cells whose
+        derivatives changed (sorted)."""
         cells = np.unique(cells)
         cells = cells[~(self.full if full else self.done)[cells]]
         if not cells.size:
-            return 0
+            return cells
         w = np.asarray(VERIFY_POINTS) if full else np.array([0.5])
         s0, s1 = self.s[cells], self.s[cells + 1]
         S = (s0[:, None] * (1.0 - w[None, :]) + s1[:, None] * w[None, :]).ravel()
@@ -668,7 +678,7 @@ class _Corrected(_Interp):
         if full:
             self.full[cells] = True
         self.evaluated += S.size
-        return int(cells.size)
+        return cells
 
     def derivatives(self, S: np.ndarray):
         S = np.atleast_1d(np.asarray(S, dtype=np.float64))
@@ -948,7 +958,7 @@ def _max_use(a: LimitUse, b: LimitUse) -> LimitUse:
 
 
 def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None,
-           compiled: bool = _checks.AVAILABLE):
+           compiled: bool = _checks.AVAILABLE, select: np.ndarray | None = None):
     """Limit use at both ends of every piece and ``per_piece`` (default
     :data:`CHECK_PER_PIECE`) points inside it.
 
@@ -956,13 +966,17 @@ def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None,
     ``rv, ra, rj`` (n, m), the speed-cap ratio (n,) and the largest of the
     sample's ratios (n,); the samples run piece by piece, ``per_piece + 2``
     each. ``compiled``: by the kernel (:func:`_evaluate_compiled`), else by
-    :func:`_evaluate` (numpy)."""
+    :func:`_evaluate` (numpy). ``select`` (indices into those samples): only
+    these are evaluated (every sample is evaluated on its own, so each gets
+    the values of the full check)."""
     k = jerk.size
     frac = np.linspace(0.0, 1.0, (per_piece or CHECK_PER_PIECE) + 2)
     npp = frac.size
     piece = np.repeat(np.arange(k), npp)
     dt = (np.diff(t)[:, None] * frac[None, :]).ravel()
     dt[npp - 1::npp] = np.diff(t)  # the piece's end exactly
+    if select is not None:
+        piece, dt = piece[select], dt[select]
     if compiled:
         return _evaluate_compiled(s_grid, der, t, st, jerk, lim, path, piece, dt)
     # in chunks of whole pieces (the arrays of a chunk stay in the cache)
@@ -972,6 +986,31 @@ def _check(s_grid, der, t, st, jerk, lim: _Limits, path=None, per_piece=None,
     rv, ra, rj, rs, acc, jk, cell = (np.concatenate([pt[j] for pt in parts]) for j in range(7))
     worst = np.max(np.column_stack([rv, ra, rj, rs[:, None]]), axis=1)
     return _use_of(lim, rv, ra, rj, rs, acc, jk), cell, rv, ra, rj, rs, worst
+
+
+def _recheck(prev: tuple, cells: np.ndarray, s_grid, der, t, st, jerk, lim: _Limits,
+             path, per_piece: int) -> tuple:
+    """:func:`_check` again after the derivatives changed in the grid ``cells``
+    (:meth:`_Corrected.add`): the pieces with a sample in those cells are
+    evaluated again, the other samples keep their values from ``prev`` (the
+    full check's result, which this returns updated). The path's own ratios
+    (acceleration, jerk, speed cap) do not depend on the joint derivatives."""
+    use, cell, rv, ra, rj, rs, worst = prev
+    if not cells.size:
+        return prev
+    npp = per_piece + 2
+    hit = np.isin(cell, cells).reshape(-1, npp).any(axis=1)
+    if not hit.any():
+        return prev
+    sel = (np.nonzero(hit)[0][:, None] * npp + np.arange(npp)[None, :]).ravel()
+    _, c2, rv2, ra2, rj2, rs2, worst2 = _check(s_grid, der, t, st, jerk, lim, path, per_piece,
+                                                select=sel)
+    cell, rv, ra, rj, rs, worst = (a.copy() for a in (cell, rv, ra, rj, rs, worst))
+    cell[sel], rv[sel], ra[sel], rj[sel], rs[sel], worst[sel] = c2, rv2, ra2, rj2, rs2, worst2
+    use = LimitUse(rv.max(axis=0, initial=0.0), ra.max(axis=0, initial=0.0),
+                   rj.max(axis=0, initial=0.0), use.path_acceleration, use.path_jerk,
+                   use.path_speed)
+    return use, cell, rv, ra, rj, rs, worst
 
 
 def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp: int,
@@ -1299,14 +1338,15 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left, unresolved)
         src = exact if exact is not None else corrected
-        use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+        res = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         if corrected is not None:
             # the true derivatives in the cells that come close to a limit, then again
-            if corrected.add(_c[worst > 1.0 - VERIFY_ABOVE]):
-                use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+            res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_ABOVE]),
+                           s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
             # ... and at every point of VERIFY_POINTS where that comes very close
-            if corrected.add(_c[worst > 1.0 - VERIFY_FULL_ABOVE], full=True):
-                use, _c, _, _, _, _, worst = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+            res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_FULL_ABOVE], full=True),
+                           s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+        use, worst = res[0], res[6]
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
         zu = _zoom(s, der, t, st, jk, lim, src, worst, FINAL_CHECK_PER_PIECE + 2)
