@@ -43,7 +43,8 @@ import numpy as np
 from ..profiles._compile import ENABLED, numba
 from ..profiles._compile import jit as _jit
 
-__all__ = ["AVAILABLE", "sample_positions", "sample_states", "rest_pieces", "mid_products", "sample_ratios"]
+__all__ = ["AVAILABLE", "sample_positions", "sample_states", "rest_pieces", "mid_products", "sample_ratios",
+           "splice_ratios"]
 
 
 def _inline(fn):
@@ -425,3 +426,26 @@ def sample_ratios(t, st, jerk, s, piece, dt, d1, d2, d3, r1, r2, r3, done, err, 
     path_peak[1] = jerk_peak
     path_peak[2] = speed_peak
     return cell, rv, ra, rj, rs, worst, peak, path_peak
+
+
+@_jit
+def splice_ratios(sel, rv, ra, rj, worst, rv2, ra2, rj2, worst2):
+    """Write the ratios of the samples ``sel`` (k,) evaluated again (``rv2, ra2, rj2``
+    (k, m), ``worst2`` (k,)) into the full check's ``rv, ra, rj`` (n, m) and ``worst``
+    (n,), in place, and return the joints' largest ratios over all samples
+    ``(3, m)`` (as ``peak`` of :func:`sample_ratios`)."""
+    m = rv.shape[1]
+    for q in range(sel.size):
+        i = sel[q]
+        worst[i] = worst2[q]
+        for j in range(m):
+            rv[i, j] = rv2[q, j]
+            ra[i, j] = ra2[q, j]
+            rj[i, j] = rj2[q, j]
+    peak = np.zeros((3, m))
+    for i in range(rv.shape[0]):
+        for j in range(m):
+            peak[0, j] = _nanmax(peak[0, j], rv[i, j])
+            peak[1, j] = _nanmax(peak[1, j], ra[i, j])
+            peak[2, j] = _nanmax(peak[2, j], rj[i, j])
+    return peak

@@ -993,22 +993,29 @@ def _recheck(prev: tuple, cells: np.ndarray, s_grid, der, t, st, jerk, lim: _Lim
     """:func:`_check` again after the derivatives changed in the grid ``cells``
     (:meth:`_Corrected.add`): the pieces with a sample in those cells are
     evaluated again, the other samples keep their values from ``prev`` (the
-    full check's result, which this returns updated). The path's own ratios
-    (acceleration, jerk, speed cap) do not depend on the joint derivatives."""
+    full check's result, whose arrays are updated in place and returned with
+    the new limit use). A sample's cell and the path's own ratios (acceleration,
+    jerk, speed cap) do not depend on the joint derivatives."""
     use, cell, rv, ra, rj, rs, worst = prev
     if not cells.size:
         return prev
     npp = per_piece + 2
-    hit = np.isin(cell, cells).reshape(-1, npp).any(axis=1)
+    changed = np.zeros(s_grid.size, dtype=bool)
+    changed[cells] = True
+    hit = changed[cell].reshape(-1, npp).any(axis=1)
     if not hit.any():
         return prev
     sel = (np.nonzero(hit)[0][:, None] * npp + np.arange(npp)[None, :]).ravel()
-    _, c2, rv2, ra2, rj2, rs2, worst2 = _check(s_grid, der, t, st, jerk, lim, path, per_piece,
-                                                select=sel)
-    cell, rv, ra, rj, rs, worst = (a.copy() for a in (cell, rv, ra, rj, rs, worst))
-    cell[sel], rv[sel], ra[sel], rj[sel], rs[sel], worst[sel] = c2, rv2, ra2, rj2, rs2, worst2
-    use = LimitUse(rv.max(axis=0, initial=0.0), ra.max(axis=0, initial=0.0),
-                   rj.max(axis=0, initial=0.0), use.path_acceleration, use.path_jerk,
+    _, _, rv2, ra2, rj2, _, worst2 = _check(s_grid, der, t, st, jerk, lim, path, per_piece,
+                                             select=sel)
+    if _checks.AVAILABLE:  # (one compiled pass; numpy's column maxima are slow here)
+        peak = _checks.splice_ratios(sel, rv, ra, rj, worst, np.ascontiguousarray(rv2),
+                                     np.ascontiguousarray(ra2), np.ascontiguousarray(rj2),
+                                     np.ascontiguousarray(worst2))
+    else:
+        rv[sel], ra[sel], rj[sel], worst[sel] = rv2, ra2, rj2, worst2
+        peak = np.stack([x.max(axis=0, initial=0.0) for x in (rv, ra, rj)])
+    use = LimitUse(peak[0], peak[1], peak[2], use.path_acceleration, use.path_jerk,
                    use.path_speed)
     return use, cell, rv, ra, rj, rs, worst
 
