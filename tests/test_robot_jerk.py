@@ -12,6 +12,7 @@ acceleration step); the tests take two periods to show it does not.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,8 @@ from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_z
 from trajkit.kinematics.scara import default_scara
 from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
-from trajkit.robot._pieces import BezierBlend
+from trajkit.robot._pieces import BezierBlend, Piece, constant_point
+from trajkit.robot._rotations import matrix_from_quat, quat_from_matrix, relative_rotvec
 from trajkit.robot.models import PalletizerRobot
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -405,6 +407,74 @@ def test_blend_derivatives_are_those_of_its_points():
         for got, c, f in zip((d1, d2, d3), coarse, fine):
             ref = f + (f - c) / 3.0
             np.testing.assert_allclose(got, ref, rtol=0, atol=1e-5 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("angle", [1e-7, 0.3, 2.5, 3.14])
+def test_slerp_rotation_taylor_is_that_of_its_rotations(angle):
+    """A slerp piece's closed-form rotation derivatives in ``s`` against central
+    differences of its rotation matrices (Richardson-extrapolated), from a tiny
+    turn to nearly a half turn, and the rotation vector of the relative rotation
+    against the matrices."""
+    rng = np.random.default_rng(int(angle * 1e3))
+    q0 = rng.normal(size=4)
+    q0 /= np.linalg.norm(q0)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    rel = np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis])
+    r1 = matrix_from_quat(q0) @ matrix_from_quat(rel)
+    q1 = -quat_from_matrix(r1)  # (the other sign of the same rotation: slerp takes the short arc)
+    np.testing.assert_allclose(relative_rotvec(q0, q1), angle * axis, rtol=1e-12, atol=1e-15)
+    length = 0.37
+    pc = Piece("path", length, constant_point(np.zeros(3)), q0, q1, 1.0, 0, 1.0)
+    s = length * np.array([0.0, 0.2, 0.5, 0.8, 1.0])
+    got = pc.rotation_taylor(s)
+    np.testing.assert_allclose(got[:, 0], matrix_from_quat(pc.quat(s)), rtol=0, atol=1e-15)
+
+    def rot(x):  # the slerp continued past its ends (the same great circle)
+        return matrix_from_quat(q0) @ _rotation_about(axis, angle * x / length)
+
+    def central(h):
+        r = np.stack([rot(s + k * h) for k in (-2, -1, 0, 1, 2)])
+        return ((r[3] - r[1]) / (2 * h), (r[3] - 2 * r[2] + r[1]) / h**2,
+                (r[4] - 2 * r[3] + 2 * r[1] - r[0]) / (2 * h**3))
+
+    h = 0.01 * length
+    coarse, fine = central(h), central(h / 2)
+    for order, (c, f) in enumerate(zip(coarse, fine), start=1):
+        ref = (f + (f - c) / 3.0) / math.factorial(order)
+        # (plus the differences' round-off: a tiny turn is below it from the second order)
+        tol = 1e-5 * (angle / length) ** order + 100.0 * np.finfo(float).eps / h**order
+        np.testing.assert_allclose(got[:, order], ref, rtol=0, atol=tol)
+    # no turn: no rate
+    still = Piece("path", length, constant_point(np.zeros(3)), q0, q0, 1.0, 0, 1.0)
+    assert not still.rotation_taylor(s)[:, 1:].any()
+
+
+def _rotation_about(axis, theta):
+    """Rotation matrices (n, 3, 3) about the unit ``axis`` by the angles ``theta`` (n,)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    th = np.asarray(theta, dtype=float)[:, None, None]
+    return np.eye(3) + np.sin(th) * k + (1.0 - np.cos(th)) * (k @ k)
+
+
+def test_joint_derivatives_of_a_turn_in_place_are_those_of_its_joints():
+    """An orientation-only motion (the tool turns on the spot: every pose derivative
+    in closed form): the joints' first derivative in ``s`` against central
+    differences of the joints, and the tool point does not move."""
+    arm = default_arm6()
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p = arm.fk(q0)
+    mots = [Lin(CartesianTarget(Pose(p.position, p.rotation @ rot_z(0.8))), 0.2)]
+    run = run_motions(arm, mots, q0)
+    jp = next(sg.chain.path for sg in run.segments if sg.kind == "CP")
+    assert [pc.kind for pc in jp.pieces] == ["orient"]
+    s = jp.length * np.linspace(0.05, 0.95, 19)
+    q, d1, d2, d3 = jp.derivatives(s)
+    e = 1e-6 * jp.length
+    fd = (jp.derivatives(s + e)[0] - jp.derivatives(s - e)[0]) / (2 * e)
+    assert np.abs(d1 - fd).max() <= 1e-6 * max(1.0, float(np.abs(d1).max()))
+    for qi in q:
+        np.testing.assert_allclose(arm.fk(qi).position, p.position, atol=1e-9)
 
 
 def test_blend_is_curvature_continuous_and_arc_length_exact():

@@ -34,6 +34,7 @@ from ._pieces import (
     angle_between_tangents,
     blended_orientation,
     constant_point,
+    constant_point_derivatives,
     sub_path,
     sub_path_derivatives,
 )
@@ -337,7 +338,8 @@ def _pieces(robot: RobotModel, specs: list[dict]) -> list[Piece]:
                 continue
             L = sp["angle"] * robot.length_scale
             pieces.append(Piece("orient", L, constant_point(sp["p0"]), sp["quat0"], sp["quat1"],
-                                w_max * robot.length_scale, i, 0.0, "orientation speed"))
+                                w_max * robot.length_scale, i, 0.0, "orientation speed",
+                                derivatives=constant_point_derivatives(sp["p0"])))
             continue
         s0, s1 = trim0[i], path.length - trim1[i]
         frac0, frac1 = s0 / path.length, s1 / path.length

@@ -5,12 +5,14 @@ the tool pose at every path parameter ``s``; the joints are the inverse
 kinematics of that pose, on the branch the chain started on (each solution
 seeded from a table of joints walked along the path).
 
-The tool pose's own derivatives at a point: the positions' in closed form
-where the piece has them (lines, arcs, corner blends), the rest (the
-orientations) by differences of the closed-form poses on a small stencil
-(step :data:`STENCIL_STEP` times the robot's length scale) inside the piece,
-never across a junction of two pieces (a one-sided stencil there and at the
-path's ends).
+The tool pose's own derivatives at a point are in closed form: the
+positions' on lines, arcs, corner blends and turns on the spot, the
+orientations' wherever they are a slerp (a constant rate about an axis fixed
+in the tool frame: lines, arcs, turns). A corner blend's orientation, a
+cross-fade of two slerps, gets differences of its closed-form poses on a
+small stencil (step :data:`STENCIL_STEP` times the robot's length scale)
+inside the piece, never across a junction of two pieces (a one-sided
+stencil there).
 
 A robot that offers its forward kinematics on Taylor series (``fk_jet``, see
 :mod:`trajkit.kinematics._jets`) and is not redundant gets the joints'
@@ -244,33 +246,52 @@ class ChainJointPath:
 
     def _pose_taylor(self, s: np.ndarray):
         """Taylor coefficients 0..3 of the tool pose along the path at ``s`` (n,): the
-        pieces ``k`` (n,), the stencil steps (n,), positions (n, 4, 3) and rotations
-        (n, 4, 3, 3). The positions' in closed form where the piece has them (a tight
-        blend's would need steps far below the stencil's), the rest by differences of
-        the closed-form poses on stencils of :data:`STENCIL_STEP` (they turn over the
-        piece's length)."""
+        pieces ``k`` (n,), positions (n, 4, 3) and rotations (n, 4, 3, 3). In
+        closed form where the piece has them: the positions of lines, arcs, corner
+        blends and orientation-only turns, the rotations of every slerp (lines,
+        arcs, turns); the rest (a corner blend's cross-faded orientation) by
+        differences of the closed-form poses on stencils of :data:`STENCIL_STEP`
+        (they turn over the piece's length)."""
         n = s.size
-        pts, k, hk, fwd, bwd, centre = self._stencil(s, self.h, tight=False)
-        pos, rot = self.poses(pts.ravel(), np.repeat(k, 7))
-        pos = pos.reshape(n, 7, 3)
-        rot = rot.reshape(n, 7, 3, 3)
-        rows = np.arange(n)
+        k = self.piece_of(s)
         pj = np.empty((n, _jets.ORDER + 1, 3))
         rj = np.empty((n, _jets.ORDER + 1, 3, 3))
-        pj[:, 0] = pos[rows, centre]
-        rj[:, 0] = rot[rows, centre]
-        fact = 1.0
-        for order, (dp, dr) in enumerate(zip(self._differences(pos, hk, fwd, bwd),
-                                             self._differences(rot, hk, fwd, bwd)), start=1):
-            fact *= order
-            pj[:, order] = dp / fact
-            rj[:, order] = dr / fact
+        pos_done = np.zeros(n, dtype=bool)
+        rot_done = np.zeros(n, dtype=bool)
         for i in np.unique(k):
-            got = self.pieces[i].derivatives(s[k == i] - self.offsets[i])
+            sel = np.flatnonzero(k == i)
+            loc = s[sel] - self.offsets[i]
+            got = self.pieces[i].derivatives(loc)
             if got is not None:
-                sel = k == i
                 pj[sel, 0], pj[sel, 1], pj[sel, 2], pj[sel, 3] = got[0], got[1], 0.5 * got[2], got[3] / 6.0
-        return k, hk, pj, rj
+                pos_done[sel] = True
+            rot = self.pieces[i].rotation_taylor(loc)
+            if rot is not None:
+                rj[sel] = rot
+                rot_done[sel] = True
+        rest = np.flatnonzero(~(pos_done & rot_done))
+        if rest.size:
+            m = rest.size
+            pts, kk, hk, fwd, bwd, centre = self._stencil(s[rest], self.h, tight=False)
+            pos, rot = self.poses(pts.ravel(), np.repeat(kk, 7))
+            pos = pos.reshape(m, 7, 3)
+            rot = rot.reshape(m, 7, 3, 3)
+            rows = np.arange(m)
+            fd_p = np.empty((m, _jets.ORDER + 1, 3))
+            fd_r = np.empty((m, _jets.ORDER + 1, 3, 3))
+            fd_p[:, 0] = pos[rows, centre]
+            fd_r[:, 0] = rot[rows, centre]
+            fact = 1.0
+            for order, (dp, dr) in enumerate(zip(self._differences(pos, hk, fwd, bwd),
+                                                 self._differences(rot, hk, fwd, bwd)), start=1):
+                fact *= order
+                fd_p[:, order] = dp / fact
+                fd_r[:, order] = dr / fact
+            keep_p = ~pos_done[rest]
+            keep_r = ~rot_done[rest]
+            pj[rest[keep_p]] = fd_p[keep_p]
+            rj[rest[keep_r]] = fd_r[keep_r]
+        return k, pj, rj
 
     def _taylor_differences(self, s: np.ndarray):
         """``q`` and its first three derivatives at ``s`` (n,) by differences of the
@@ -281,7 +302,7 @@ class ChainJointPath:
         higher derivatives vanish: the stencil's truncation error comes from the
         kinematics alone, not from a tight blend's rapidly changing curvature."""
         n = s.size
-        k, _, pj, rj = self._pose_taylor(s)
+        k, pj, rj = self._pose_taylor(s)
         # (the polynomial is not bound to the piece: the full step everywhere)
         hk = np.full(n, self.h)
         e = hk[:, None] * np.arange(-3.0, 4.0)[None, :]  # (n, 7)
@@ -302,7 +323,7 @@ class ChainJointPath:
         return q_all[:, 3], d[0], d[1], d[2]
 
     def _jet_derivatives(self, s: np.ndarray):
-        k, _, pj, rj = self._pose_taylor(s)
+        k, pj, rj = self._pose_taylor(s)
         q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s))
         compiled = getattr(self.robot, "joint_taylor_many", None)
         got = None if compiled is None else compiled(q, pj, rj)

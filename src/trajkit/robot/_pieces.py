@@ -18,7 +18,7 @@ from ..paths.arc import Arc3
 from ..paths.base import Path
 from ..paths.line import Line
 from . import _bezier_jit
-from ._rotations import SLERP_SMALL_ANGLE, rotation_angle, slerp
+from ._rotations import SLERP_SMALL_ANGLE, matrix_from_quat, relative_rotvec, rotation_angle, slerp
 
 __all__ = ["Piece", "BezierBlend", "BLEND_TABLE", "sub_path_derivatives"]
 
@@ -359,6 +359,10 @@ class Piece:
         self.feature = float(feature)
         self._derivatives = derivatives
         self.angle = rotation_angle(q0, q1)
+        # the slerp's constant rate in the tool frame [rad per unit of s], as hat(omega)
+        omega = relative_rotvec(q0, q1) / self.length if self.length > 0 else np.zeros(3)
+        self._omega_hat = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]],
+                                    [-omega[1], omega[0], 0.0]])
 
     def point(self, s: np.ndarray) -> np.ndarray:
         return self._point(np.clip(s, 0.0, self.length))
@@ -370,6 +374,23 @@ class Piece:
             return None
         return self._derivatives(np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0,
                                          self.length))
+
+    def rotation_taylor(self, s: np.ndarray) -> np.ndarray | None:
+        """Taylor coefficients 0..3 of the tool's rotation matrix in ``s`` at ``s`` (n,),
+        shape (n, 4, 3, 3): ``R`` and its first three derivatives over ``k!``, exact;
+        None for an orientation given by ``quat_fn`` (a corner blend's cross-fade).
+
+        The slerp from ``q0`` to ``q1`` turns at a constant rate about an axis fixed
+        in the tool frame, ``R(s) = R(0) Exp(s hat(omega))``, so the k-th derivative
+        is ``R(s) hat(omega)^k``."""
+        if self.quat_fn is not None:
+            return None
+        s = np.atleast_1d(np.asarray(s, dtype=np.float64))
+        out = np.empty((s.size, 4, 3, 3))
+        out[:, 0] = matrix_from_quat(self.quat(s))
+        for order in range(1, 4):
+            out[:, order] = (out[:, order - 1] @ self._omega_hat) / order
+        return out
 
     def quat(self, s: np.ndarray) -> np.ndarray:
         if self.quat_fn is not None:
@@ -464,6 +485,14 @@ def constant_point(p: np.ndarray):
     def point(s: np.ndarray) -> np.ndarray:
         return np.broadcast_to(p, (np.atleast_1d(s).size, 3)).copy()
     return point
+
+
+def constant_point_derivatives(p: np.ndarray):
+    """``derivatives`` callable (see :class:`Piece`) of an orientation-only piece."""
+    def derivatives(s: np.ndarray):
+        z = np.zeros((np.atleast_1d(s).size, 3))
+        return np.broadcast_to(p, z.shape).copy(), z, z.copy(), z.copy()
+    return derivatives
 
 
 def angle_between_tangents(ta: np.ndarray, tb: np.ndarray) -> float:

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["quat_from_matrix", "matrix_from_quat", "slerp", "rotation_angle"]
+__all__ = ["quat_from_matrix", "matrix_from_quat", "slerp", "rotation_angle", "relative_rotvec"]
 
 #: Below this angle [rad] slerp falls back to normalised linear interpolation.
 SLERP_SMALL_ANGLE = 1e-9
@@ -76,6 +76,26 @@ def rotation_angle(q0: Any, q1: Any) -> float:
     vy = w0 * y1 - w1 * y0 - (z0 * x1 - x0 * z1)
     vz = w0 * z1 - w1 * z0 - (x0 * y1 - y0 * x1)
     return 2.0 * math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), abs(c))
+
+
+def relative_rotvec(q0: Any, q1: Any) -> np.ndarray:
+    """Rotation vector (3,) [rad] of the shortest rotation from ``q0`` to ``q1``, in
+    ``q0``'s frame: ``R(q1) = R(q0) Exp(hat(r))`` (the arc :func:`slerp` follows).
+
+    From the relative rotation ``conj(q0) q1 = (c, v)`` (made ``c >= 0``):
+    ``2 atan2(|v|, c) v / |v|``; zero where ``v`` is.
+    """
+    w0, x0, y0, z0 = (float(c) for c in q0)
+    w1, x1, y1, z1 = (float(c) for c in q1)
+    c = w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1
+    v = np.array([w0 * x1 - w1 * x0 - (y0 * z1 - z0 * y1), w0 * y1 - w1 * y0 - (z0 * x1 - x0 * z1),
+                  w0 * z1 - w1 * z0 - (x0 * y1 - y0 * x1)])
+    if c < 0.0:
+        c, v = -c, -v
+    nv = float(np.linalg.norm(v))
+    if nv == 0.0:
+        return np.zeros(3)
+    return (2.0 * math.atan2(nv, c) / nv) * v
 
 
 def slerp(q0: Any, q1: Any, u: Any) -> np.ndarray:
