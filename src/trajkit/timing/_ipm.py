@@ -27,7 +27,9 @@ unregularised matrix follows every solve. The rows are grouped by their
 interval, so that every pass over them reads the interval's four unknowns
 once and adds one 4 x 4 block (or four entries) into the system per
 interval. The start is centred (every slack
-times its multiplier equal), the step goes 0.99 of the way to the boundary
+times its multiplier equal), or, for a round whose rows are those of the
+round before (the rounds have settled), starts the multipliers from that
+round's; the step goes 0.99 of the way to the boundary
 of ``s, lam > 0`` and of ``x > 0`` (the objective's domain).
 
 Compiled by numba when it is installed (the engine uses the cone solver
@@ -72,6 +74,11 @@ STEP_FRACTION = 0.99
 #: a cold start).
 START_SLACK = 1e-2
 START_MU = 1e-3
+
+#: Warm start (the previous round's multipliers): slacks of at least this, and
+#: every product of a slack and its multiplier at least WARM_MU.
+WARM_SLACK = 1e-4
+WARM_MU = 1e-5
 
 #: Steps of iterative refinement of every linear solve.
 REFINE = 1
@@ -298,12 +305,14 @@ def _fold_cells(N, cell, C, h, px, X, U, qnode):
     cf = np.zeros((m, 4))
     hh = np.zeros(m)
     fill = ptr[:N].copy()
+    where = np.full(m0, -1, dtype=np.int64)
     for r in range(m0):
         if not keep[r]:
             continue
         i = cell[r]
         free = (px[i] >= 0, px[i + 1] >= 0, px[i] >= 0, px[i + 1] >= 0)
         q = fill[i]
+        where[r] = q
         for a in range(4):
             if free[a]:
                 cf[q, a] = C[r, a]
@@ -314,11 +323,11 @@ def _fold_cells(N, cell, C, h, px, X, U, qnode):
         k = qnode[j]
         qrow[j] = fill[k]
         fill[k] += 1
-    return cf, hh, ptr, qrow, feasible
+    return cf, hh, ptr, qrow, feasible, where
 
 
 @_jit
-def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol):
+def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol, lam0, lam_out):
     """The compiled solver (see :func:`solve_round`)."""
     px, pu, pe, nk = _layout(N, ecell)
     X = X0.copy()
@@ -326,7 +335,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     for j in range(qnode.size):
         if px[qnode[j]] < 0:
             return X, U, ST_FAILED, 0, math.nan
-    cf, hh, ptr, qrow, feas = _fold_cells(N, cell, C, h, px, X, U, qnode)
+    cf, hh, ptr, qrow, feas, where = _fold_cells(N, cell, C, h, px, X, U, qnode)
     epos, ecf, ee, ekeep, efeas = _fold(ecell, E, e, px, pu, X, U)
     if not (feas and efeas and ekeep.all()):
         return X, U, ST_FAILED, 0, math.nan
@@ -370,6 +379,18 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
             gz = cf[r, 0] * z0 + cf[r, 1] * z1 + cf[r, 2] * z2 + cf[r, 3] * z3
             s[r] = max(hh[r] - gz, START_SLACK)
             lam[r] = START_MU / s[r]
+    # a warm start: the previous round's multipliers where a row was there (its
+    # slack kept small where the multiplier says the row is active)
+    if lam0.size:
+        for r0 in range(lam0.size):
+            r = where[r0]
+            if r < 0 or not (lam0[r0] > 0.0):
+                continue
+            i = cell[r0]
+            gz = (cf[r, 0] * z[cp[i, 0]] + cf[r, 1] * z[cp[i, 1]] + cf[r, 2] * z[cp[i, 2]]
+                  + cf[r, 3] * z[cp[i, 3]])
+            s[r] = max(hh[r] - gz, WARM_SLACK)
+            lam[r] = max(lam0[r0], WARM_MU / s[r])
     M = np.zeros((nk, bw + 1))
     L = np.zeros((nk, bw + 1))
     dd = np.zeros(nk)
@@ -604,6 +625,8 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     for k in range(1, N):
         X[k] = z[px[k]]
         U[k] = z[pu[k]]
+    for r0 in range(lam_out.size):
+        lam_out[r0] = lam[where[r0]] if where[r0] >= 0 else math.nan
     return X, U, status, it, _objective(X, w)
 
 
@@ -655,7 +678,8 @@ def _max_steps(s, lam, ds, dl, z, dz, px, N, frac):
 def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
                 ecell: np.ndarray, E: np.ndarray, e: np.ndarray,
                 x0: np.ndarray, u0: np.ndarray, quad: tuple | None = None,
-                max_iter: int = IPM_MAX_ITER, tol: float = IPM_TOL):
+                max_iter: int = IPM_MAX_ITER, tol: float = IPM_TOL,
+                lam0: np.ndarray | None = None, lam_out: np.ndarray | None = None):
     """Solve one round's grid problem (see the module text).
 
     Parameters
@@ -686,6 +710,9 @@ def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
         return np.array(x0, dtype=float), np.array(u0, dtype=float), ST_FAILED, 0, math.nan
     if quad is None:
         quad = (np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0))
+    m0 = int(np.size(cell))
+    lam_in = np.zeros(0) if lam0 is None else np.ascontiguousarray(lam0, dtype=np.float64)
+    duals = np.empty(m0) if lam_out is None else lam_out
     X, U, status, it, f = _solve(
         N, np.ascontiguousarray(w, dtype=np.float64), np.ascontiguousarray(cell, dtype=np.int64),
         np.ascontiguousarray(C, dtype=np.float64), np.ascontiguousarray(h, dtype=np.float64),
@@ -693,5 +720,5 @@ def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
         np.ascontiguousarray(e, dtype=np.float64), np.ascontiguousarray(quad[0], dtype=np.int64),
         np.ascontiguousarray(quad[1], dtype=np.float64),
         np.ascontiguousarray(quad[2], dtype=np.float64), np.array(x0, dtype=np.float64),
-        np.array(u0, dtype=np.float64), int(max_iter), float(tol))
+        np.array(u0, dtype=np.float64), int(max_iter), float(tol), lam_in, duals)
     return X, U, int(status), int(it), float(f)

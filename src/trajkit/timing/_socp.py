@@ -174,6 +174,9 @@ class GridSolution:
         The solver's status of the last round.
     history : list of float
         The model's duration after every round [s].
+    duals : ndarray
+        The multipliers of the last round's inequalities (interior-point
+        method only; NaN where a row was left out).
     """
 
     x: np.ndarray
@@ -184,6 +187,9 @@ class GridSolution:
     converged: bool
     status: str
     history: list[float] = field(default_factory=list)  # time of every round [s]
+    #: the multipliers of the last round's inequalities (NaN where a row was left
+    #: out), for a warm start of a solve on the same grid
+    duals: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 class _StaticRows:
@@ -519,11 +525,14 @@ def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr
 
 
 def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
-               x_bar, u_bar, xv, nv, n, quad=None):
+               x_bar, u_bar, xv, nv, n, quad=None, duals=None, warm=False):
     """One round by the banded interior-point method (:mod:`._ipm`) on the
     inequalities ``keep`` (of the static rows, then the jerk rows, as in
     ``b_in_all``): ``(z, time)`` with ``z`` the cone program's unknowns (only
-    ``x`` and ``u`` filled), or ``(None, nan)`` when it did not solve."""
+    ``x`` and ``u`` filled), or ``(None, nan)`` when it did not solve.
+    ``duals`` (one entry per row of ``b_in_all``'s rows on the grid, NaN where
+    unknown) is replaced by this round's multipliers where it solved; with
+    ``warm`` its entries (the previous round's) start them."""
     N = n - 1
     cells = [s_cell]
     coefs = [s_coef]
@@ -565,9 +574,17 @@ def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, 
     else:
         x0, u0 = x_bar.copy(), u_bar.copy()
     x0[0], u0[0], x0[N], u0[N] = p.x0, p.u0, p.xN, p.uN
-    X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0, quad)
+    warm = warm and duals is not None and duals.size == rows.size
+    lam_out = np.empty(int(rows.sum()))
+    X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0, quad,
+                                             lam0=duals[rows] if warm else None, lam_out=lam_out)
     if status != _ipm.ST_SOLVED:
         return None, math.nan
+    if duals is not None:
+        if not warm:
+            duals.resize(rows.size, refcheck=False)
+        duals[:] = math.nan
+        duals[rows] = lam_out
     z = np.zeros(nv)
     z[:n] = X
     z[n:2 * n] = U
@@ -655,7 +672,8 @@ def _settle_short(sol: GridSolution, p: GridProblem) -> None:
 
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
                init: tuple[np.ndarray, np.ndarray] | None = None,
-               settled: bool = False, near: bool = False) -> GridSolution:
+               settled: bool = False, near: bool = False,
+               duals: np.ndarray | None = None) -> GridSolution:
     """Solve the grid problem (see the module notes); raises RuntimeError if the solver fails.
 
     The problem is solved in scaled units (``s / L``, ``t / T0`` with ``T0``
@@ -683,7 +701,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
     sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None,
-                        near and init is not None)
+                        near and init is not None, duals if settled else None)
     sol.x = sol.x * (L / T0) ** 2
     sol.u = sol.u * L / as_
     sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
@@ -697,7 +715,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
 
 def _solve_scaled(p: GridProblem, max_rounds: int,
                   init: tuple[np.ndarray, np.ndarray] | None = None,
-                  settled: bool = False, near: bool = False) -> GridSolution:
+                  settled: bool = False, near: bool = False,
+                  duals0: np.ndarray | None = None) -> GridSolution:
     import clarabel
 
     s = p.s
@@ -897,6 +916,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     jerk_rounds = 0
     best = None
     z_prev = None
+    # the last round's multipliers of the inequalities (a warm start of a settled round)
+    duals = duals0.copy() if (settled or near) and duals0 is not None else np.zeros(0)
     t_init = math.nan
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
@@ -932,8 +953,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         # them, the round is solved again with more rows (the result is the same either
         # way: the solution of fewer rows that keeps all of them is the optimum)
         t_prev = times[-2] if jerk_rounds >= 2 else (t_init if jerk_rounds == 1 else math.nan)
-        if z_prev is not None and (((settled or near) and not times)
-                                   or (times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1])):
+        # (a settled round also starts from the previous multipliers)
+        warm = z_prev is not None and (((settled or near) and not times)
+                                       or bool(times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1]))
+        if warm and z_prev is not None:
             az_prev = ineq_times(z_prev)
             keep = _near(az_prev, b_in_all)
             # the velocity and speed-cap rows only loosely (a cruise at the cap stays exact)
@@ -949,7 +972,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             if ipm_round:
                 z_new, t_new = _ipm_solve(static.cell, static.coef, b_in_all, keep, jerk, g, eq_values[1:],
                                           b_eq[6:], rest0, restN, D, wts, p, x_bar, u_bar, xv, nv, n,
-                                          quad)
+                                          quad, duals, warm and screen == 0)
                 ipm_round = z_new is not None
             if not ipm_round:
                 values = [np.concatenate(eq_values), np.concatenate([static_entries()[2], jerk_values]),
@@ -1022,4 +1045,4 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         t, x, u = best
     return GridSolution(x=x, u=u, time=t if times else math.nan,
                         jerk_free_time=jerk_free, rounds=len(times), converged=converged,
-                        status=status, history=times)
+                        status=status, history=times, duals=duals)

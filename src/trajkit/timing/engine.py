@@ -1237,6 +1237,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         attempt = 0
         init_settled = False  # init is a solution of the same grid
         init_near = False  # ... or of the grid before a split (interpolated)
+        init_duals = None  # ... and its multipliers (on the same grid)
         while attempt <= MAX_TIGHTEN:
             prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
@@ -1247,9 +1248,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
             sol = first if (attempt == 0 and not add.size and not splits) else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
-                settled=init_settled, near=init_near)
+                settled=init_settled, near=init_near, duals=init_duals)
             init = (sol.x, sol.u)  # a tightened attempt starts from this one
             init_settled = True  # (on the same grid)
+            init_duals = sol.duals
             try:
                 dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
             except ValueError:
@@ -1283,6 +1285,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 s_new = np.unique(np.concatenate([s, 0.5 * (s[cells] + s[cells + 1])]))
                 init = (np.interp(s_new, s, sol.x), np.interp(s_new, s, sol.u))
                 init_settled = False
+                init_duals = None
                 init_near = sol.converged
                 scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
                                                     (scale_v, scale_a, scale_j, x_cap))
