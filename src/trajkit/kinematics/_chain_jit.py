@@ -181,17 +181,85 @@ _FAST_COND_NORMAL = 1e8
 
 
 @_jit
-def _singular(jac, lhs, square):
+def _lu(a, piv):
+    """LU factors of the square ``a`` in place, with partial pivoting (rows
+    swapped as recorded in ``piv``); False at a zero or non-finite pivot."""
+    n = a.shape[0]
+    for k in range(n):
+        p = k
+        big = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                big = abs(a[i, k])
+                p = i
+        piv[k] = p
+        if not (big > 0.0 and big < np.inf):
+            return False
+        if p != k:
+            for c in range(n):
+                t = a[k, c]
+                a[k, c] = a[p, c]
+                a[p, c] = t
+        inv = 1.0 / a[k, k]
+        for i in range(k + 1, n):
+            f = a[i, k] * inv
+            a[i, k] = f
+            if f != 0.0:
+                for c in range(k + 1, n):
+                    a[i, c] -= f * a[k, c]
+    return True
+
+
+@_jit
+def _lu_solve(lu, piv, b, x):
+    """``x`` solving ``a x = b`` from the factors of :func:`_lu`."""
+    n = lu.shape[0]
+    for i in range(n):
+        x[i] = b[i]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            t = x[k]
+            x[k] = x[p]
+            x[p] = t
+    for i in range(n):
+        acc = x[i]
+        for c in range(i):
+            acc -= lu[i, c] * x[c]
+        x[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = x[i]
+        for c in range(i + 1, n):
+            acc -= lu[i, c] * x[c]
+        x[i] = acc / lu[i, i]
+
+
+@_jit
+def _singular(jac, lhs, square, lu, piv, col, work):
     """The test of :func:`._jets.joint_taylor`: the Jacobian's condition number
     (largest over smallest singular value) is not below :data:`COND_MAX`.
-    Decided by a cheap upper bound where that suffices, else by the SVD."""
-    if np.all(np.isfinite(lhs)) and np.linalg.det(lhs) != 0.0:  # (inv needs nonzero pivots)
-        inv = np.linalg.inv(lhs)
-        bound = np.sqrt(np.sum(lhs * lhs) * np.sum(inv * inv))
+    Decided by a cheap upper bound where that suffices (with ``lhs``'s LU
+    factors, left in ``lu``, ``piv`` for the solves), else by the SVD (a
+    matrix with a zero pivot counts as singular).
+    ``col``, ``work``: scratch vectors."""
+    m = lhs.shape[0]
+    lu[:] = lhs
+    factored = np.all(np.isfinite(lhs)) and _lu(lu, piv)
+    if factored:
+        # |lhs|_F |lhs^-1|_F, the inverse column by column
+        inv2 = 0.0
+        for c in range(m):
+            col[:] = 0.0
+            col[c] = 1.0
+            _lu_solve(lu, piv, col, work)
+            for r in range(m):
+                inv2 += work[r] * work[r]
+        bound = np.sqrt(np.sum(lhs * lhs) * inv2)
         if bound < (_FAST_COND if square else _FAST_COND_NORMAL):
             return False
     sv = np.linalg.svd(jac)[1]
-    return not (sv[sv.size - 1] * COND_MAX > sv[0])
+    # (a matrix without LU factors has a zero pivot: singular whatever the SVD says)
+    return not (sv[sv.size - 1] * COND_MAX > sv[0]) or not factored
 
 
 @_jit
@@ -246,6 +314,11 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
     dr = np.empty((3, 3))
     x = np.empty((3, 3))
     cur = np.zeros((_N, m))
+    lu = np.empty((m, m))
+    piv = np.zeros(m, dtype=np.int64)
+    col = np.empty(m)
+    sol = np.empty(m)
+    rhs_m = np.empty(m)
     for p in range(n):
         cur[:] = 0.0
         for j in range(m):
@@ -261,7 +334,7 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
             lhs[:] = jac
         else:  # fewer joints: the normal equations
             lhs[:] = jt @ jac
-        if _singular(jac, lhs, m == 6):
+        if _singular(jac, lhs, m == 6, lu, piv, col, sol):
             singular[p] = True
             for k in range(1, _N):
                 for j in range(m):
@@ -285,7 +358,15 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
             rhs[3] = 0.5 * (x[2, 1] - x[1, 2])
             rhs[4] = 0.5 * (x[0, 2] - x[2, 0])
             rhs[5] = 0.5 * (x[1, 0] - x[0, 1])
-            sol = np.linalg.solve(lhs, rhs if m == 6 else jt @ rhs)
+            if m == 6:
+                _lu_solve(lu, piv, rhs, sol)
+            else:
+                for j in range(m):
+                    acc = 0.0
+                    for r in range(6):
+                        acc += jt[j, r] * rhs[r]
+                    rhs_m[j] = acc
+                _lu_solve(lu, piv, rhs_m, sol)
             for j in range(m):
                 qj[p, k, j] = sol[j]
                 cur[k, j] = sol[j]
