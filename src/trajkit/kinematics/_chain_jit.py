@@ -35,8 +35,9 @@ _N = ORDER + 1
 
 
 @_jit
-def _frames(qj, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot):
-    """Jets of every joint frame for the joint jet ``qj`` (N, m).
+def _frames(qj, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot, kmax):
+    """Jets of every joint frame for the joint jet ``qj`` (N, m), the coefficients
+    ``0 .. kmax`` (the higher ones are left as they were).
 
     ``R`` (J + 1, N, 3, 3), ``P`` (J + 1, N, 3): rotation and position jets of
     frame 0 (the base) and of each joint's moving frame; ``W`` (J, 3), ``O``
@@ -52,7 +53,7 @@ def _frames(qj, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, m
     for i in range(nj):
         pa = parent[i]
         # the joint's fixed frame: parent frame times the placement
-        for k in range(_N):
+        for k in range(kmax + 1):
             for r in range(3):
                 s = 0.0
                 for c in range(3):
@@ -78,37 +79,37 @@ def _frames(qj, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, m
             cj = (c0, -s0 * sd1, c0 * cd2 - s0 * sd2, c0 * cd3 - s0 * sd3)
             sj = (s0, c0 * sd1, s0 * cd2 + c0 * sd2, s0 * cd3 + c0 * sd3)
             # Rodrigues: I + sin K + (1 - cos) K^2
-            for k in range(_N):
+            for k in range(kmax + 1):
                 for r in range(3):
                     for c in range(3):
                         mot[k, r, c] = sj[k] * kx[i, r, c] + (-cj[k]) * k2[i, r, c]
             for r in range(3):
                 for c in range(3):
                     mot[0, r, c] += k2[i, r, c] + (1.0 if r == c else 0.0)
-            for k in range(_N):
+            for k in range(kmax + 1):
                 for r in range(3):
                     for c in range(3):
                         R[i + 1, k, r, c] = 0.0
-            for a in range(_N):
-                for b in range(_N - a):
+            for a in range(kmax + 1):
+                for b in range(kmax + 1 - a):
                     for r in range(3):
                         for c in range(3):
                             s = 0.0
                             for e in range(3):
                                 s += rj[a, r, e] * mot[b, e, c]
                             R[i + 1, a + b, r, c] += s
-            for k in range(_N):
+            for k in range(kmax + 1):
                 for r in range(3):
                     P[i + 1, k, r] = pj[k, r]
         else:
             xs = (x0, x1, x2, x3)
-            for k in range(_N):
+            for k in range(kmax + 1):
                 for r in range(3):
                     for c in range(3):
                         R[i + 1, k, r, c] = rj[k, r, c]
                     P[i + 1, k, r] = pj[k, r]
-            for a in range(_N):
-                for b in range(_N - a):
+            for a in range(kmax + 1):
+                for b in range(kmax + 1 - a):
                     for r in range(3):
                         w = rj[b, r, 0] * ax0 + rj[b, r, 1] * ax1 + rj[b, r, 2] * ax2
                         P[i + 1, a + b, r] += xs[a] * w
@@ -155,10 +156,10 @@ def _world_jacobian(W, O, p0, p1, p2, iq, rev, jac):
 
 
 @_jit
-def _tool(R, P, tpar, r_tool, t_tool, pt, rt):
-    """Tool position ``pt`` (N, 3) and rotation ``rt`` (N, 3, 3) jets from the
-    frame ``tpar`` and the tool's placement in it."""
-    for k in range(_N):
+def _tool(R, P, tpar, r_tool, t_tool, pt, rt, kmax):
+    """Tool position ``pt`` (N, 3) and rotation ``rt`` (N, 3, 3) jets (coefficients
+    ``0 .. kmax``) from the frame ``tpar`` and the tool's placement in it."""
+    for k in range(kmax + 1):
         for r in range(3):
             s = 0.0
             for c in range(3):
@@ -324,8 +325,9 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
         for j in range(m):
             cur[0, j] = q0[p, j]
             qj[p, 0, j] = q0[p, j]
-        _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot)
-        _tool(R, P, tpar, r_tool, t_tool, pt, rt)
+        # (the first coefficient needs the frames alone: the Jacobian)
+        _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot, 0)
+        _tool(R, P, tpar, r_tool, t_tool, pt, rt, 0)
         _world_jacobian(W, O, pt[0, 0], pt[0, 1], pt[0, 2], iq, rev, jac)
         for r in range(6):
             for c in range(m):
@@ -342,8 +344,8 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
             continue
         for k in range(1, _N):
             if k > 1:  # the coefficient k of the motion so far (q_k still 0)
-                _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot)
-                _tool(R, P, tpar, r_tool, t_tool, pt, rt)
+                _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot, k)
+                _tool(R, P, tpar, r_tool, t_tool, pt, rt, k)
             for r in range(3):
                 rhs[r] = pos[p, k, r] - (pt[k, r] if k > 1 else 0.0)
                 for c in range(3):
