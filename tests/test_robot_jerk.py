@@ -25,8 +25,8 @@ from trajkit.io.program import load_program
 from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_z
 from trajkit.kinematics.scara import default_scara
-from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
-from trajkit.robot._pieces import BezierBlend, Piece, constant_point
+from trajkit.robot import CartesianTarget, Circ, Lin, _orient_jets, run_motions
+from trajkit.robot._pieces import BezierBlend, Piece, blended_orientation, constant_point
 from trajkit.robot._rotations import matrix_from_quat, quat_from_matrix, relative_rotvec
 from trajkit.robot.models import PalletizerRobot
 
@@ -448,6 +448,108 @@ def test_slerp_rotation_taylor_is_that_of_its_rotations(angle):
     # no turn: no rate
     still = Piece("path", length, constant_point(np.zeros(3)), q0, q0, 1.0, 0, 1.0)
     assert not still.rotation_taylor(s)[:, 1:].any()
+
+
+def _quat_about(q, angle, rng):
+    """``q`` turned by ``angle`` about a random axis of its own frame."""
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    return quat_from_matrix(matrix_from_quat(q) @ _rotation_about(axis, [angle])[0])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_blend_rotation_taylor_is_that_of_its_rotations(seed):
+    """A corner blend's orientation (a slerp between the two motions' slerps at
+    the smootherstep fraction): its closed-form Taylor coefficients against
+    central differences of its rotations (Richardson-extrapolated)."""
+    rng = np.random.default_rng(seed)
+    qa0 = quat_from_matrix(_rotation_about(np.array([0.0, 0.0, 1.0]), [rng.uniform(0, 6)])[0])
+    qa1 = _quat_about(qa0, rng.uniform(0.1, 2.0), rng)
+    qb0 = _quat_about(qa1, [0.0, 0.05, 0.4, 1.5][seed], rng)
+    qb1 = _quat_about(qb0, rng.uniform(0.1, 2.0), rng)
+    length = 0.02
+    ori = blended_orientation(qa0, qa1, 0.3, 0.29, qb0, qb1, 0.4, 0.01, length)
+    s = length * np.array([0.05, 0.3, 0.5, 0.7, 0.95])
+    got = ori.taylor(s)
+    np.testing.assert_allclose(got[:, 0], matrix_from_quat(ori(s)), rtol=0, atol=1e-14)
+
+    def central(h):
+        r = np.stack([matrix_from_quat(ori(s + k * h)) for k in (-2, -1, 0, 1, 2)])
+        return ((r[3] - r[1]) / (2 * h), (r[3] - 2 * r[2] + r[1]) / h**2,
+                (r[4] - 2 * r[3] + 2 * r[1] - r[0]) / (2 * h**3))
+
+    h = 0.01 * length
+    for order, (c, f) in enumerate(zip(central(h), central(h / 2)), start=1):
+        ref = (f + (f - c) / 3.0) / math.factorial(order)
+        scale = float(np.abs(ref).max())
+        np.testing.assert_allclose(got[:, order], ref, rtol=0, atol=1e-5 * scale)
+
+
+@pytest.mark.parametrize("angle", [1e-5, 1e-4, 1e-3, 5e-3])
+def test_blend_rotation_taylor_series_and_square_root_agree(monkeypatch, angle):
+    """Where the two orientations are close the slerp's coefficients come from their
+    series in |v|^2 instead of the square root |v|: both routes, forced, agree."""
+    rng = np.random.default_rng(int(1 / angle))
+    qa0 = quat_from_matrix(_rotation_about(np.array([1.0, 0.0, 0.0]), [0.7])[0])
+    qa1 = _quat_about(qa0, 0.3, rng)
+    qb0 = _quat_about(qa1, angle, rng)
+    qb1 = _quat_about(qb0, 0.2, rng)
+    ori = blended_orientation(qa0, qa1, 0.3, 0.29, qb0, qb1, 0.4, 0.01, 0.02)
+    s = 0.02 * np.linspace(0.05, 0.95, 7)
+    monkeypatch.setattr(_orient_jets, "SERIES_ANGLE", 1.0)
+    series = ori.taylor(s)
+    monkeypatch.setattr(_orient_jets, "SERIES_ANGLE", 1e-12)
+    root = ori.taylor(s)
+    for order in range(4):
+        scale = float(np.abs(series[:, order]).max())
+        np.testing.assert_allclose(root[:, order], series[:, order], rtol=0, atol=1e-9 * scale)
+
+
+@pytest.mark.codepaths
+def test_blend_rotation_taylor_python_body_matches_the_compiled_one():
+    """The blend orientation's Taylor kernel run as plain Python (what runs without
+    numba) and compiled: the same coefficients to a few ulps of each order's scale."""
+    fn = _orient_jets.blend_rotation_taylor
+    py = getattr(fn, "py_func", fn)
+    rng = np.random.default_rng(9)
+    qa0 = quat_from_matrix(_rotation_about(np.array([0.0, 1.0, 0.0]), [0.4])[0])
+    qa1 = _quat_about(qa0, 0.8, rng)
+    for corner in (0.3, 1e-4):  # the square root's route and the series'
+        qb0 = _quat_about(qa1, corner, rng)
+        qb1 = _quat_about(qb0, 1.1, rng)
+        args = (qa0, relative_rotvec(qa0, qa1), 0.3, 0.29, qb0, relative_rotvec(qb0, qb1), 0.4, 0.01,
+                0.02, 0.02 * np.linspace(0.0, 1.0, 9), _orient_jets.SERIES_ANGLE)
+        a, b = fn(*args), py(*args)
+        for order in range(4):
+            scale = float(np.abs(b[:, order]).max())
+            np.testing.assert_allclose(a[:, order], b[:, order], rtol=0, atol=64 * np.finfo(float).eps * scale)
+
+
+def test_joint_path_derivatives_of_blended_chains_take_no_differences(monkeypatch):
+    """Every tool-pose derivative of a chain with corner blends (lines and an arc,
+    orientation changes) is closed form: the joint path of a non-redundant arm
+    never evaluates a stencil, and its q' equals central differences of its joints."""
+    arm = default_arm6()
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p = arm.fk(q0)
+    pos, rot = p.position, p.rotation
+    mots = [Lin(CartesianTarget(Pose(pos + [0.0, 0.08, 0.0], rot @ rot_z(0.4))), 0.2, zone=0.02),
+            Circ(CartesianTarget(Pose(pos + [0.04, 0.12, 0.0], rot)),
+                 CartesianTarget(Pose(pos + [0.08, 0.08, 0.0], rot @ rot_z(-0.3))), 0.2, zone=0.02),
+            Lin(CartesianTarget(Pose(pos + [0.08, 0.0, 0.02], rot)), 0.2)]
+    run = run_motions(arm, mots, q0)
+    jp = next(sg.chain.path for sg in run.segments if sg.kind == "CP")
+    assert sum(pc.kind == "blend" for pc in jp.pieces) == 2
+
+    def no_stencil(*args, **kw):
+        raise AssertionError("a stencil of differences was evaluated")
+
+    monkeypatch.setattr(jp, "_stencil", no_stencil)
+    s = jp.length * np.linspace(0.01, 0.99, 60)
+    q, d1, d2, d3 = jp.derivatives(s)
+    e = 1e-6 * jp.length
+    fd = (jp.derivatives(s + e)[0] - jp.derivatives(s - e)[0]) / (2 * e)
+    assert np.abs(d1 - fd).max() <= 1e-6 * max(1.0, float(np.abs(d1).max()))
 
 
 def _rotation_about(axis, theta):

@@ -7,9 +7,10 @@ seeded from a table of joints walked along the path).
 
 The tool pose's own derivatives at a point are in closed form: the
 positions' on lines, arcs, corner blends and turns on the spot, the
-orientations' wherever they are a slerp (a constant rate about an axis fixed
-in the tool frame: lines, arcs, turns). A corner blend's orientation, a
-cross-fade of two slerps, gets differences of its closed-form poses on a
+orientations' of every slerp (a constant rate about an axis fixed in the
+tool frame: lines, arcs, turns) and of a corner blend's cross-fade of two
+slerps (by Taylor series through its formula, :mod:`._orient_jets`). A
+piece without them would get differences of its closed-form poses on a
 small stencil (step :data:`STENCIL_STEP` times the robot's length scale)
 inside the piece, never across a junction of two pieces (a one-sided
 stencil there).
@@ -247,11 +248,10 @@ class ChainJointPath:
     def _pose_taylor(self, s: np.ndarray):
         """Taylor coefficients 0..3 of the tool pose along the path at ``s`` (n,): the
         pieces ``k`` (n,), positions (n, 4, 3) and rotations (n, 4, 3, 3). In
-        closed form where the piece has them: the positions of lines, arcs, corner
-        blends and orientation-only turns, the rotations of every slerp (lines,
-        arcs, turns); the rest (a corner blend's cross-faded orientation) by
-        differences of the closed-form poses on stencils of :data:`STENCIL_STEP`
-        (they turn over the piece's length)."""
+        closed form where the piece has them (every piece of a chain: lines, arcs,
+        corner blends and orientation-only turns); else by differences of the
+        closed-form poses on stencils of :data:`STENCIL_STEP` (they turn over the
+        piece's length)."""
         n = s.size
         k = self.piece_of(s)
         pj = np.empty((n, _jets.ORDER + 1, 3))

@@ -17,7 +17,7 @@ import numpy as np
 from ..paths.arc import Arc3
 from ..paths.base import Path
 from ..paths.line import Line
-from . import _bezier_jit
+from . import _bezier_jit, _orient_jets
 from ._rotations import SLERP_SMALL_ANGLE, matrix_from_quat, relative_rotvec, rotation_angle, slerp
 
 __all__ = ["Piece", "BezierBlend", "BLEND_TABLE", "sub_path_derivatives"]
@@ -378,13 +378,17 @@ class Piece:
     def rotation_taylor(self, s: np.ndarray) -> np.ndarray | None:
         """Taylor coefficients 0..3 of the tool's rotation matrix in ``s`` at ``s`` (n,),
         shape (n, 4, 3, 3): ``R`` and its first three derivatives over ``k!``, exact;
-        None for an orientation given by ``quat_fn`` (a corner blend's cross-fade).
+        for an orientation given by ``quat_fn``, its ``taylor`` (a corner blend's
+        cross-fade: :class:`BlendedOrientation`), None if it has none.
 
         The slerp from ``q0`` to ``q1`` turns at a constant rate about an axis fixed
         in the tool frame, ``R(s) = R(0) Exp(s hat(omega))``, so the k-th derivative
         is ``R(s) hat(omega)^k``."""
         if self.quat_fn is not None:
-            return None
+            taylor = getattr(self.quat_fn, "taylor", None)
+            if taylor is None:
+                return None
+            return taylor(np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length))
         s = np.atleast_1d(np.asarray(s, dtype=np.float64))
         out = np.empty((s.size, 4, 3, 3))
         out[:, 0] = matrix_from_quat(self.quat(s))
@@ -423,13 +427,35 @@ def blended_orientation(qa0, qa1, len_a: float, sa: float, qb0, qb1, len_b: floa
     ``len_b``, reaching arc length ``sb`` at the end), so the orientation
     and its rate are continuous at both ends of the blend.
     """
-    def fn(s: np.ndarray) -> np.ndarray:
-        ua = (sa + s) / len_a
-        ub = (sb - (length - s)) / len_b
-        a = slerp_any(qa0, qa1, ua)
-        b = slerp_any(qb0, qb1, ub)
-        return slerp_rows(a, b, smootherstep(s / length))
-    return fn
+    return BlendedOrientation(qa0, qa1, len_a, sa, qb0, qb1, len_b, sb, length)
+
+
+class BlendedOrientation:
+    """A corner blend's orientation (see :func:`blended_orientation`): called with
+    ``s`` (n,), the unit quaternions (n, 4); :meth:`taylor`, the rotation
+    matrix's exact Taylor coefficients."""
+
+    def __init__(self, qa0, qa1, len_a: float, sa: float, qb0, qb1, len_b: float, sb: float,
+                 length: float) -> None:
+        self.qa0, self.qa1, self.len_a, self.sa = qa0, qa1, float(len_a), float(sa)
+        self.qb0, self.qb1, self.len_b, self.sb = qb0, qb1, float(len_b), float(sb)
+        self.length = float(length)
+
+    def __call__(self, s: np.ndarray) -> np.ndarray:
+        ua = (self.sa + s) / self.len_a
+        ub = (self.sb - (self.length - s)) / self.len_b
+        a = slerp_any(self.qa0, self.qa1, ua)
+        b = slerp_any(self.qb0, self.qb1, ub)
+        return slerp_rows(a, b, smootherstep(s / self.length))
+
+    def taylor(self, s: np.ndarray) -> np.ndarray:
+        """Taylor coefficients 0..3 (n, 4, 3, 3) of the rotation matrix at ``s`` (n,)."""
+        f64 = np.float64
+        return _orient_jets.blend_rotation_taylor(
+            np.ascontiguousarray(self.qa0, dtype=f64), relative_rotvec(self.qa0, self.qa1), self.len_a,
+            self.sa, np.ascontiguousarray(self.qb0, dtype=f64), relative_rotvec(self.qb0, self.qb1),
+            self.len_b, self.sb, self.length,
+            np.ascontiguousarray(np.atleast_1d(s), dtype=f64), float(_orient_jets.SERIES_ANGLE))
 
 
 def slerp_rows(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
