@@ -525,14 +525,14 @@ def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr
 
 
 def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, restN, D, wts, p,
-               x_bar, u_bar, xv, nv, n, quad=None, duals=None, warm=False):
+               x_bar, u_bar, xv, nv, n, quad=None, duals=None):
     """One round by the banded interior-point method (:mod:`._ipm`) on the
     inequalities ``keep`` (of the static rows, then the jerk rows, as in
-    ``b_in_all``): ``(z, time)`` with ``z`` the cone program's unknowns (only
-    ``x`` and ``u`` filled), or ``(None, nan)`` when it did not solve.
-    ``duals`` (one entry per row of ``b_in_all``'s rows on the grid, NaN where
-    unknown) is replaced by this round's multipliers where it solved; with
-    ``warm`` its entries (the previous round's) start them."""
+    ``b_in_all``): ``(z, time, multipliers)`` with ``z`` the cone program's
+    unknowns (only ``x`` and ``u`` filled) and the multipliers of the rows (NaN
+    for those left out), or ``(None, nan, None)`` when it did not solve.
+    ``duals``: the previous round's multipliers of the same rows, to start
+    this round's from (a warm start)."""
     N = n - 1
     cells = [s_cell]
     coefs = [s_coef]
@@ -574,21 +574,18 @@ def _ipm_solve(s_cell, s_coef, b_in_all, keep, jerk, g, eq_values, b_eq, rest0, 
     else:
         x0, u0 = x_bar.copy(), u_bar.copy()
     x0[0], u0[0], x0[N], u0[N] = p.x0, p.u0, p.xN, p.uN
-    warm = warm and duals is not None and duals.size == rows.size
+    warm = duals is not None and duals.size == rows.size
     lam_out = np.empty(int(rows.sum()))
     X, U, status, _its, f = _ipm.solve_round(wts, cell, C, h, ecell, E, e, x0, u0, quad,
                                              lam0=duals[rows] if warm else None, lam_out=lam_out)
     if status != _ipm.ST_SOLVED:
-        return None, math.nan
-    if duals is not None:
-        if not warm:
-            duals.resize(rows.size, refcheck=False)
-        duals[:] = math.nan
-        duals[rows] = lam_out
+        return None, math.nan, None
+    lam = np.full(rows.size, math.nan)
+    lam[rows] = lam_out
     z = np.zeros(nv)
     z[:n] = X
     z[n:2 * n] = U
-    return z, f
+    return z, f, lam
 
 
 #: Use the banded interior-point method (:mod:`._ipm`) where numba is installed;
@@ -917,7 +914,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     best = None
     z_prev = None
     # the last round's multipliers of the inequalities (a warm start of a settled round)
-    duals = duals0.copy() if (settled or near) and duals0 is not None else np.zeros(0)
+    duals = duals0 if (settled or near) and duals0 is not None else np.zeros(0)
     t_init = math.nan
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]
@@ -970,10 +967,12 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         ipm_round = use_ipm  # (the cone solver takes the round if the method fails)
         for screen in range(SCREEN_PASSES):
             if ipm_round:
-                z_new, t_new = _ipm_solve(static.cell, static.coef, b_in_all, keep, jerk, g, eq_values[1:],
-                                          b_eq[6:], rest0, restN, D, wts, p, x_bar, u_bar, xv, nv, n,
-                                          quad, duals, warm and screen == 0)
+                z_new, t_new, lam = _ipm_solve(static.cell, static.coef, b_in_all, keep, jerk, g,
+                                               eq_values[1:], b_eq[6:], rest0, restN, D, wts, p, x_bar,
+                                               u_bar, xv, nv, n, quad,
+                                               duals if warm and screen == 0 else None)
                 ipm_round = z_new is not None
+                duals = lam if lam is not None else np.zeros(0)
             if not ipm_round:
                 values = [np.concatenate(eq_values), np.concatenate([static_entries()[2], jerk_values]),
                           nn_values, cn_values, acc_values]
