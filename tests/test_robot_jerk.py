@@ -552,6 +552,27 @@ def test_joint_path_derivatives_of_blended_chains_take_no_differences(monkeypatc
     assert np.abs(d1 - fd).max() <= 1e-6 * max(1.0, float(np.abs(d1).max()))
 
 
+def test_pose_differences_of_a_piece_without_closed_forms_agree_with_them(monkeypatch):
+    """A piece that offers no closed-form pose derivatives gets differences of its
+    poses on the stencil: on a blended chain, those agree with the closed forms to
+    the stencil's accuracy (the same joint derivatives to 1e-5 of their scale)."""
+    arm = default_arm6()
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p = arm.fk(q0)
+    pos, rot = p.position, p.rotation
+    mots = [Lin(CartesianTarget(Pose(pos + [0.0, 0.08, 0.0], rot @ rot_z(0.4))), 0.2, zone=0.02),
+            Lin(CartesianTarget(Pose(pos + [0.06, 0.08, 0.02], rot)), 0.2)]
+    run = run_motions(arm, mots, q0)
+    jp = next(sg.chain.path for sg in run.segments if sg.kind == "CP")
+    s = jp.length * np.linspace(0.01, 0.99, 40)
+    exact = jp.derivatives(s)
+    monkeypatch.setattr(Piece, "rotation_taylor", lambda self, loc: None)
+    monkeypatch.setattr(Piece, "derivatives", lambda self, loc: None)
+    diff = jp.derivatives(s)
+    for a, b in zip(exact[1:], diff[1:]):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-5 * np.abs(a).max())
+
+
 def _rotation_about(axis, theta):
     """Rotation matrices (n, 3, 3) about the unit ``axis`` by the angles ``theta`` (n,)."""
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
