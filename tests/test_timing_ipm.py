@@ -293,3 +293,35 @@ def test_compiled_jerk_rows_equal_the_numpy_ones(path_jerk):
         np.testing.assert_allclose(C, C2, rtol=4e-16 * 8, atol=1e-300)
         np.testing.assert_allclose(b, b2, rtol=4e-16 * 8, atol=1e-300)
         assert np.abs(C).max(axis=1, initial=0.0).max(initial=1.0) <= 1.0
+
+
+def test_the_jerk_free_rounds_start_is_the_speed_the_ends_allow():
+    """The starting point of the jerk-free round (``_socp._reachable``): the min-plus
+    scans equal the step-by-step recursion ``x_(i+1) = min(cap, x_i + 2 D a)``
+    from both ends, on a path whose joint rates vary (and a zero-rate stretch)."""
+    rng = np.random.default_rng(2)
+    n = 40
+    s = np.sort(np.concatenate([[0.0, 1.0], rng.uniform(0.0, 1.0, n - 2)]))
+    d1 = np.column_stack([np.cos(3 * s), 0.5 + 0 * s])
+    d1[10:14] = 0.0  # no joint moves there: no bound from the accelerations
+    prob = GridProblem(s=s, d1=d1, d2=0 * d1, d3=0 * d1, v_max=np.array([1.0, 2.0]),
+                       a_acc=np.array([3.0, 5.0]), a_dec=np.array([2.0, 5.0]),
+                       j_acc=np.array([30.0, 50.0]), j_dec=np.array([30.0, 50.0]),
+                       x_cap=np.full(n, np.inf), x0=0.0, xN=0.04)
+    D = np.diff(s)
+    xv = rng.uniform(0.5, 2.0, n)
+    xv[20:25] = np.inf
+    got = _socp._reachable(xv, D, prob)
+    with np.errstate(divide="ignore"):
+        um = np.min(np.where(np.abs(d1) > 0, np.minimum([3.0, 5.0], [2.0, 5.0]) / np.abs(d1), np.inf), axis=1)
+    cap = xv.copy()
+    cap[0], cap[-1] = 0.0, 0.04
+    fwd, bwd = cap.copy(), cap.copy()
+    for i in range(n - 1):
+        fwd[i + 1] = min(cap[i + 1], fwd[i] + 2 * D[i] * min(um[i], um[i + 1]))
+    for i in range(n - 2, -1, -1):
+        bwd[i] = min(cap[i], bwd[i + 1] + 2 * D[i] * min(um[i], um[i + 1]))
+    want = np.minimum(fwd, bwd)
+    finite = np.isfinite(want)
+    assert finite.sum() > n // 2 and got[0] == 0.0 and got[-1] == 0.04
+    np.testing.assert_allclose(got[finite], want[finite], rtol=1e-12, atol=1e-15)

@@ -72,8 +72,8 @@ STEP_FRACTION = 0.99
 #: Starting point: slacks of at least this (the rows are normalised to
 #: coefficients <= 1 and the problem to times of order one), and every product
 #: of a slack and its multiplier equal to START_MU (a centred point; from the
-#: previous round's solution the method then needs 9-17 iterations, 30-40 from
-#: a cold start).
+#: previous round's solution the method then needs 9-17 iterations, 10-30 for a
+#: jerk-free round from the engine's first guess).
 START_SLACK = 1e-2
 START_MU = 1e-3
 
