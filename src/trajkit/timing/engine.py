@@ -1078,9 +1078,11 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
 
 #: The best attempt of :func:`plan_path_timing` so far: (score, solution, piece
 #: durations, piece jerks, limit use, uniform time scale, interval of every
-#: piece, (grid, derivatives, speed cap, curvature, velocity cap)).
+#: piece, (grid, derivatives, speed cap, curvature, velocity cap), the grid cells
+#: where its check came within VERIFY_ABOVE and VERIFY_FULL_ABOVE of a limit).
 _Best = tuple[float, GridSolution, np.ndarray, np.ndarray, LimitUse, float, np.ndarray,
-              tuple[np.ndarray, tuple, np.ndarray, np.ndarray | None, np.ndarray]]
+              tuple[np.ndarray, tuple, np.ndarray, np.ndarray | None, np.ndarray],
+              tuple[np.ndarray, np.ndarray]]
 
 
 # --------------------------------------------------------------------------- public
@@ -1261,14 +1263,17 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
             lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                           cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
-            use, cell, rv, ra, rj, rs, _ = _check(s, der, t, st, jk, lim,
-                                                  exact if cheap else _Interp(s, der, breaks, left))
+            use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
+                                                     exact if cheap else _Interp(s, der, breaks, left))
             k = _uniform_scale(use)
             # a timing that needs no uniform slow-down keeps its exact cruise speeds:
             # preferred unless a slowed one is clearly faster
             score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
             if best is None or score < best[0]:
-                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap))
+                # (the cells close to a limit: the final check corrects them first)
+                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap),
+                        (np.unique(cell[near > 1.0 - VERIFY_ABOVE]),
+                         np.unique(cell[near > 1.0 - VERIFY_FULL_ABOVE])))
             if use.worst <= 1.0 + TIGHTEN_ABOVE:
                 break  # a small excess costs less as a uniform slow-down than as another round
             if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
@@ -1328,7 +1333,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         sol, piv, k_scale, tightened = None, None, 1.0, 0
         jerk_free_time = math.nan
     else:
-        _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap) = best
+        _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap), close = best
     corrected: _Corrected | None = None
     for _final in range(4):
         if k_scale > 1.0 and not (rest0 and restN):
@@ -1347,6 +1352,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                       cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left, unresolved)
+            if sol is not None:  # the true derivatives where the rounds' check came close
+                corrected.add(close[0])
+                corrected.add(close[1], full=True)
         src = exact if exact is not None else corrected
         res = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         if corrected is not None:
