@@ -69,13 +69,18 @@ def rotation_angle(q0: Any, q1: Any) -> float:
     accurate to a few ulps at every angle (``2 acos(|c|)`` loses half the
     digits near zero: about 1e-8 rad).
     """
+    c, vx, vy, vz = _relative(q0, q1)
+    return 2.0 * math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), abs(c))
+
+
+def _relative(q0: Any, q1: Any) -> tuple[float, float, float, float]:
+    """The relative rotation ``conj(q0) q1`` of two unit quaternions, ``(c, vx, vy, vz)``."""
     w0, x0, y0, z0 = (float(c) for c in q0)
     w1, x1, y1, z1 = (float(c) for c in q1)
-    c = w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1
-    vx = w0 * x1 - w1 * x0 - (y0 * z1 - z0 * y1)
-    vy = w0 * y1 - w1 * y0 - (z0 * x1 - x0 * z1)
-    vz = w0 * z1 - w1 * z0 - (x0 * y1 - y0 * x1)
-    return 2.0 * math.atan2(math.sqrt(vx * vx + vy * vy + vz * vz), abs(c))
+    return (w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1,
+            w0 * x1 - w1 * x0 - (y0 * z1 - z0 * y1),
+            w0 * y1 - w1 * y0 - (z0 * x1 - x0 * z1),
+            w0 * z1 - w1 * z0 - (x0 * y1 - y0 * x1))
 
 
 def relative_rotvec(q0: Any, q1: Any) -> np.ndarray:
@@ -85,11 +90,8 @@ def relative_rotvec(q0: Any, q1: Any) -> np.ndarray:
     From the relative rotation ``conj(q0) q1 = (c, v)`` (made ``c >= 0``):
     ``2 atan2(|v|, c) v / |v|``; zero where ``v`` is.
     """
-    w0, x0, y0, z0 = (float(c) for c in q0)
-    w1, x1, y1, z1 = (float(c) for c in q1)
-    c = w0 * w1 + x0 * x1 + y0 * y1 + z0 * z1
-    v = np.array([w0 * x1 - w1 * x0 - (y0 * z1 - z0 * y1), w0 * y1 - w1 * y0 - (z0 * x1 - x0 * z1),
-                  w0 * z1 - w1 * z0 - (x0 * y1 - y0 * x1)])
+    c, vx, vy, vz = _relative(q0, q1)
+    v = np.array([vx, vy, vz])
     if c < 0.0:
         c, v = -c, -v
     nv = float(np.linalg.norm(v))
