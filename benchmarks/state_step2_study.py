@@ -4,12 +4,16 @@ whether a blocked interval really is one.
 
     python benchmarks/state_step2_study.py --cases 3000 --seed 2
     python benchmarks/state_step2_study.py --cases 3000 --seed 2 --oracle 6
+    python benchmarks/state_step2_study.py --cases 3000 --seed 20 --seeds 40 --no-verify
 
 For ``--cases`` random asymmetric moves (``tests/state_reference.random_case``)
 it plans four durations ``T = T_min f``, ``f`` uniform in [1, 3], and counts
 the outcomes (a profile, verified by ``trajkit.verify.verify_motion``; a
 blocked duration; "no profile found"), the blocked intervals of
 ``feasible_durations`` and their summed length in minimum durations.
+``--seeds N`` runs the seeds ``seed .. seed + N - 1`` one after the other and
+adds them up; ``--no-verify`` counts every returned profile as a profile
+(much faster; the tests verify them).
 
 ``--oracle N`` checks the midpoints of N blocked intervals (those that start
 at the minimum duration first) with an independent mixed-integer program
@@ -111,18 +115,27 @@ def grid_feasible(s, g, L, T, n=200, time_limit=300.0):
     return None
 
 
+def _moves(seed, n_seeds, cases):
+    """The random asymmetric moves of ``cases`` per seed, seeds ``seed ..``, each
+    with its seed's generator (which then draws the move's durations)."""
+    for sd in range(seed, seed + n_seeds):
+        rng = np.random.default_rng(sd)
+        for _ in range(cases):
+            yield rng, random_case(rng, symmetric=False)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cases", type=int, default=3000)
     ap.add_argument("--seed", type=int, default=2)
     ap.add_argument("--oracle", type=int, default=0)
+    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--no-verify", action="store_true")
     args = ap.parse_args()
-    rng = np.random.default_rng(args.seed)
     count = {"profile": 0, "blocked": 0, "no profile": 0, "limit broken": 0}
     blocked = []
     t_fd, t_fixed = [], []
-    for _ in range(args.cases):
-        s, g, L = random_case(rng, symmetric=False)
+    for rng, (s, g, L) in _moves(args.seed, args.seeds, args.cases):
         if s == g:
             continue
         lim = AxisLimits(*L)
@@ -138,14 +151,17 @@ def main() -> None:
             t0 = time.perf_counter()
             try:
                 q = plan_state_to_state(s, g, lim, duration=t_min * f)
-                key = "profile" if verify_motion(q).ok else "limit broken"
+                t_fixed.append(time.perf_counter() - t0)
+                key = "profile" if args.no_verify or verify_motion(q).ok else "limit broken"
             except BlockedDurationError:
+                t_fixed.append(time.perf_counter() - t0)
                 key = "blocked"
             except InfeasibleError:
+                t_fixed.append(time.perf_counter() - t0)
                 key = "no profile"
-            t_fixed.append(time.perf_counter() - t0)
             count[key] += 1
-    print(f"{args.cases} moves (seed {args.seed}), {sum(count.values())} fixed durations: "
+    seeds = f"seed {args.seed}" if args.seeds == 1 else f"seeds {args.seed}-{args.seed + args.seeds - 1}"
+    print(f"{args.cases * args.seeds} moves ({seeds}), {sum(count.values())} fixed durations: "
           + ", ".join(f"{k} {v}" for k, v in count.items()))
     at_min = [b for b in blocked if b[4] == b[3]]
     print(f"blocked intervals: {len(blocked)} ({len(at_min)} starting at the minimum), summed "

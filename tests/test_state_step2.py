@@ -282,6 +282,68 @@ def test_fixed_durations_through_a_reversal_with_separate_legs(s, g, L, duration
     assert seen & set(families), seen
 
 
+#: Fixed durations with separate legs that the earlier families missed ("no profile
+#: found"; the grid oracle of ``benchmarks/state_step2_study.py`` found a motion at
+#: each), all from the study's random moves: (start, goal, limits, duration, the
+#: family's last word, whether only the time-reversed move's families find it).
+MIDDLE_HOLDS = [
+    # the reversal inside a hold at the smaller acceleration limit, after a hold at a
+    # free level
+    ((-0.1080128503531773, 0.3712077372569841, -0.15079724472027783),
+     (-0.10801277946732947, -0.27661867945532237, 0.0),
+     (0.6558944471915301, 0.1589438576652786, 0.865854524973261, 0.32759319818162236,
+      0.6867099583709829), 3.2939970368940195, "hold1_acc1", False),
+    # a hold at a free level through the reversal
+    ((0.013106282919973077, -0.12431536598332057, 0.1040581404287947),
+     (0.013106282919973077, 0.14233498229845165, 0.20035047812037415),
+     (0.16432005755827378, 0.3915938399868019, 0.23434830086728042, 0.8118321565155231,
+      0.06696431925870687), 1.9174031865764225, "hold_mid", False),
+    ((-0.10237676445254386, 0.11167298404460657, -0.3943344910328354),
+     (-0.10237676445254386, -0.13633380382266674, -0.7906968694558592),
+     (0.13633380382266674, 2.312852583726923, 3.1075587962233513, 0.7906968694558592,
+      1.6751919437468983), 0.4913465400294499, "hold_mid", False),
+    # a cruise at the start's (goal's) velocity with a hold at a free level through the
+    # reversal
+    ((-1.4643535558870662, -3.3441680305520682, -1.2274371921750928),
+     (4.606391894375869, 7.547331274926791, 0.0),
+     (7.547331274926791, 5.21569699527284, 2.965120271410355, 1.502957552461593,
+      1.7032114731679555), 6.61755218373325, "cruise_shape", False),
+    ((0.012104600983959652, 0.1498053884048595, 0.0),
+     (0.012104579874499484, -0.1498053884048595, 0.0),
+     (0.1498053884048595, 0.2835575506452661, 2.088429185609405, 0.28249069738213345,
+      0.9731445129598802), 1.3506152571129977, "cruise_shape", False),
+    # the same families on the time-reversed move
+    ((5.004105724838268, -5.072551100393745, 0.0), (12.477758997789861, 5.072551100393745, 0.0),
+     (5.072551100393745, 1.3751014423359054, 0.458301907068435, 5.906115401825305,
+      0.5893086545184211), 10.691788947274611, "cruise_shape", True),
+    ((-5.469828229300064, 6.750492161338357, -0.22826495033725333),
+     (-5.469828229300064, -3.8640862480543583, -0.12617054195239152),
+     (6.750492161338357, 0.47877573911394755, 0.8836133743772189, 1.954766192423431,
+      2.823558040199294), 12.54478437643983, "cruise_shape", True),
+    ((0.5043130381950653, -1.7365610249579935, 2.315659831101669),
+     (0.5043126892054148, 1.7365610249579935, 0.5172964050876196),
+     (1.7365610249579935, 7.588289710874881, 17.122700584585534, 3.0423448401455127,
+      72.22367932979876), 1.0710688350436606, "hold1_acc1", True),
+]
+
+
+@pytest.mark.parametrize("s, g, L, T, family, backwards", MIDDLE_HOLDS)
+def test_fixed_durations_with_a_hold_through_the_reversal(s, g, L, T, family, backwards):
+    """A hold at a level between the corners of ramp 2 with the velocity
+    reversal inside it (the jerk limit changes there), alone, after a hold at a
+    free level or after a cruise, and the motions only the time-reversed move's
+    families find: step 2 plans each duration exactly, within the limits by the
+    independent exact check, and the duration is not reported blocked."""
+    lim = AxisLimits(*L)
+    assert feasible_durations(s, g, lim).contains(T)
+    q = plan_state_to_state(s, g, lim, duration=T)
+    assert q.duration == pytest.approx(T, rel=1e-12)
+    _check(q, lim)
+    assert q.n_brake_phases == 0
+    assert q.family.split()[-1] == family, q.family
+    assert ("reversed" in q.family) == backwards, q.family
+
+
 N_ENDS = sweep_size(400)
 
 

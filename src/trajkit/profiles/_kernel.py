@@ -55,8 +55,10 @@ from ._shapes import (
     R_T,
     R_TARGET,
     R_V0,
+    STEP2_HOLD2_FIRST,
     integrate,
     step1,
+    step2_pairs,
 )
 from ._symfast import C_SG, NCF, NSF, SF_SCRATCH, build_candidate, sym_applies, sym_step1, sym_step2
 
@@ -98,6 +100,13 @@ DURATION_RTOL = 1e-12
 
 #: Shape code (step 2, before the fixed-duration offset) of the cruise fallback.
 SHAPE_CRUISE_FALLBACK = 15
+
+#: Added to a step-2 shape code where the profile was found on the time-reversed
+#: move (:func:`_step2_reversed`).
+SHAPE_REVERSED = 64
+
+#: The first (stage, direction) pair of step 2 tried on the time-reversed move.
+REVERSED_FIRST_PAIR = STEP2_HOLD2_FIRST
 
 #: Where in a gap between two valid step-1 durations step 2 is tried (fractions
 #: of the gap, in order) when separate legs leave the blocked intervals to be
@@ -143,7 +152,9 @@ SUM_SCRATCH = IN_GENERAL + 1
 _SAVE = SUM_SCRATCH + NPH + 1
 _NSAVE = OUT_PH + 3 * NPH - OUT_STATUS
 _FOUND = _SAVE + _NSAVE
-NWS = _FOUND + 2 * NBLK
+#: The time-reversed move of step 2 (separate legs): its limits and its problem.
+_REV = _FOUND + 2 * NBLK
+NWS = _REV + 12
 
 
 def workspace() -> np.ndarray:
@@ -490,10 +501,63 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
     if _step1_at(ws, T, tmin, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl, cfg,
                  st, keep, out, ts, js, as_):
         return
+    if (start_inside and (lim[1] != lim[3] or lim[2] != lim[4])
+            and _step2_reversed(ws, T, tmin, st0, lim, best, res, W, vec, ivl, cfg, st, keep,
+                                out, ts, js, as_)):
+        return
     ws[OUT_STATUS] = ST_NONE
     for b in range(nblk):
         if ws[OUT_BLK + 2 * b] / ts < T < ws[OUT_BLK + 2 * b + 1] / ts:
             ws[OUT_STATUS] = ST_BLOCKED
+
+
+@jit_raw
+def _step2_reversed(ws, T, tmin, st0, lim, best, res, W, vec, ivl, cfg, st, keep, out, ts, js,
+                    as_):
+    """Step 2's families on the time-reversed move (separate legs, a start inside
+    the limits); True when it emitted a profile.
+
+    Played backwards, a motion from ``(p0, v0, a0)`` to ``(pf, vf, af)`` is one
+    from ``(pf, -vf, af)`` to ``(p0, -v0, a0)`` with the jerk negated, and
+    ``|v|`` grows where it shrank: the legs swap. The families are not closed
+    under this reversal (a hold at a limit before a reversal maps to one after
+    it), so a duration they miss forwards can be found backwards. The table found
+    is turned back (phases in reverse order, each starting at the acceleration
+    where its reversed phase ends) and checked exactly in forward time.
+    """
+    r = ws[_REV:_REV + 12]
+    limr = r[0:5]
+    sr = r[5:12]
+    limr[0] = lim[0]
+    limr[1] = lim[3]
+    limr[2] = lim[4]
+    limr[3] = lim[1]
+    limr[4] = lim[2]
+    sr[0] = 0.0
+    sr[1] = -st0[4]
+    sr[2] = st0[5]
+    sr[3] = -st0[3]
+    sr[4] = -st0[1]
+    sr[5] = st0[2]
+    sr[6] = T
+    res[R_ALL] = 0.0
+    step2_pairs(sr, limr, best, res, W, vec, ivl, cfg, st, REVERSED_FIRST_PAIR)
+    if not (res[R_T] < math.inf):
+        return False
+    n = int(res[R_N])
+    total = 0.0
+    for i in range(n):
+        k = n - 1 - i
+        keep[i, 0] = best[k, 0]
+        keep[i, 1] = -best[k, 1]
+        keep[i, 2] = st0[2] if i == 0 else best[k + 1, 2]
+        total += keep[i, 0]
+    if not check(keep, n, st0[0], st0[1], st0[2], st0[3], st0[4], st0[5],
+                 lim[0], lim[1], lim[2], lim[3], lim[4]):
+        return False
+    _emit(ws, out, keep, n, 0, total, tmin, ts, js, as_)
+    ws[OUT_SHAPE] = res[R_SHAPE] + 32 + SHAPE_REVERSED
+    return True
 
 
 @jit_raw

@@ -61,7 +61,7 @@ from ._compile import jit_raw
 from ._phase import phase_end
 from ._roots import NODES, illinois, interp_unit, real_roots_unit, sort_ascending
 
-__all__ = ["NPH", "NVALID", "step1"]
+__all__ = ["NPH", "NVALID", "step1", "step2_pairs"]
 
 #: Largest number of phases of a profile (brake + prefix + template + suffix).
 NPH = 40
@@ -124,6 +124,12 @@ S2_MH1, S2_MH2, S2_MH3, S2_MH4, S2_JF = 10, 11, 12, 13, 14
 # C_HH1/C_HH3 (free in the fixed-duration context), H1X/H3X as H1/H3.
 S2_HH1, S2_HH3, S2_H1X, S2_H3X = 16, 17, 18, 19
 C_HH1, C_HH3 = 0, 1
+# ... and, where ramp 2 of a one-run template (M_ZSINGLE) reverses the velocity,
+# a hold at a level z of ramp 2 with the reversal inside it (c1 -> z on the
+# slowing leg, z -> c3 = ae on the speeding leg): a free z with the hold at
+# c1 = L1 (HZ1, reported as MH2) or a free c1 without a hold (HZ0, as MH1), or z
+# at the smaller acceleration limit with a hold at a free c1 (HZ2, as C_HH1)
+S2_HZ1, S2_HZ0, S2_HZ2 = 20, 21, 22
 # ... and, where ramp 1 starts (ramp 4 ends) at a = 0, a second cruise there: at the
 # start's velocity before ramp 1 (the goal's after ramp 4), with the cruise of ramp 2
 # (C_DC; :func:`_delay_cruise`)
@@ -154,6 +160,9 @@ STAGE_CRUISE, STAGE_HOLD, STAGE_INFLECTION, STAGE_EQUAL, STAGE_HOLD2 = 0, 1, 2, 
 #: (stage, direction) pairs of step 2 (5 stages x 2 directions), searched in the
 #: order of :func:`_step2_pair`.
 STEP2_PAIRS = 10
+
+#: The first pair of the last stage (:data:`STAGE_HOLD2`) in that order.
+STEP2_HOLD2_FIRST = 8
 
 #: Samples of the exact residual per sign branch in step 2's last stage.
 HOLD2_SAMPLES = 16
@@ -1003,20 +1012,46 @@ def _ramp_time(cfg, work):
 
 @jit_raw
 def _hold2_unknowns(cfg, shape, u, sa, sb, lin):
-    """(c1, t1, z, c3, t3) of a shape of :func:`_hold2` at parameter ``u`` on the
-    sign branch ``(sa, sb)``; NaN where the branch has no real value.
+    """(c1, t1, z, c3, t3, tc) of a shape of :func:`_hold2` at parameter ``u`` on
+    the sign branch ``(sa, sb)``; NaN where the branch has no real value.
 
     The duration of the ramps is affine in the corners, ``lin = (b, d1, dz,
     d3)`` of :func:`_ramp_time`; with the velocity equations (``ve = F + E``,
     or ``F = z^2 kz`` and ``ve = z^2 kze + E`` through a reversal) and the
     duration ``T`` the remaining unknowns are linear or roots of a quadratic.
+    ``tc`` is the hold at the level ``z`` of HZ0 / HZ1 / HZ2 (0 for the others;
+    HZ2's level is in ``cfg[L3]`` while :func:`_hold_mid` runs).
     """
     T = cfg[TT]
     b, d1, dz, d3 = lin
     ve = cfg[VE]
+    nan = math.nan
+    if S2_HZ1 <= shape <= S2_HZ2:
+        # (mode M_MID, c3 = ae: no ramp 4) the velocity at the end without the
+        # holds, vb = F(c1, 0) - z^2 K2P/2 + (z^2 - ae^2) K2N/2, then
+        # c1 t1 + z tc = ve - vb and t1 + tc = T - (b + d1 c1 + dz z + d3 ae)
+        z = cfg[L3] if shape == S2_HZ2 else u
+        ae = cfg[AE]
+        w = 0.5 * (cfg[K2N] - cfg[K2P]) * z * z - 0.5 * cfg[K2N] * ae * ae
+        R0 = T - (b + dz * z + d3 * ae)
+        if shape != S2_HZ0:
+            c1 = cfg[L1] if shape == S2_HZ1 else u
+            if c1 == z or sb < 0.0 or sa < 0.0:
+                return nan, nan, nan, nan, nan, nan
+            R = R0 - d1 * c1
+            t1 = (ve - _F(cfg, c1, 0.0) - w - z * R) / (c1 - z)
+            return c1, t1, z, ae, 0.0, R - t1
+        # HZ0 (t1 = 0): tc = R0 - d1 c1 and h c1^2 - z d1 c1 + (P0 + w + z R0 - ve) = 0
+        if sb < 0.0:
+            return nan, nan, nan, nan, nan, nan
+        h = 0.5 * (cfg[K1] + cfg[K2P])
+        P0 = cfg[VS] - 0.5 * cfg[AS] * cfg[AS] * cfg[K1]
+        c1 = _quad_branch(h, -z * d1, P0 + w + z * R0 - ve, sa)
+        if not (c1 == c1):
+            return nan, nan, nan, nan, nan, nan
+        return c1, 0.0, z, ae, 0.0, R0 - d1 * c1
     kz = _kz(cfg)
     kze = _kze(cfg)
-    nan = math.nan
     if shape == S2_HH1 or shape == S2_HH3:
         hh1 = shape == S2_HH1
         c1 = u if hh1 else cfg[L1]
@@ -1028,17 +1063,17 @@ def _hold2_unknowns(cfg, shape, u, sa, sb, lin):
             R = T - (b + d1 * c1 + d3 * c3)
             G = ve - F0 - E0
             if c1 == c3 or sa < 0.0:
-                return nan, nan, nan, nan, nan
+                return nan, nan, nan, nan, nan, nan
             t1 = (G - c3 * R) / (c1 - c3)
-            return c1, t1, 0.0, c3, R - t1
+            return c1, t1, 0.0, c3, R - t1, 0.0
         if c1 == 0.0 or c3 == 0.0:
-            return nan, nan, nan, nan, nan
+            return nan, nan, nan, nan, nan, nan
         # t1 = (z^2 kz - F0) / c1, t3 = (ve - z^2 kze - E0) / c3, the duration T
         z = _quad_branch(kz / c1 - kze / c3, dz,
                          b + d1 * c1 + d3 * c3 - F0 / c1 + (ve - E0) / c3 - T, sa)
         if sb < 0.0 or not (z == z):
-            return nan, nan, nan, nan, nan
-        return c1, (z * z * kz - F0) / c1, z, c3, (ve - z * z * kze - E0) / c3
+            return nan, nan, nan, nan, nan, nan
+        return c1, (z * z * kz - F0) / c1, z, c3, (ve - z * z * kze - E0) / c3, 0.0
     z = u
     h = 0.5 * (cfg[K1] + cfg[K2P])
     P0 = cfg[VS] - 0.5 * cfg[AS] * cfg[AS] * cfg[K1]  # F(c1, 0) = P0 + h c1^2
@@ -1048,51 +1083,60 @@ def _hold2_unknowns(cfg, shape, u, sa, sb, lin):
     if shape == S2_H1X:
         # c3 from the end velocity (no hold), then c1 (hold t1) from the duration
         if kc3 == 0.0:
-            return nan, nan, nan, nan, nan
+            return nan, nan, nan, nan, nan, nan
         q = (z * z * kze + sg * aek - ve) / (sg * kc3)
         if not (q >= 0.0):
-            return nan, nan, nan, nan, nan
+            return nan, nan, nan, nan, nan, nan
         c3 = sb * math.sqrt(q)
         c1 = _quad_branch(d1 - h, b + dz * z + d3 * c3 - T, z * z * kz - P0, sa)
         if not (c1 == c1) or c1 == 0.0:
-            return nan, nan, nan, nan, nan
-        return c1, (z * z * kz - P0 - h * c1 * c1) / c1, z, c3, 0.0
+            return nan, nan, nan, nan, nan, nan
+        return c1, (z * z * kz - P0 - h * c1 * c1) / c1, z, c3, 0.0, 0.0
     # S2_H3X: c1 from the reversal (no hold), then c3 (hold t3) from the duration
     if h == 0.0:
-        return nan, nan, nan, nan, nan
+        return nan, nan, nan, nan, nan, nan
     q = (z * z * kz - P0) / h
     if not (q >= 0.0):
-        return nan, nan, nan, nan, nan
+        return nan, nan, nan, nan, nan, nan
     c1 = sa * math.sqrt(q)
     c3 = _quad_branch(d3 + sg * kc3, b + d1 * c1 + dz * z - T, ve - z * z * kze - sg * aek, sb)
     if not (c3 == c3) or c3 == 0.0:
-        return nan, nan, nan, nan, nan
-    return c1, 0.0, z, c3, (ve - z * z * kze - _E(cfg, c3, 0.0)) / c3
+        return nan, nan, nan, nan, nan, nan
+    return c1, 0.0, z, c3, (ve - z * z * kze - _E(cfg, c3, 0.0)) / c3, 0.0
 
 
 @jit_raw
 def _h2_cand(cfg, work, kind, shape, u, sa, sb, lin, vd):
-    """(c1, t1, z, c3, t3, t0) of a shape of step 2's last stage at ``u`` on the
-    sign branch ``(sa, sb)`` (NaN where it has none). ``kind`` 0: the holds of
-    :func:`_hold2_unknowns` (``t0`` 0); 1: a step-1 shape (:func:`_unknowns`,
-    ``sa``, ``sb`` the signs of its square roots) after a cruise of ``t0`` at
-    ``vd`` before ramp 1 or after ramp 4 that fills the duration."""
+    """(c1, t1, z, c3, t3, tc, t0) of a shape of step 2's last stage at ``u`` on
+    the sign branch ``(sa, sb)`` (NaN where it has none). ``kind`` 0: the holds
+    of :func:`_hold2_unknowns` (``t0`` 0); 1: a step-1 shape (:func:`_unknowns`,
+    ``sa``, ``sb`` the signs of its square roots; ``tc`` 0) after a cruise of
+    ``t0`` at ``vd`` before ramp 1 or after ramp 4 that fills the duration; 2: a
+    hold at a free ``c1 = u`` and ``c3 = ae`` (no ramp 4) with such a cruise, on
+    a template without a reversal in ramp 2 (the velocity gives the hold, the
+    duration the cruise)."""
     if kind == 0:
-        c1, t1, z, c3, t3 = _hold2_unknowns(cfg, shape, u, sa, sb, lin)
-        return c1, t1, z, c3, t3, 0.0
+        c1, t1, z, c3, t3, tc = _hold2_unknowns(cfg, shape, u, sa, sb, lin)
+        return c1, t1, z, c3, t3, tc, 0.0
+    if kind == 2:
+        if u == 0.0:
+            return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
+        ae = cfg[AE]
+        t1 = (cfg[VE] - _E(cfg, ae, 0.0) - _F(cfg, u, 0.0)) / u
+        return u, t1, 0.0, ae, 0.0, 0.0, cfg[TT] - _durations(cfg, work, u, t1, 0.0, ae, 0.0)
     c1, t1, z, c3, t3, _, rz, r3 = _unknowns(cfg, work, shape, u, sa, sb)
     if not (rz >= 0.0 and r3 >= 0.0):
-        return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
-    return c1, t1, z, c3, t3, cfg[TT] - _durations(cfg, work, c1, t1, z, c3, t3)
+        return math.nan, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan
+    return c1, t1, z, c3, t3, 0.0, cfg[TT] - _durations(cfg, work, c1, t1, z, c3, t3)
 
 
 @jit_raw
 def _h2_resid(cfg, work, kind, shape, u, sa, sb, lin, vd):
     """End-position residual of :func:`_h2_cand` (NaN where it has no value)."""
-    c1, t1, z, c3, t3, t0 = _h2_cand(cfg, work, kind, shape, u, sa, sb, lin, vd)
-    if not (t1 == t1 and t3 == t3 and t0 == t0):
+    c1, t1, z, c3, t3, tc, t0 = _h2_cand(cfg, work, kind, shape, u, sa, sb, lin, vd)
+    if not (t1 == t1 and t3 == t3 and tc == tc and t0 == t0):
         return math.nan
-    return walk(cfg, c1, t1, z, c3, t3, 0.0)[0] + vd * t0 - cfg[PE]
+    return walk(cfg, c1, t1, z, c3, t3, tc)[0] + vd * t0 - cfg[PE]
 
 
 @jit_raw
@@ -1222,10 +1266,10 @@ def _scan(cfg, work, kind, shape, lo, hi, sa, sb, lin, vd, end, kd, pre, npre, s
                     if abs(fx) <= tol or not (fx == fx):
                         break
                     a, fa, b, fb, side = illinois(x, fx, a, fa, b, fb, side)
-            c1, t1, z, c3, t3, t0 = _h2_cand(cfg, work, kind, shape, x, sa, sb, lin, vd)
-            if (t1 == t1 and t3 == t3 and t0 >= eps
-                    and _plausible(cfg, c1, t1, c3, t3, 0.0)):
-                _offer_delay(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, 0.0,
+            c1, t1, z, c3, t3, tc, t0 = _h2_cand(cfg, work, kind, shape, x, sa, sb, lin, vd)
+            if (t1 == t1 and t3 == t3 and tc == tc and t0 >= eps
+                    and _plausible(cfg, c1, t1, c3, t3, tc)):
+                _offer_delay(cfg, work, pre, npre, suf, nsuf, c1, t1, z, c3, t3, max(tc, 0.0),
                              max(t0, 0.0), end, kd, sgn, st, lim, best, res, scratch, code)
                 if res[R_T] < math.inf:
                     return True
@@ -1274,6 +1318,46 @@ def _hold2(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
             if _scan(cfg, work, 0, shape, lo, hi, sa, sb, lin, 0.0, -1, 0, pre, npre, suf, nsuf,
                      sgn, st, lim, best, res, scratch, code):
                 return
+    if int(cfg[MODE]) == M_ZSINGLE and cfg[K2N] == cfg[K2Q]:
+        _hold_mid(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch)
+
+
+@jit_raw
+def _hold_mid(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch):
+    """The holds at a level ``z`` of ramp 2 with the velocity reversal inside (HZ1,
+    HZ0, HZ2) of a one-run template (mode ``M_ZSINGLE``): ``c1 -> z`` on the
+    slowing leg, the hold, ``z -> c3 = ae`` on the speeding leg (``K2N``, which
+    equals ``K2Q`` there), no ramp 4. The hold lies on both legs: ``|z|`` at
+    most the smaller acceleration limit, between ``ae`` and ramp 1's top (HZ2:
+    at that limit, with a hold at a free ``c1``). Each has one parameter and
+    closed-form unknowns (:func:`_hold2_unknowns`), scanned on the exact
+    residual (:func:`_scan`)."""
+    Am = min(lim[1], lim[3])
+    lo = max(-Am, min(cfg[AE], cfg[C1LO]))
+    hi = min(Am, max(cfg[AE], cfg[C1HI]))
+    if not (hi > lo):
+        return
+    mode = cfg[MODE]
+    l3 = cfg[L3]
+    cfg[MODE] = M_MID
+    cfg[L3] = math.copysign(Am, cfg[L1])  # HZ2's level
+    lin = _ramp_time(cfg, work)
+    for shape in (S2_HZ1, S2_HZ0, S2_HZ2):
+        if shape == S2_HZ1 and not (abs(cfg[L1]) < math.inf and cfg[L1] != 0.0):
+            continue
+        code = S2_MH2 if shape == S2_HZ1 else (S2_MH1 if shape == S2_HZ0 else C_HH1)
+        u_lo, u_hi = (cfg[C1LO], cfg[C1HI]) if shape == S2_HZ2 else (lo, hi)
+        if not (abs(u_lo) < math.inf and abs(u_hi) < math.inf and u_hi > u_lo):
+            continue
+        for br in range(2 if shape == S2_HZ0 else 1):
+            sa = 1.0 if br == 0 else -1.0
+            if _scan(cfg, work, 0, shape, u_lo, u_hi, sa, 1.0, lin, 0.0, -1, 0, pre, npre, suf,
+                     nsuf, sgn, st, lim, best, res, scratch, code):
+                cfg[MODE] = mode
+                cfg[L3] = l3
+                return
+    cfg[MODE] = mode
+    cfg[L3] = l3
 
 
 @jit_raw
@@ -1333,6 +1417,21 @@ def _delay_cruise(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scra
                          end, kd, sgn, st, lim, best, res, scratch, C_DC)
             if res[R_T] < math.inf:
                 return
+
+
+@jit_raw
+def _delay_hold(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res, scratch, end):
+    """A cruise at the start's velocity before ramp 1 (``end = 0``) or the goal's
+    after ramp 4 (``end = 1``) with a hold at a free ``c1`` and ``c3 = ae`` (no
+    ramp 4; with a hypothesis of a reversal inside the hold at ``c1``, the
+    velocity reverses there): one parameter ``c1``, scanned on the exact
+    residual (:func:`_scan`, kind 2)."""
+    kd, vd = _delay_at(cfg, pre, npre, suf, nsuf, st, end)
+    lo, hi = cfg[C1LO], cfg[C1HI]
+    if kd < 0 or not (abs(lo) < math.inf and abs(hi) < math.inf and hi > lo):
+        return
+    _scan(cfg, work, 2, 0, lo, hi, 1.0, 1.0, _ramp_time(cfg, work), vd, end, kd, pre, npre, suf,
+          nsuf, sgn, st, lim, best, res, scratch, C_DS)
 
 
 @jit_raw
@@ -1711,6 +1810,9 @@ def solve_template(cfg, W, vec, ivl, npre, nsuf, sgn, st, lim, best, res):
                 if mode != M_MID and not (res[R_T] < math.inf):
                     _delay_step1(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res,
                                  scratch, end)
+                if (mode == M_SINGLE or mode == M_ZERO) and not (res[R_T] < math.inf):
+                    _delay_hold(cfg, work, pre, npre, suf, nsuf, sgn, st, lim, best, res,
+                                scratch, end)
             return
         if stage == STAGE_EQUAL and mode == M_ZERO and (
                 cfg[S3] == 0.0 or (cfg[K1] == max(lim[2], lim[4]) and cfg[K4] == cfg[K1])):
@@ -2374,9 +2476,9 @@ def _step2_pair(k, m1, m2):
         return _cruise_pair(up1 == small1, up2 != small1)
     if k == 5:
         return _cruise_pair(not up1, not up2)
-    if k < 8:
+    if k < STEP2_HOLD2_FIRST:
         return STAGE_EQUAL, (1.0 if k == 6 else -1.0)
-    return STAGE_HOLD2, (1.0 if k == 8 else -1.0)
+    return STAGE_HOLD2, (1.0 if k == STEP2_HOLD2_FIRST else -1.0)
 
 
 @jit_raw
@@ -2399,16 +2501,28 @@ def step1(st0, lim, best, res, W, vec, ivl, cfg, st):
     rest_goal = st0[4] == 0.0 and st0[5] == 0.0 and st0[3] == st0[3] and st0[6] != st0[6]
     res[R_STOP] = -1.0 if (symmetric and rest_goal and res[R_ALL] == 0.0 and EARLY) else 0.0
     if st0[6] == st0[6] and st0[3] == st0[3]:
-        # every (stage, direction) pair, the likeliest first (see _step2_pair)
-        m1, m2 = _cruise_margins(st0, lim)
-        for k in range(STEP2_PAIRS):
-            stage, sgn = _step2_pair(k, m1, m2)
-            res[R_STAGE] = stage
-            res[R_HINT] = _cruise_hint(st0, lim, stage, sgn, m1, m2)
-            direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st)
-            if res[R_T] < math.inf:
-                break
+        step2_pairs(st0, lim, best, res, W, vec, ivl, cfg, st, 0)
         return
     direction(1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
     if res[R_STOP] <= 0.0:
         direction(-1.0, st0, lim, best, res, W, vec, ivl, cfg, st)
+
+
+@jit_raw
+def step2_pairs(st0, lim, best, res, W, vec, ivl, cfg, st, k0):
+    """Step 2 (exactly ``st0[6]``) by the (stage, direction) pairs ``k0 ..
+    STEP2_PAIRS - 1``, the likeliest first (see :func:`_step2_pair`); ``best``
+    and ``res`` as :func:`step1` fills them."""
+    res[R_T] = math.inf
+    res[R_N] = 0.0
+    res[R_NV] = 0.0
+    res[R_SHAPE] = 0.0
+    res[R_STOP] = 0.0
+    m1, m2 = _cruise_margins(st0, lim)
+    for k in range(k0, STEP2_PAIRS):
+        stage, sgn = _step2_pair(k, m1, m2)
+        res[R_STAGE] = stage
+        res[R_HINT] = _cruise_hint(st0, lim, stage, sgn, m1, m2)
+        direction(sgn, st0, lim, best, res, W, vec, ivl, cfg, st)
+        if res[R_T] < math.inf:
+            break

@@ -524,6 +524,8 @@ def _family(code: float) -> str:
 
 
 def _family_name(c: int) -> str:
+    if c >= K.SHAPE_REVERSED:
+        return _family_name(c - K.SHAPE_REVERSED).replace("fixed ", "fixed reversed ", 1)
     fixed = c >= 32
     direction = "DUUD" if c & 16 else "UDDU"
     c &= 15
