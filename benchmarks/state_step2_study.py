@@ -13,7 +13,9 @@ blocked duration; "no profile found"), the blocked intervals of
 ``feasible_durations`` and their summed length in minimum durations.
 ``--seeds N`` runs the seeds ``seed .. seed + N - 1`` one after the other and
 adds them up; ``--no-verify`` counts every returned profile as a profile
-(much faster; the tests verify them).
+(much faster; the tests verify them); ``--brake`` draws every other move
+from ``tests/state_reference.random_brake_case`` (a start outside the
+limits: a brake comes first).
 
 ``--oracle N`` checks the midpoints of N blocked intervals (those that start
 at the minimum duration first) with an independent mixed-integer program
@@ -38,7 +40,7 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.sparse import lil_matrix
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from state_reference import random_case  # noqa: E402
+from state_reference import random_brake_case, random_case  # noqa: E402
 
 from trajkit import AxisLimits  # noqa: E402
 from trajkit.errors import InfeasibleError  # noqa: E402
@@ -115,13 +117,17 @@ def grid_feasible(s, g, L, T, n=200, time_limit=300.0):
     return None
 
 
-def _moves(seed, n_seeds, cases):
+def _moves(seed, n_seeds, cases, brake):
     """The random asymmetric moves of ``cases`` per seed, seeds ``seed ..``, each
-    with its seed's generator (which then draws the move's durations)."""
+    with its seed's generator (which then draws the move's durations); with
+    ``brake`` every other one starts outside the limits."""
     for sd in range(seed, seed + n_seeds):
         rng = np.random.default_rng(sd)
-        for _ in range(cases):
-            yield rng, random_case(rng, symmetric=False)
+        for i in range(cases):
+            if brake and i % 2 == 1:
+                yield rng, random_brake_case(rng, symmetric=False)
+            else:
+                yield rng, random_case(rng, symmetric=False)
 
 
 def main() -> None:
@@ -131,11 +137,12 @@ def main() -> None:
     ap.add_argument("--oracle", type=int, default=0)
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--no-verify", action="store_true")
+    ap.add_argument("--brake", action="store_true")
     args = ap.parse_args()
     count = {"profile": 0, "blocked": 0, "no profile": 0, "limit broken": 0}
     blocked = []
     t_fd, t_fixed = [], []
-    for rng, (s, g, L) in _moves(args.seed, args.seeds, args.cases):
+    for rng, (s, g, L) in _moves(args.seed, args.seeds, args.cases, args.brake):
         if s == g:
             continue
         lim = AxisLimits(*L)
@@ -161,7 +168,8 @@ def main() -> None:
                 key = "no profile"
             count[key] += 1
     seeds = f"seed {args.seed}" if args.seeds == 1 else f"seeds {args.seed}-{args.seed + args.seeds - 1}"
-    print(f"{args.cases * args.seeds} moves ({seeds}), {sum(count.values())} fixed durations: "
+    kind = ", every other with a brake" if args.brake else ""
+    print(f"{args.cases * args.seeds} moves ({seeds}{kind}), {sum(count.values())} fixed durations: "
           + ", ".join(f"{k} {v}" for k, v in count.items()))
     at_min = [b for b in blocked if b[4] == b[3]]
     print(f"blocked intervals: {len(blocked)} ({len(at_min)} starting at the minimum), summed "
