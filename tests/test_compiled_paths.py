@@ -63,13 +63,27 @@ _SCRIPT = textwrap.dedent("""
 """)
 
 
-def _run(n, no_jit):
+#: Fixed durations of given moves (the families of step 2's last stage, forwards
+#: and on the time-reversed move): family, phase durations and jerks.
+_SCRIPT_FIXED = textwrap.dedent("""
+    import json
+    from trajkit import AxisLimits
+    from trajkit.profiles.state import plan_state_to_state
+    out = []
+    for s, g, L, T in json.loads({cases!r}):
+        q = plan_state_to_state(s, g, AxisLimits(*L), duration=T)
+        out.append(dict(d=q.duration, fam=q.family, ph=list(q.phase_durations), jk=list(q.jerks)))
+    print(json.dumps(out))
+""")
+
+
+def _run(n, no_jit, script=_SCRIPT, **fields):
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
     if no_jit:
         env["TRAJKIT_NO_JIT"] = "1"
     else:
         env.pop("TRAJKIT_NO_JIT", None)
-    code = _SCRIPT.format(tests=str(ROOT / "tests"), n=n)
+    code = script.format(tests=str(ROOT / "tests"), n=n, **fields)
     r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                        timeout=1800)
     assert r.returncode == 0, r.stderr[-3000:]
@@ -97,3 +111,20 @@ def test_state_planner_numba_equals_python():
             np.testing.assert_allclose(a["ph"], b["ph"], rtol=1e-9, atol=1e-12 * a["d"])
             assert a["jk"] == b["jk"]
     assert same_family >= 0.95 * n
+
+
+def test_step2_last_stage_numba_equals_python():
+    """The holds through a velocity reversal and the time-reversed search (the
+    moves of ``test_state_step2.MIDDLE_HOLDS``): both paths return the same
+    family and phase table."""
+    from test_state_step2 import MIDDLE_HOLDS
+
+    cases = json.dumps([[s, g, L, T] for s, g, L, T, _, _ in MIDDLE_HOLDS])
+    fast = _run(0, no_jit=False, script=_SCRIPT_FIXED, cases=cases)
+    slow = _run(0, no_jit=True, script=_SCRIPT_FIXED, cases=cases)
+    for i, (a, b) in enumerate(zip(fast, slow)):
+        assert a["fam"] == b["fam"], (i, a["fam"], b["fam"])
+        assert_ulp_close(a["d"], b["d"], DURATION_ULPS, err_msg=f"case {i}")
+        np.testing.assert_allclose(a["ph"], b["ph"], rtol=1e-9, atol=1e-12 * a["d"])
+        assert a["jk"] == b["jk"]
+    assert len(fast) == len(MIDDLE_HOLDS)
