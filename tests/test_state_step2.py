@@ -382,7 +382,7 @@ def test_duration_at_the_end_of_a_blocked_interval():
                 for T in (lo + eps, 0.5 * (lo + hi), hi - eps):
                     with pytest.raises(BlockedDurationError):
                         plan_state_to_state(s, g, lim, duration=T)
-    assert n_ends >= 0.025 * N_ENDS  # (measured: 14 ends in 400 cases)
+    assert n_ends >= 0.02 * N_ENDS  # (measured: 12 ends in 400 cases, 198 in 8,000)
 
 
 N_CLOSED = sweep_size(1500)
