@@ -514,8 +514,9 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
 @jit_raw
 def _step2_reversed(ws, T, tmin, st0, lim, best, res, W, vec, ivl, cfg, st, keep, out, ts, js,
                     as_):
-    """Step 2's families on the time-reversed move (separate legs, a start inside
-    the limits); True when it emitted a profile.
+    """Step 2's last stage (the pairs from :data:`REVERSED_FIRST_PAIR` on) on the
+    time-reversed move (separate legs, a start inside the limits); True when it
+    emitted a profile.
 
     Played backwards, a motion from ``(p0, v0, a0)`` to ``(pf, vf, af)`` is one
     from ``(pf, -vf, af)`` to ``(p0, -v0, a0)`` with the jerk negated, and
