@@ -272,3 +272,79 @@ def test_compiled_arc_length_inversion_equals_the_numpy_steps(monkeypatch):
         monkeypatch.setattr(_saddle_jit, "AVAILABLE", True)
         assert np.abs(got - ref).max() <= 8 * np.spacing(2 * math.pi)
         np.testing.assert_allclose(curve.s_of_theta(got), s, rtol=0, atol=1e-12)
+
+
+def _reference_theta(curve, s):
+    """theta at arc length s by scipy: adaptive quadrature of an independent scalar
+    ds/dtheta, root by brentq; returns (theta, the quadrature's error estimate [m])."""
+    from scipy.optimize import brentq
+
+    r, R, d, a = curve.branch_radius, curve.main_radius, curve.offset, curve.angle
+
+    def speed(t):
+        w = r * math.sin(t) - d
+        z1 = -r * math.cos(a) / math.sin(a) * math.sin(t) - w * r * math.cos(t) / (math.sqrt(R * R - w * w) * math.sin(a))
+        return math.sqrt(r * r + z1 * z1)
+
+    th0 = curve.theta_start
+    err = [0.0]
+
+    def f(t):
+        v, e = quad(speed, th0, t, epsabs=0.0, epsrel=2e-14, limit=200)
+        err[0] = max(err[0], e)
+        return v - s
+
+    lo, hi = th0, th0 + 2 * math.pi
+    if s <= 0.0:
+        return lo, 0.0
+    th = brentq(f, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    return th, err[0]
+
+
+@pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")  # the reference's own round-off
+@pytest.mark.parametrize("args", [(0.11, 0.1, 90, 0.0, 0.0), (0.16, 0.1, 90, 0.04, 0.0), (0.15, 0.1, 60, 0.0, 1.0),
+                                  (1.0, 0.99999, 90, 0.0, -0.5), (0.05, 0.0025, 23, 0.01, -3.0)])
+def test_theta_of_s_meets_its_residual_and_matches_an_independent_inversion(args):
+    """theta(s): s(theta(s)) = s within the documented tolerance (ARC_INVERSION_RTOL of the
+    length), and theta within the arc length's stated bound of a scipy quad + brentq
+    inversion; the same angles in any order of s; s = 0, length and the table nodes exact."""
+    from trajkit.paths._tolerances import ARC_INVERSION_RTOL
+
+    R, r, ang, off, th0 = args
+    c = SaddleCurve(R, r, math.radians(ang), off, th0)
+    rng = np.random.default_rng(11)
+    s = np.concatenate([[0.0, c.length], rng.uniform(0.0, c.length, 20000)])
+    th = c.theta_of_s(s)
+    ulp = np.spacing(abs(c.theta_start) + 2 * math.pi)
+    assert th[0] == c.theta_start
+    assert abs(th[1] - (c.theta_start + 2 * math.pi)) <= 4 * ulp
+    assert np.all((th >= c.theta_start) & (th <= c.theta_start + 2 * math.pi))
+    assert np.max(np.abs(c.s_of_theta(th) - s)) <= ARC_INVERSION_RTOL * c.length
+    # the same angles in any order (the points are independent)
+    perm = rng.permutation(s.size)
+    assert np.max(np.abs(c.theta_of_s(s[perm]) - th[perm])) <= 4 * ulp
+    # at the table nodes: the table's angles
+    nodes = c.s_of_theta(c.theta_start + np.linspace(0.0, 2 * math.pi, 65))
+    np.testing.assert_allclose(c.theta_of_s(nodes), c.theta_start + np.linspace(0.0, 2 * math.pi, 65),
+                               rtol=0, atol=8 * ulp)
+    # independent reference: |dtheta| <= (stated bound of s(theta) + quad's error) / min speed (>= r)
+    for k in range(2, 22):
+        ref, err = _reference_theta(c, float(s[k]))
+        assert abs(th[k] - ref) <= (SADDLE_LENGTH_RTOL * c.length + err) / r + 4 * ulp, (k, th[k] - ref)
+
+
+def test_theta_of_s_series_agrees_with_the_quadrature_newton():
+    """Newton on each table interval's Chebyshev series gives the angles of Newton on the
+    Gauss-Legendre quadrature (every interval forced back to it) to a few ulps, on the four
+    benchmark seams and a near-touching one (where some intervals keep the quadrature)."""
+    rng = np.random.default_rng(5)
+    for R, r, ang, off in ((0.11, 0.1, 90, 0.0), (0.2, 0.1, 90, 0.0), (0.15, 0.1, 60, 0.0),
+                           (0.16, 0.1, 90, 0.04), (1.0, 0.5, 57.3, 0.499999)):
+        c = SaddleCurve(R, r, math.radians(ang), off)
+        s = np.concatenate([[0.0, c.length], rng.uniform(0.0, c.length, 5000)])
+        got = c.theta_of_s(s)
+        fitted = int(np.sum(c._deg >= 0))
+        assert fitted >= 0.8 * c._deg.size  # the series are the rule, the quadrature the exception
+        c._deg = np.full_like(c._deg, -1)
+        ref = c.theta_of_s(s)
+        assert np.abs(got - ref).max() <= 4 * np.spacing(2 * math.pi)

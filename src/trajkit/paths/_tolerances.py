@@ -34,6 +34,20 @@ CORNER_ANGLE = 1e-6
 #: by comparing two Gauss-Legendre tables of different size).
 SADDLE_LENGTH_RTOL = 1e-12
 
+#: Saddle arc length inside a table interval as a Chebyshev series (the
+#: inverse map theta(s) uses it): ds/dtheta's coefficients are kept down to
+#: this fraction of the first one (the mean speed; round-off is ~1e-16 of it) ...
+SADDLE_FIT_CHOP = 4e-16
+
+#: ... and the series must give the Gauss-Legendre partial arc lengths of its
+#: interval within this fraction of the interval's arc length (checked at
+#: construction; measured <= 1e-15, the sums' round-off), else the interval
+#: keeps the quadrature. An interval's arc length is below the whole length,
+#: so the series is within ARC_INVERSION_RTOL / 2 of the length; theta(s)
+#: moves by at most this fraction of the interval's angle times its mean
+#: speed over the local one (~1e-16 rad on 64-interval tables).
+SADDLE_FIT_RTOL = 4e-15
+
 #: Newton iterations converge when the arc-length residual is below this
 #: fraction of the path length.
 ARC_INVERSION_RTOL = 1e-14

@@ -27,6 +27,7 @@ import math
 from typing import Any
 
 import numpy as np
+from scipy.fft import dct
 from scipy.special import roots_legendre
 
 from .._validate import check_finite, check_positive
@@ -38,6 +39,8 @@ from ._tolerances import (
     GAUSS_ORDER,
     MAX_COORDINATE,
     NEWTON_LAST_STEP,
+    SADDLE_FIT_CHOP,
+    SADDLE_FIT_RTOL,
     SADDLE_LENGTH_RTOL,
     THETA_RANGE_ATOL,
 )
@@ -52,6 +55,13 @@ _TABLE_START = 32
 _TABLE_MAX = 1 << 16
 #: Intervals of the inverse table theta(s) (first guesses for Newton).
 _INVERSE_TABLE = 4096
+
+#: Chebyshev points (plus one) of ds/dtheta per table interval, the largest
+#: degree kept, and the angles per interval where the series is checked
+#: against the quadrature (:meth:`SaddleCurve._fit_table`).
+_FIT_SAMPLES = 32
+_FIT_MAX_DEGREE = 24
+_FIT_CHECKS = 6
 
 #: Points evaluated at once by the arc-length inversions (bounds their memory:
 #: the quadrature holds GAUSS_ORDER values per point).
@@ -90,7 +100,12 @@ class SaddleCurve(Path):
     composite Gauss-Legendre quadrature on a table refined until two
     tables agree to :data:`SADDLE_LENGTH_RTOL` (relative error bound of
     ``length`` and of every ``s(theta)``); ``theta(s)`` is the Newton root of
-    ``s(theta) = s`` to :data:`ARC_INVERSION_RTOL` of the length.
+    ``s(theta) = s`` to :data:`ARC_INVERSION_RTOL` of the length. Inside each
+    table interval that Newton iteration evaluates ``s(theta)`` by a
+    Chebyshev series fitted at construction and checked against the
+    quadrature to :data:`SADDLE_FIT_RTOL` of the interval's arc length
+    (intervals where it is not met, near-touching pipes, keep the
+    quadrature); :meth:`s_of_theta` is always the quadrature.
     """
 
     closed = True
@@ -155,7 +170,12 @@ class SaddleCurve(Path):
         q2 = (-(w1 * w1 + w * w2) - q1 * q1) / q
         q3 = (-(3.0 * w1 * w2 + w * w3) - 3.0 * q1 * q2) / q
         k, s = r * self._cot, self._sin
-        return np.stack([k * cs + q / s, -k * sn + q1 / s, -k * cs + q2 / s, k * sn + q3 / s])
+        out = np.empty((4,) + th.shape)
+        np.add(k * cs, q / s, out=out[0])
+        np.add(-k * sn, q1 / s, out=out[1])
+        np.add(-k * cs, q2 / s, out=out[2])
+        np.add(k * sn, q3 / s, out=out[3])
+        return out
 
     def point_theta(self, theta: Any) -> np.ndarray:
         """Seam points at angles ``theta`` [rad]: shape (n, 3) [m]."""
@@ -229,10 +249,66 @@ class SaddleCurve(Path):
         self._cum = cur
         self.length = float(cur[-1])
         self.length_error_estimate = err
+        self._fit_table()
         # inverse table theta(s) on equal arc-length steps, for Hermite first guesses
+        empty = np.zeros(0)
+        self._inv = (empty, empty, empty, np.zeros(0, dtype=np.int64))
         sg = np.linspace(0.0, self.length, _INVERSE_TABLE + 1)
-        thg = self._newton(sg, self._guess(sg))
-        self._inv = (sg, thg, 1.0 / self.speed_theta(thg))
+        thg = self._invert(sg)
+        kg = np.clip(np.searchsorted(self._cum, sg, side="right") - 1, 0, len(self._edges) - 2)
+        self._inv = (sg, thg, 1.0 / self.speed_theta(thg), kg.astype(np.int64))
+
+    def _fit_table(self) -> None:
+        """Chebyshev series of the arc length inside every table interval.
+
+        In the interval ``[a, b]`` with ``x = 2 (theta - a) / (b - a) - 1``,
+        ``ds/dtheta`` is interpolated at ``_FIT_SAMPLES + 1`` Chebyshev points
+        and its series cut after the last coefficient above
+        :data:`SADDLE_FIT_CHOP` of the first (the mean speed). The arc length
+        from ``a`` is ``(theta - a) Q(x)``, ``Q`` = the integral of that series
+        from -1 to x divided by ``x + 1`` (exact polynomial division; the
+        mean speed over ``[a, theta]``). Each series is then compared with
+        the Gauss-Legendre quadrature from ``a`` at ``_FIT_CHECKS`` angles of
+        the interval (its end included); an interval whose series needs a
+        degree above ``_FIT_MAX_DEGREE`` or misses the quadrature by more than
+        :data:`SADDLE_FIT_RTOL` of the interval's arc length keeps the
+        quadrature (degree -1).
+        """
+        a, b = self._edges[:-1], self._edges[1:]
+        T, N = a.size, _FIT_SAMPLES
+        xc = np.cos(np.pi * np.arange(N + 1) / N)
+        f = self.speed_theta((a + b)[:, None] / 2.0 + ((b - a) / 2.0)[:, None] * xc)
+        c = dct(f, type=1, axis=1) / N  # Chebyshev coefficients of ds/dtheta
+        c[:, 0] /= 2.0
+        c[:, N] /= 2.0
+        big = np.abs(c) > SADDLE_FIT_CHOP * np.abs(c[:, :1])
+        deg = N - np.argmax(big[:, ::-1], axis=1)
+        deg = np.where(deg <= _FIT_MAX_DEGREE, deg, -1)
+        M = _FIT_MAX_DEGREE
+        cp = np.zeros((T, M + 3))  # c_0 .. c_M, then zeros
+        cp[:, :M + 1] = np.where(np.arange(M + 1) <= deg[:, None], c[:, :M + 1], 0.0)
+        # A(x) = int_{-1}^x sum c_j T_j: C_n = (c_{n-1} - c_{n+1}) / (2 n), A(-1) = 0
+        C = np.zeros((T, M + 3))
+        C[:, 2:M + 2] = (cp[:, 1:M + 1] - cp[:, 3:M + 3]) / (2.0 * np.arange(2, M + 2))
+        C[:, 1] = cp[:, 0] - cp[:, 2] / 2.0
+        C[:, 0] = -(C[:, 1:] @ (-1.0) ** np.arange(1, M + 3))
+        # A = (1 + x) D: C_n = d_n + (d_{n-1} + d_{n+1}) / 2 (n >= 2), C_1 = d_1 + d_0 + d_2 / 2
+        D = np.zeros((T, M + 3))
+        for j in range(M + 1, 1, -1):
+            D[:, j - 1] = 2.0 * (C[:, j] - D[:, j]) - D[:, j + 1]
+        D[:, 0] = C[:, 1] - D[:, 1] - D[:, 2] / 2.0
+        self._scale = 2.0 / (b - a)
+        self._coef = np.ascontiguousarray(D[:, :M + 1])
+        self._deg = deg.astype(np.int64)
+        # validation against the quadrature
+        u = np.concatenate([(1.0 - np.cos(np.pi * (np.arange(_FIT_CHECKS - 1) + 0.5) / (_FIT_CHECKS - 1))) / 2.0,
+                            [1.0]])
+        k = np.repeat(np.flatnonzero(deg >= 0), u.size)
+        th = np.minimum(a[k] + (b - a)[k] * np.tile(u, k.size // u.size), b[k])
+        miss = np.abs(self._fitted_arc(k, th) - self._quadrature_arc(k, th))
+        bad = np.zeros(T, dtype=bool)
+        np.logical_or.at(bad, k, miss > SADDLE_FIT_RTOL * np.diff(self._cum)[k])
+        self._deg[bad] = -1
 
     def s_of_theta(self, theta: Any) -> np.ndarray:
         """Arc length [m] from ``theta_start`` to ``theta`` (in [theta_start, theta_start + 2 pi]).
@@ -257,53 +333,82 @@ class SaddleCurve(Path):
         return out
 
     def _partial(self, k: np.ndarray, th: np.ndarray) -> np.ndarray:
+        return self._cum[k] + self._quadrature_arc(k, th)
+
+    def _quadrature_arc(self, k: np.ndarray, th: np.ndarray) -> np.ndarray:
+        """Arc length [m] from the table node ``k`` to ``th`` by Gauss-Legendre quadrature, shape (n,)."""
         a = self._edges[k]
         h = th - a
         x = a[:, None] + (h[:, None] / 2.0) * (1.0 + self._gx)
-        return self._cum[k] + (h / 2.0) * (self.speed_theta(x.ravel()).reshape(x.shape) @ self._gw)
+        return (h / 2.0) * (self.speed_theta(x.ravel()).reshape(x.shape) @ self._gw)
+
+    def _fitted_arc(self, k: np.ndarray, th: np.ndarray) -> np.ndarray:
+        """Arc length [m] from the table node ``k`` to ``th`` by the interval's
+        series (:meth:`_fit_table`; intervals with one only), shape (n,)."""
+        a = self._edges[k]
+        x = (th - a) * self._scale[k] - 1.0
+        coef = self._coef[k]
+        b1 = np.zeros_like(x)
+        b2 = np.zeros_like(x)
+        for j in range(int(np.max(self._deg[k], initial=0)), 0, -1):  # Clenshaw
+            b1, b2 = coef[:, j] + 2.0 * x * b1 - b2, b1
+        return (th - a) * (coef[:, 0] + x * b1 - b2)
 
     def theta_of_s(self, s: Any) -> np.ndarray:
-        """Angle theta [rad] at arc length ``s`` [m] (Newton on the quadrature).
+        """Angle theta [rad] at arc length ``s`` [m] (Newton on the arc length).
+
+        Parameters
+        ----------
+        s : array_like, shape (n,)
+            Arc lengths [m] in [0, length], in any order.
 
         Returns
         -------
         ndarray, shape (n,)
+            Angles in [theta_start, theta_start + 2 pi]; ``s_of_theta`` of
+            them is ``s`` to round-off (the Newton step after a residual
+            within the tolerance squares it).
         """
         ss, _ = self._prep(s)
+        return self._invert(ss)
+
+    def _invert(self, ss: np.ndarray) -> np.ndarray:
+        """theta_of_s of arc lengths ``ss`` (n,) [m] already within [0, length]."""
+        tol = max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
+        if _saddle_jit.AVAILABLE:  # the same steps, compiled
+            sg, thg, dg, kg = self._inv
+            return _saddle_jit.theta_of_s(
+                np.ascontiguousarray(ss, dtype=np.float64), self._edges, self._cum, self._scale,
+                self._coef, self._deg, sg, thg, dg, kg, self._gx, self._gw, self.branch_radius,
+                self.main_radius, self.offset, self._cot, self._sin, tol, ARC_INVERSION_MAX_ITER)
         out = np.empty_like(ss)
         for i in range(0, ss.size, _CHUNK):
             part = ss[i:i + _CHUNK]
-            out[i:i + _CHUNK] = self._newton(part, self._guess(part))
+            out[i:i + _CHUNK] = self._newton(part, tol)
         return out
 
-    def _guess(self, ss: np.ndarray) -> np.ndarray:
-        g = getattr(self, "_inv", None)
+    def _newton(self, ss: np.ndarray, tol: float) -> np.ndarray:
         k = np.clip(np.searchsorted(self._cum, ss, side="right") - 1, 0, len(self._edges) - 2)
         a, b = self._edges[k], self._edges[k + 1]
-        ca, cb = self._cum[k], self._cum[k + 1]
-        lin = a + (b - a) * (ss - ca) / (cb - ca)
-        if g is None:
-            return lin
-        sg, thg, dg = g
-        h = sg[1] - sg[0]
-        j = np.clip((ss / h).astype(np.int64), 0, len(sg) - 2)
-        u = (ss - sg[j]) / h
-        h00, h10 = (1 + 2 * u) * (1 - u) ** 2, u * (1 - u) ** 2
-        h01, h11 = u * u * (3 - 2 * u), u * u * (u - 1)
-        return h00 * thg[j] + h10 * h * dg[j] + h01 * thg[j + 1] + h11 * h * dg[j + 1]
-
-    def _newton(self, ss: np.ndarray, th: np.ndarray) -> np.ndarray:
-        k = np.clip(np.searchsorted(self._cum, ss, side="right") - 1, 0, len(self._edges) - 2)
-        tol = max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
-        if _saddle_jit.AVAILABLE:  # the same steps, compiled
-            return _saddle_jit.theta_newton(
-                np.ascontiguousarray(ss, dtype=np.float64), np.ascontiguousarray(th, dtype=np.float64),
-                k.astype(np.int64), self._edges, self._cum, self._gx, self._gw, self.branch_radius,
-                self.main_radius, self.offset, self._cot, self._sin, tol, ARC_INVERSION_MAX_ITER)
-        a, b = self._edges[k], self._edges[k + 1]
+        sg, thg, dg, _ = self._inv
+        if sg.size > 1:  # cubic Hermite on the inverse table
+            h = sg[1] - sg[0]
+            j = np.clip((ss / h).astype(np.int64), 0, len(sg) - 2)
+            u = (ss - sg[j]) / h
+            h00, h10 = (1 + 2 * u) * (1 - u) ** 2, u * (1 - u) ** 2
+            h01, h11 = u * u * (3 - 2 * u), u * u * (u - 1)
+            th = h00 * thg[j] + h10 * h * dg[j] + h01 * thg[j + 1] + h11 * h * dg[j + 1]
+        else:  # linear in the table interval (while the inverse table is built)
+            ca, cb = self._cum[k], self._cum[k + 1]
+            th = a + (b - a) * (ss - ca) / (cb - ca)
         th = np.clip(th, a, b)
+        fit = self._deg[k] >= 0
+        kf, kq = k[fit], k[~fit]
+        res = np.empty_like(ss)
         for _ in range(ARC_INVERSION_MAX_ITER):
-            res = self._partial(k, th) - ss
+            res[fit] = self._cum[kf] + self._fitted_arc(kf, th[fit]) - ss[fit]
+            if kq.size:
+                res[~fit] = self._cum[kq] + self._quadrature_arc(kq, th[~fit]) - ss[~fit]
             th = np.clip(th - res / self.speed_theta(th), a, b)
             # residual below NEWTON_LAST_STEP * r: the step just taken squares
             # it (quadratic convergence), far below ARC_INVERSION_RTOL
@@ -364,17 +469,21 @@ class SaddleCurve(Path):
         """:meth:`machine_axes` at the angles ``theta`` [rad] (n,) instead of arc lengths."""
         th = np.asarray(theta, dtype=float)
         z = self.z_derivatives(th)
+        out = np.empty((2, 4) + th.shape)  # written in place: no stacked copies
         r2 = self.branch_radius ** 2
         sig = np.sqrt(r2 + z[1] ** 2)
         sig1 = z[1] * z[2] / sig
         sig2 = (z[2] ** 2 + z[1] * z[3] - sig1 ** 2) / sig
-        t1 = 1.0 / sig
-        t2 = -sig1 / sig ** 3
-        t3 = (-sig2 / sig ** 3 + 3.0 * sig1 ** 2 / sig ** 4) / sig
-        z1 = z[1] * t1
-        z2 = z[2] * t1 ** 2 + z[1] * t2
-        z3 = z[3] * t1 ** 3 + 3.0 * z[2] * t1 * t2 + z[1] * t3
-        return np.stack([np.stack([th, t1, t2, t3]), np.stack([z[0], z1, z2, z3])])
+        sig3 = sig ** 3
+        out[0, 0] = th
+        t1 = np.divide(1.0, sig, out=out[0, 1])
+        t2 = np.divide(-sig1, sig3, out=out[0, 2])
+        t3 = np.divide(-sig2 / sig3 + 3.0 * sig1 ** 2 / sig ** 4, sig, out=out[0, 3])
+        out[1, 0] = z[0]
+        np.multiply(z[1], t1, out=out[1, 1])  # dZ/ds
+        np.add(z[2] * t1 ** 2, z[1] * t2, out=out[1, 2])
+        np.add(z[3] * t1 ** 3 + 3.0 * z[2] * t1 * t2, z[1] * t3, out=out[1, 3])
+        return out
 
     def to_dict(self) -> dict:
         return {
