@@ -444,3 +444,95 @@ def test_closed_form_cruise_family_of_symmetric_limits():
         assert q.phase_durations == pytest.approx(tuple(ph[:n, 0]), rel=1e-12, abs=1e-12 * T)
         assert q.family.startswith("fixed") and "cruise" in q.family
     assert n_found >= 0.95 * n_req and n_req >= 0.8 * N_CLOSED
+
+
+#: Fixed durations the shape families and the time-reversed search miss (from
+#: ``benchmarks/state_step2_study.py --cases 3000 --seed 20 --seeds 40``): start,
+#: goal, limits, duration and the state between the two halves found.
+SPLIT = [
+    ((3.7576421700115556, 3.4827378955439263, -1.285837259795132),
+     (3.7576421700115556, -5.611217688122037, -3.8458311536005083),
+     (5.611217688122037, 3.8458311536005083, 0.9783522813574893, 13.386484013821715, 3.1493946945042555),
+     3.58299250242889, 'split_at_velocity_extremum'),
+    ((-0.04557438395698044, 0.4568264452424138, -0.03787361761037154),
+     (0.35388565288298707, -0.7788523956030566, -0.25919661137707256),
+     (0.7788523956030566, 0.8652032049723586, 0.5194326365567639, 0.37020709397327606, 0.16467706133337606),
+     4.761820298833784, 'split_at_reversal'),
+    ((-2.0211022739474624, 5.2472361838398545, -0.1045323440631481),
+     (6.400410422009994, -5.2472361838398545, -0.45652979174020203),
+     (5.2472361838398545, 0.6503180478214451, 0.1894344249613898, 0.5350384773081455, 0.22230724468163515),
+     19.07019091657255, 'split_at_reversal'),
+    ((-2.4146927006313703, 1.1814264193488113, -0.37108552578093396),
+     (-2.4146927006313703, -2.4266244189859156, -1.648360890106777),
+     (2.6157537032032137, 2.9403798000020274, 0.8704058612159771, 2.2819732525505954, 0.37057493451106366),
+     4.441135942983648, 'split_at_reversal'),
+    ((0.9609667634999397, -1.1433398078180743, 0.04051314985678465),
+     (-2.9555785440634237, 0.887215680078552, 0.10151356395202647),
+     (1.1468558296030626, 0.7006707274388636, 0.5459890207355447, 0.1635097233147258, 0.10900295083282749),
+     10.11648295356341, 'split_at_reversal'),
+    ((-0.5637679866725168, -0.3839408035948737, 0.19809901191056511),
+     (-0.5637679866725168, 0.656926830906539, 0.3148309860506993),
+     (0.656926830906539, 0.9852792847760087, 1.002632791158017, 0.36414525170815465, 0.38890653801709246),
+     2.9238578312863353, 'split_at_reversal'),
+    ((0.6250464482956484, -0.8394696828424577, 0.2014401203913498),
+     (0.6250464482956484, 0.8394696828424577, 0.015159247101582464),
+     (0.8394696828424577, 0.3602470753091162, 0.17654069298348832, 0.23916750103893622, 0.38111736213779174),
+     7.3017169253622365, 'split_at_reversal'),
+    ((-0.04869001028446794, -0.019879929187501796, 0.01353881373384062),
+     (-0.007248092382059743, 0.08450917776225578, 0.0911863764067133),
+     (0.12065349033813619, 0.15144779098653247, 0.11128878660762728, 0.20204535623013045, 0.02952898432634326),
+     2.0750936456373172, 'split_at_reversal'),
+    ((2.371755561560229, -1.1070913899688444, 4.531042932017537),
+     (11.073489119734852, 4.05867995686406, 0.1601564475179121),
+     (5.42938268644296, 5.435916474251384, 2.027630671460224, 9.492394088208904, 3.670467396164427),
+     3.40776767271941, 'split_at_velocity_extremum'),
+    ((-1.1190921082463732, -0.7899774647994787, 0.006921084482070048),
+     (-1.1190919859235027, 1.443760685420434, 0.6569377980549636),
+     (1.451785612808186, 7.164323443448838, 0.11355399838957037, 7.957824956657893, 0.23970956717252273),
+     5.002207618354767, 'split_at_reversal'),
+    ((-1.6702867945232325, 0.7626636182625894, -0.16563659315824272),
+     (-1.6702996260978171, -0.5716811067502934, -0.015106085624514334),
+     (2.102108888777601, 0.17195556530247394, 0.6262720366175643, 0.38771412101162783, 0.12781662207246336),
+     6.534875727783268, 'split_at_reversal'),
+]
+
+
+@pytest.mark.parametrize("s, g, L, T, where", SPLIT)
+def test_fixed_durations_split_in_two_halves(s, g, L, T, where):
+    """Where every family misses a duration, the profile is found as two
+    halves through a velocity reversal ``(p, 0, a)`` or a velocity extremum
+    ``(p, v, 0)``: exactly the duration, within the limits by the independent
+    exact check, and passing that state at a phase boundary."""
+    lim = AxisLimits(*L)
+    q = plan_state_to_state(s, g, lim, duration=T)
+    assert q.duration == pytest.approx(T, rel=1e-12)
+    assert q.family == f"fixed {where}", q.family
+    _check(q, lim)
+    st = q.sample(np.cumsum(q.phase_durations)[:-1])
+    if where == "split_at_reversal":  # at rest, with an acceleration within both legs
+        at = np.abs(st.velocity) <= 1e-9 * lim.v_max
+        assert at.any()
+        assert (np.abs(st.acceleration[at]) <= min(lim.a_max, lim.a_max_decel)).all()
+    else:  # no acceleration, the velocity within v_max
+        at = np.abs(st.acceleration) <= 1e-9 * max(lim.a_max, lim.a_max_decel)
+        assert at.any()
+        assert (np.abs(st.velocity[at]) <= lim.v_max).all()
+
+
+def test_split_fixed_durations_in_a_batch():
+    """The batch planner finds the same profiles as the one-move planner."""
+    from trajkit.profiles.state_batch import plan_state_moves
+
+    starts = np.array([c[0] for c in SPLIT])
+    goals = np.array([c[1] for c in SPLIT])
+    L = np.array([c[2] for c in SPLIT]).T
+    T = np.array([c[3] for c in SPLIT])
+    b = plan_state_moves(starts, goals, *L, durations=T)
+    np.testing.assert_allclose(b.duration, T, rtol=1e-12)
+    for i, (s, g, lims, dur, where) in enumerate(SPLIT):
+        q = b.profile(i)
+        one = plan_state_to_state(s, g, AxisLimits(*lims), duration=dur)
+        assert q.family == one.family == f"fixed {where}"
+        assert q.min_duration == pytest.approx(one.min_duration, rel=1e-12)
+        np.testing.assert_allclose(q.phase_durations, one.phase_durations, rtol=1e-12, atol=1e-12 * dur)
+        _check(q, AxisLimits(*lims))

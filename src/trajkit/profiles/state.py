@@ -34,6 +34,7 @@ from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
 from . import _kernel as K
 from ._brake import inside
+from ._check import check as _check_table
 from ._compile import ENABLED as _COMPILED
 from ._range import (
     DISTANCE_ABS_MIN,
@@ -513,6 +514,12 @@ _OUT_PH = K.OUT_PH
 
 _FAMILIES: dict[int, str] = {}
 
+#: Shape codes of a fixed-duration profile made of two halves through a velocity
+#: reversal or a velocity extremum (:func:`_split_fixed`; above every code of
+#: the kernel).
+SHAPE_SPLIT = 1024
+SHAPE_SPLIT_EXTREMUM = 1025
+
 
 def _family(code: float) -> str:
     """The shape name of a kernel shape code (see :attr:`StateProfile.family`)."""
@@ -524,6 +531,10 @@ def _family(code: float) -> str:
 
 
 def _family_name(c: int) -> str:
+    if c == SHAPE_SPLIT:
+        return "fixed split_at_reversal"
+    if c == SHAPE_SPLIT_EXTREMUM:
+        return "fixed split_at_velocity_extremum"
     if c >= K.SHAPE_REVERSED:
         return _family_name(c - K.SHAPE_REVERSED).replace("fixed ", "fixed reversed ", 1)
     fixed = c >= 32
@@ -552,12 +563,229 @@ def _fail(ws, s, g, limits, what):
         # the fixed-duration gap of asymmetric limits (docs/state-profiles.md)
         raise InfeasibleError(
             f"no profile found {what}{name} from state {s!r} to {g!r} within the limits: with "
-            "separate accel/decel limits the fixed-duration search misses some durations of "
-            "profiles that reverse (it found profiles elsewhere between the same step-1 "
-            "durations); a longer duration may be feasible")
+            "separate accel/decel limits the fixed-duration search (the shape families, then "
+            "two halves through a velocity reversal or extremum) misses a few durations of "
+            "profiles that reverse; a longer duration may be feasible")
     raise InfeasibleError(
         f"no profile found {what}{name} from state {s!r} to {g!r} within the limits "
         "(please report this input)")
+
+
+# ------------------------------------------- fixed duration: split at a reversal
+#: The search for the state ``M`` between two halves (:func:`_split_at`): positions
+#: and values of the free coordinate on its first grid, and positions closer to both ends (``SPLIT_NEAR`` halvings
+#: of the range); finer grids around its best ``SPLIT_STARTS`` points
+#: (``SPLIT_ZOOM`` times); a Nelder-Mead search of at most ``SPLIT_EVALS``
+#: evaluations from each of them; ``SPLIT_BISECT`` bisection steps; at most
+#: ``SPLIT_TRIES`` durations tried per reversal; and ``SPLIT_BUDGET`` minimum-time
+#: plans in all (about 0.3 s: the search runs only where every shape family has
+#: missed the duration).
+SPLIT_POSITIONS = 41
+SPLIT_VALUES = 17
+SPLIT_NEAR = 12
+SPLIT_STARTS = 4
+SPLIT_ZOOM = 3
+SPLIT_EVALS = 300
+SPLIT_BISECT = 60
+SPLIT_TRIES = 3
+SPLIT_BUDGET = 6000
+
+#: ``M``'s free coordinate stays this fraction inside its bound: the smaller of
+#: the two legs' acceleration limits at a reversal (both legs meet at ``v = 0``),
+#: ``v_max`` at an extremum.
+SPLIT_MARGIN = 1e-3
+
+
+def _min_or_inf(s, g, limits: AxisLimits) -> float:
+    """Minimum duration [s] of a move from ``s`` to ``g`` (inf where there is none)."""
+    ws = _run(s, g, limits, K.TASK_MIN)
+    return float(ws[K.OUT_TMIN]) if int(ws[K.OUT_STATUS]) == K.ST_OK else math.inf
+
+
+def _durations_or_none(s, g, limits: AxisLimits):
+    """``(minimum, blocked intervals)`` [s] of a move from ``s`` to ``g``, or None."""
+    ws = _run(s, g, limits, K.TASK_BLOCK)
+    if int(ws[K.OUT_STATUS]) != K.ST_OK:
+        return None
+    nb = int(ws[K.OUT_NBLK])
+    return float(ws[K.OUT_TMIN]), [(float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1]))
+                                   for i in range(nb)]
+
+
+def _fixed_or_none(s, g, limits: AxisLimits, T: float):
+    """The kernel's profile of duration ``T`` from ``s`` to ``g``, or None."""
+    ws = _run(s, g, limits, K.TASK_FIXED, T)
+    if int(ws[K.OUT_STATUS]) != K.ST_OK:
+        return None
+    n = int(ws[K.OUT_N])
+    return (ws[K.OUT_PH:K.OUT_PH + 3 * n].reshape(n, 3).copy(), int(ws[K.OUT_NB]))
+
+
+def _stop_reach(v: float, a: float, A: float, J: float) -> float:
+    """A bound on the distance [unit] an axis at ``(v, a)`` covers before it can
+    be at rest (acceleration ``A``, jerk ``J``: the smaller of both legs)."""
+    v_top = abs(v) + 0.5 * a * a / J
+    return v_top * (v_top / A + 2.0 * A / J + abs(a) / J)
+
+
+def _split_fixed(s: tuple, g: tuple, limits: AxisLimits, T: float):
+    """A profile of exactly ``T`` [s] as two halves where every shape family
+    missed it (:func:`_split_at`, through a velocity reversal, then through a
+    velocity extremum): ``(table (n, 3), brake phases, shape code)``, or None."""
+    for code, extremum in ((SHAPE_SPLIT, False), (SHAPE_SPLIT_EXTREMUM, True)):
+        out = _split_at(s, g, limits, T, extremum)
+        if out is not None:
+            return out[0], out[1], code
+    return None
+
+
+def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
+    """A phase table of exactly ``T`` [s] from ``s`` to ``g`` made of two profiles
+    of the kernel (``s`` to ``M`` and ``M`` to ``g``, each of a fixed duration)
+    through a velocity reversal ``M = (p_m, 0, a_m)``, or with ``extremum``
+    through a velocity extremum ``M = (p_m, v_m, 0)``: ``(table (n, 3), brake
+    phases)``, or None.
+
+    Any profile that passes such a state is two such halves, each at least as
+    long as its own minimum: ``M`` is searched for where the two minima add up
+    to at most ``T`` (a grid of positions and of the free coordinate, finer
+    grids around its best points, a Nelder-Mead search from them on the sum,
+    and a bisection towards where the sum is ``T``), and ``T`` is shared
+    between the halves' feasible durations (minimum and blocked intervals of
+    each). The table found is checked exactly (after any brake pre-phase)
+    before it is returned.
+    """
+    from scipy.optimize import minimize
+
+    p0, v0, a0 = s
+    pf, vf, af = g
+    A = min(limits.a_max, limits.a_max_decel)
+    J = min(limits.j_max, limits.j_max_decel)
+    # the free coordinate of M: its acceleration (at v = 0), or with ``extremum``
+    # its velocity (at a = 0)
+    c_top = (limits.v_max if extremum else A) * (1.0 - SPLIT_MARGIN)
+    # the reversal lies within reach of both ends: beyond the stops, and no
+    # farther from either end than the axis can travel in T
+    reach = abs(pf - p0) + _stop_reach(v0, a0, A, J) + _stop_reach(vf, af, A, J)
+    travel = T * max(limits.v_max, abs(v0) + 0.5 * a0 * a0 / J)
+    lo = max(min(p0, pf) - reach, max(p0, pf) - travel)
+    hi = min(max(p0, pf) + reach, min(p0, pf) + travel)
+    if not (math.isfinite(lo) and math.isfinite(hi) and hi > lo):
+        return None
+
+    def state(z) -> tuple | None:
+        c = float(min(max(z[1], -c_top), c_top))
+        M = (float(min(max(z[0], lo), hi)), c, 0.0) if extremum else (float(min(max(z[0], lo), hi)), 0.0, c)
+        return M if _goal_violation(M[1], M[2], limits) is None else None
+
+    spent = [0]
+
+    def total(z) -> float:
+        M = state(z)
+        if M is None or spent[0] >= SPLIT_BUDGET:
+            return math.inf
+        spent[0] += 1
+        t1 = _min_or_inf(s, M, limits)
+        if not t1 < T:
+            return math.inf
+        spent[0] += 1
+        return t1 + _min_or_inf(M, g, limits)
+
+    dp = (hi - lo) / (SPLIT_POSITIONS - 1)
+    dc = 2.0 * c_top / (SPLIT_VALUES - 1)
+    # a grid over the range, denser towards both ends (a reversal right after
+    # the start or just before the goal)
+    near = (hi - lo) * 0.5 ** np.arange(1, SPLIT_NEAR + 1)
+    pos = np.concatenate([np.linspace(lo, hi, SPLIT_POSITIONS), p0 - near, p0 + near, pf - near,
+                          pf + near])
+    pos = pos[(pos >= lo) & (pos <= hi)]
+    grid = sorted((total((pm, cm)), pm, cm) for pm in pos
+                  for cm in np.linspace(-c_top, c_top, SPLIT_VALUES))
+    for _ in range(SPLIT_ZOOM):  # finer grids around the best points
+        if not (math.isfinite(grid[0][0]) and grid[0][0] > T):
+            break
+        dp, dc = dp / 5.0, dc / 5.0
+        grid = sorted(grid[:SPLIT_STARTS] + [
+            (total((pm + i * dp, cm + k * dc)), pm + i * dp, cm + k * dc)
+            for _f, pm, cm in grid[:SPLIT_STARTS] for i in range(-5, 6) for k in range(-5, 6)
+            if i or k])
+    k1 = 0.0 if limits.j_max == math.inf else 1.0 / limits.j_max
+    k2 = 0.0 if limits.j_max_decel == math.inf else 1.0 / limits.j_max_decel
+
+    def joined(M):
+        """The two halves through ``M`` with ``T`` shared between their feasible
+        durations (minimum and blocked intervals of each), checked; or None."""
+        d1 = _durations_or_none(s, M, limits)
+        d2 = _durations_or_none(M, g, limits) if d1 is not None else None
+        if d1 is None or d2 is None:
+            return None
+        (t1, blk1), (t2, blk2) = d1, d2
+        lo_, hi_ = t1, T - t2
+        if not hi_ >= lo_ - K.DURATION_RTOL * T:
+            return None
+        free = [(lo_, max(hi_, lo_))]
+        for a, b in list(blk1) + [(T - b, T - a) for a, b in blk2]:
+            free = [piece for c, d in free for piece in ((c, min(d, a)), (max(c, b), d))
+                    if piece[1] >= piece[0]]
+        for c, d in sorted(free, key=lambda iv: iv[0] - iv[1])[:SPLIT_TRIES]:
+            T1 = 0.5 * (c + d)
+            first = _fixed_or_none(s, M, limits, T1)
+            if first is None:
+                continue
+            second = _fixed_or_none(M, g, limits, T - T1)
+            if second is None:
+                continue
+            table = np.concatenate([first[0], second[0]])
+            if abs(float(np.sum(table[:, 0])) - T) > K.DURATION_RTOL * T:
+                continue
+            nb = first[1]
+            q = s
+            for dt, j, a in table[:nb]:  # the state after the brake pre-phase
+                q = (q[0] + dt * (q[1] + dt * (0.5 * a + dt * j / 6.0)),
+                     q[1] + dt * (a + 0.5 * dt * j), a + dt * j)
+            if _check_table(np.ascontiguousarray(table[nb:]), table.shape[0] - nb, q[0], q[1],
+                            q[2], pf, vf, af, limits.v_max, limits.a_max, k1,
+                            limits.a_max_decel, k2):
+                return table, nb
+        return None
+
+    for f, pm, cm in grid[:SPLIT_STARTS]:
+        if not math.isfinite(f):
+            break
+        z = (pm, cm)
+        if f > T:
+            with np.errstate(invalid="ignore"):  # (inf - inf between infeasible points)
+                res = minimize(total, z, method="Nelder-Mead",
+                               options={"maxfev": SPLIT_EVALS, "xatol": 1e-12 * (hi - lo + c_top),
+                                        "fatol": 1e-12 * T})
+            if not res.fun <= T:
+                continue
+            z = (float(res.x[0]), float(res.x[1]))
+        M = state(z)
+        if M is None:
+            continue
+        out = joined(M)
+        if out is None:
+            # a half may have no profile longer than its minimum: move the
+            # reversal (bisection in position, then in acceleration) to where
+            # the two minima add up to T
+            for side in ((hi, z[1]), (lo, z[1]), (z[0], c_top), (z[0], -c_top)):
+                if not total(side) > T:
+                    continue
+                w_in, w_out = 0.0, 1.0
+                for _ in range(SPLIT_BISECT):
+                    w = 0.5 * (w_in + w_out)
+                    if total((z[0] + w * (side[0] - z[0]), z[1] + w * (side[1] - z[1]))) <= T:
+                        w_in = w
+                    else:
+                        w_out = w
+                M2 = state((z[0] + w_in * (side[0] - z[0]), z[1] + w_in * (side[1] - z[1])))
+                out = None if M2 is None else joined(M2)
+                if out is not None:
+                    break
+        if out is not None:
+            return out
+    return None
 
 
 def _check_range(prof: StateProfile, limits: AxisLimits) -> StateProfile:
@@ -730,6 +958,15 @@ def plan_state_to_state(
                 f"duration {T!r} s{name} lies in a blocked interval ({lo!r}, {hi!r}) s of the "
                 f"move from state {s!r} to {g!r}: no profile of that duration keeps the limits; "
                 f"the minimum is {tmin!r} s", minimum=tmin, interval=(lo, hi))
+        if st == K.ST_NONE and T is not None:
+            # a profile the shape families miss: two halves
+            tmin = float(ws[K.OUT_TMIN])
+            split = _split_fixed(s, g, limits, T)
+            if split is not None:
+                table, nb, code = split
+                return _check_range(_from_table(s, g, table.ravel().tolist(), table.shape[0], nb,
+                                                tmin, _family(code), limits), limits)
+            ws = _run(s, g, limits, K.TASK_FIXED, T)  # (the status and minimum for the message)
         _fail(ws, s, g, limits, "" if T is None else f"of duration {T!r} s")
     n = int(ws[K.OUT_N])
     flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()

@@ -22,7 +22,7 @@ from . import _batch_states as B
 from . import _kernel as K
 from . import _range as R
 from .batch import _float_array, _limit_array
-from .state import StateProfile, _family, _from_table
+from .state import StateProfile, _family, _from_table, _split_fixed
 
 __all__ = ["StateMoveBatch", "plan_state_moves", "PHASES_MIN"]
 
@@ -231,6 +231,22 @@ def plan_state_moves(
             ph2[:, :PHASES_MIN] = ph
             ph2[wide] = wph[:, :ph2.shape[1]]
             ph = ph2
+    if T is not None:
+        # durations every shape family misses: two halves, as plan_state_to_state
+        # finds them
+        for i in np.flatnonzero(status == K.ST_NONE).tolist():
+            lim = AxisLimits(float(vm[i]), float(a1[i]), float(j1[i]), float(a2[i]), float(j2[i]))
+            split = _split_fixed(tuple(float(x) for x in s[i]), tuple(float(x) for x in g[i]),
+                                 lim, float(T[i]))
+            if split is None:
+                continue
+            table, nb, code = split
+            if table.shape[0] > ph.shape[1]:
+                ph = np.concatenate([ph, np.zeros((n, table.shape[0] - ph.shape[1], 3))], axis=1)
+            ph[i] = 0.0
+            ph[i, :table.shape[0]] = table
+            status[i], dur[i], nph[i], nbr[i], shape[i] = (K.ST_OK, math.fsum(table[:, 0]),
+                                                           table.shape[0], nb, code)
     bad = np.flatnonzero(status != K.ST_OK)
     if bad.size:
         out = np.flatnonzero(status == B.ST_RANGE)
