@@ -13,6 +13,7 @@ from scipy.integrate import quad
 from trajkit import AxisLimits
 from trajkit.errors import InvalidInputError
 from trajkit.interpolation import SaddleMachine, plan_saddle
+from trajkit.interpolation.machine import axis_states, check_axes, check_times
 from trajkit.paths import SaddleCurve, chord_deviations
 from trajkit.paths._tolerances import SADDLE_LENGTH_RTOL
 
@@ -348,3 +349,75 @@ def test_theta_of_s_series_agrees_with_the_quadrature_newton():
         c._deg = np.full_like(c._deg, -1)
         ref = c.theta_of_s(s)
         assert np.abs(got - ref).max() <= 4 * np.spacing(2 * math.pi)
+
+
+BENCH_SEAMS = ((0.11, 0.1, 90, 0.0, 0.0), (0.2, 0.1, 90, 0.0, 0.0), (0.15, 0.1, 60, 0.0, 0.0),
+               (0.16, 0.1, 90, 0.04, 0.0), (0.3, 0.2, 120, -0.05, 2.0))
+
+
+def _bench_plan(R, r, ang, off, th0):
+    d2r = math.pi / 180
+    m = SaddleMachine(AxisLimits(180 * d2r, 720 * d2r, 7200 * d2r, name="theta"),
+                      AxisLimits(0.04, 1.0, 10.0, name="z_axis"))
+    c = SaddleCurve(R, r, math.radians(ang), off, th0)
+    return plan_saddle(c, 0.05, 0.5, 5.0, m, 1e-5, 0.001)
+
+
+def _reference_peaks(curve, fp, t):
+    """The straightforward check: every axis state at the times t, then the largest magnitudes (2, 3)."""
+    st = axis_states(curve, fp.sample(t, points=False))
+    return np.max(np.abs(st[:, 1:]), axis=2)
+
+
+@pytest.mark.parametrize("seam", BENCH_SEAMS)
+def test_axis_check_peaks_equal_the_axis_states_on_the_check_times(seam):
+    """check_axes (one pass with the compiled kernels) checks exactly the times of check_times
+    (the grid, every piece boundary and the float before it, no repeats) and finds the peaks of
+    axis_states there to a few ulps, at the planning period, a coarse one (the 1000-point floor)
+    and a fine one."""
+    plan = _bench_plan(*seam)
+    c, fp, m = plan.curve, plan.feed_plan, plan.machine
+    for period in (0.001, 0.1, 0.0001):
+        chk = check_axes(c, fp, m, period)
+        t = check_times(fp, period)
+        assert np.all(np.diff(t) > 0)
+        assert set(fp.motion.t) <= set(t)
+        assert set(np.nextafter(fp.motion.t[1:], -np.inf)) <= set(t)
+        assert chk.n_points == t.size
+        ref = _reference_peaks(c, fp, t)
+        assert np.all(np.abs(chk.peaks - ref) <= 4 * np.spacing(ref)), (chk.peaks - ref) / np.spacing(ref)
+        np.testing.assert_array_equal(chk.ratio, chk.peaks / m.limits_array())
+    assert plan.check.n_points == check_times(fp, 0.001).size
+
+
+@pytest.mark.parametrize("seam", BENCH_SEAMS[::2])
+def test_one_pass_axis_kernel_matches_axis_states(seam):
+    """The one-pass kernel itself (compiled, or its Python source under TRAJKIT_NO_JIT) on small
+    lists with repeats and times outside the motion (the start and the end at rest): the
+    distinct times counted, the peaks of axis_states there to a few ulps; an unsorted list is
+    refused (-1)."""
+    from trajkit.interpolation.machine import _check_lists
+    from trajkit.paths import _saddle_jit
+
+    plan = _bench_plan(*seam)
+    c, fp = plan.curve, plan.feed_plan
+    mo = fp.motion
+    T = fp.duration
+    _, bounds = _check_lists(fp, 0.001)
+    rng = np.random.default_rng(17)
+    grid = np.sort(np.concatenate([np.linspace(-0.05, T + 0.05, 301), rng.choice(bounds, 20),
+                                   rng.uniform(0.0, T, 200)]))
+    st = mo.state[:-1]
+
+    def run(g, b):
+        peaks = np.full((2, 3), np.nan)
+        n = _saddle_jit.axis_peaks(g, b, mo.t, st[:, 0].copy(), st[:, 1].copy(), st[:, 2].copy(), mo.jerk,
+                                   mo.s0, mo.s_end, c.length, *c._inversion_args(), c.branch_radius ** 2, peaks)
+        return n, peaks
+
+    n, peaks = run(grid, bounds)
+    t = np.unique(np.concatenate([grid, bounds]))
+    assert n == t.size
+    ref = _reference_peaks(c, fp, t)
+    assert np.all(np.abs(peaks - ref) <= 4 * np.spacing(ref)), (peaks - ref) / np.spacing(ref)
+    assert run(grid[::-1].copy(), bounds)[0] == -1

@@ -28,6 +28,7 @@ from .._sampling import MAX_SAMPLES
 from .._validate import check_positive
 from ..errors import InfeasibleError, InvalidInputError
 from ..limits import AxisLimits
+from ..paths import _saddle_jit
 from ..paths.saddle import SaddleCurve
 from .feed import FeedPlan, FeedSample, _check_period, plan_feed, setpoint_times
 
@@ -196,21 +197,78 @@ def axis_states(curve: SaddleCurve, fs: FeedSample, theta: np.ndarray | None = N
     return out
 
 
+def check_times(feed_plan: FeedPlan, period: float) -> np.ndarray:
+    """The times [s] where :func:`check_axes` verifies the limits, shape (n,), increasing.
+
+    A uniform grid of ``CHECK_PER_PERIOD`` points per period over the
+    duration (at least 1000, at most :data:`CHECK_MAX_POINTS`), every
+    constant-jerk piece boundary of the feed and the float just before each
+    (the last state of the piece that ends there), without repeats.
+
+    Parameters
+    ----------
+    feed_plan : FeedPlan
+    period : float
+        Control period [s].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Times [s] in ``[0, duration]``.
+    """
+    grid, bounds = _check_lists(feed_plan, period)
+    return np.unique(np.concatenate([grid, bounds]))
+
+
+def _check_lists(feed_plan: FeedPlan, period: float) -> tuple[np.ndarray, np.ndarray]:
+    """The uniform grid (n,) [s] and the sorted piece boundaries with the float before each (2 k + 2,) [s]."""
+    T = feed_plan.duration
+    n = int(min(CHECK_MAX_POINTS, max(1000, math.ceil(T / period) * CHECK_PER_PERIOD)))
+    tb = feed_plan.motion.t
+    return np.linspace(0.0, T, n), np.sort(np.concatenate([tb, np.nextafter(tb, -np.inf).clip(0.0)]))
+
+
 def check_axes(plan_curve: SaddleCurve, feed_plan: FeedPlan, machine: SaddleMachine,
                period: float) -> AxisCheck:
     """Verify the axis limits on a grid of ``CHECK_PER_PERIOD`` points per period.
 
     Every constant-jerk piece boundary of the feed is included (where the
     tangential acceleration and jerk change), the values are exact there
-    (analytic derivatives, no finite differences).
+    (analytic derivatives, no finite differences); the times are
+    :func:`check_times`. With the compiled kernels the feed is sampled, the
+    arc lengths inverted and the axis states reduced to their peaks in one
+    pass over the sorted times (no state arrays); otherwise, and for a feed
+    along another path or without pieces, the peaks of :func:`axis_states`
+    there (the same values to a few ulps).
+
+    Parameters
+    ----------
+    plan_curve : SaddleCurve
+    feed_plan : FeedPlan
+        The feed along ``plan_curve``.
+    machine : SaddleMachine
+    period : float
+        Control period [s].
+
+    Returns
+    -------
+    AxisCheck
     """
-    T = feed_plan.duration
-    n = int(min(CHECK_MAX_POINTS, max(1000, math.ceil(T / period) * CHECK_PER_PERIOD)))
-    t = np.unique(np.concatenate([np.linspace(0.0, T, n), feed_plan.motion.t,
-                                  np.nextafter(feed_plan.motion.t, -np.inf).clip(0.0)]))
+    lim = machine.limits_array()
+    grid, bounds = _check_lists(feed_plan, period)
+    m = feed_plan.motion
+    if _saddle_jit.AVAILABLE and m.jerk.size and feed_plan.path is plan_curve:
+        st = m.state
+        peaks = np.empty((2, 3))
+        count = _saddle_jit.axis_peaks(
+            grid, bounds, m.t, np.ascontiguousarray(st[:-1, 0]), np.ascontiguousarray(st[:-1, 1]),
+            np.ascontiguousarray(st[:-1, 2]), m.jerk, m.s0, m.s_end, plan_curve.length,
+            *plan_curve._inversion_args(), plan_curve.branch_radius ** 2, peaks)
+        if count > 0:
+            return AxisCheck(peaks, lim, peaks / lim, int(count))
+    t = np.unique(np.concatenate([grid, bounds]))
     st = axis_states(plan_curve, feed_plan.sample(t, points=False))
     peaks = np.max(np.abs(st[:, 1:]), axis=2)
-    lim = machine.limits_array()
     return AxisCheck(peaks, lim, peaks / lim, int(t.size))
 
 

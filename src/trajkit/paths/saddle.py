@@ -374,18 +374,27 @@ class SaddleCurve(Path):
 
     def _invert(self, ss: np.ndarray) -> np.ndarray:
         """theta_of_s of arc lengths ``ss`` (n,) [m] already within [0, length]."""
-        tol = max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
         if _saddle_jit.AVAILABLE:  # the same steps, compiled
-            sg, thg, dg, kg = self._inv
-            return _saddle_jit.theta_of_s(
-                np.ascontiguousarray(ss, dtype=np.float64), self._edges, self._cum, self._scale,
-                self._coef, self._deg, sg, thg, dg, kg, self._gx, self._gw, self.branch_radius,
-                self.main_radius, self.offset, self._cot, self._sin, tol, ARC_INVERSION_MAX_ITER)
+            return _saddle_jit.theta_of_s(np.ascontiguousarray(ss, dtype=np.float64), *self._inversion_args())
+        tol = self._inversion_tol()
         out = np.empty_like(ss)
         for i in range(0, ss.size, _CHUNK):
             part = ss[i:i + _CHUNK]
             out[i:i + _CHUNK] = self._newton(part, tol)
         return out
+
+    def _inversion_tol(self) -> float:
+        """Residual [m] after which the arc-length inversion takes its last Newton step."""
+        return max(ARC_INVERSION_RTOL * self.length, NEWTON_LAST_STEP * self.branch_radius)
+
+    def _inversion_args(self) -> tuple:
+        """The curve's data for the compiled inversion, in the order of
+        :func:`~trajkit.paths._saddle_jit.theta_of_s` after the arc lengths (tables,
+        geometry, tolerance [m], iteration limit)."""
+        sg, thg, dg, kg = self._inv
+        return (self._edges, self._cum, self._scale, self._coef, self._deg, sg, thg, dg, kg,
+                self._gx, self._gw, self.branch_radius, self.main_radius, self.offset, self._cot,
+                self._sin, self._inversion_tol(), ARC_INVERSION_MAX_ITER)
 
     def _newton(self, ss: np.ndarray, tol: float) -> np.ndarray:
         k = np.clip(np.searchsorted(self._cum, ss, side="right") - 1, 0, len(self._edges) - 2)
