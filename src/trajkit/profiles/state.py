@@ -36,6 +36,7 @@ from . import _kernel as K
 from ._brake import inside
 from ._check import check as _check_table
 from ._compile import ENABLED as _COMPILED
+from ._phase import phase_end
 from ._range import (
     DISTANCE_ABS_MIN,
     POSITION_MAX,
@@ -664,7 +665,9 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
     # the free coordinate of M: its acceleration (at v = 0), or with ``extremum``
     # its velocity (at a = 0)
     c_top = (limits.v_max if extremum else A) * (1.0 - SPLIT_MARGIN)
-    # the reversal lies within reach of both ends: beyond the stops, and no
+    if not math.isfinite(c_top):
+        return None
+    # M lies within reach of both ends: no farther out than the stops, and no
     # farther from either end than the axis can travel in T
     reach = abs(pf - p0) + _stop_reach(v0, a0, A, J) + _stop_reach(vf, af, A, J)
     travel = T * max(limits.v_max, abs(v0) + 0.5 * a0 * a0 / J)
@@ -736,13 +739,12 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
             if second is None:
                 continue
             table = np.concatenate([first[0], second[0]])
-            if abs(float(np.sum(table[:, 0])) - T) > K.DURATION_RTOL * T:
+            if abs(math.fsum(table[:, 0]) - T) > K.DURATION_RTOL * T:
                 continue
             nb = first[1]
             q = s
-            for dt, j, a in table[:nb]:  # the state after the brake pre-phase
-                q = (q[0] + dt * (q[1] + dt * (0.5 * a + dt * j / 6.0)),
-                     q[1] + dt * (a + 0.5 * dt * j), a + dt * j)
+            for dt, j, a in table[:nb].tolist():  # the state after the brake pre-phase
+                q = phase_end(q[0], q[1], a, j, dt)
             if _check_table(np.ascontiguousarray(table[nb:]), table.shape[0] - nb, q[0], q[1],
                             q[2], pf, vf, af, limits.v_max, limits.a_max, k1,
                             limits.a_max_decel, k2):
@@ -766,9 +768,9 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
             continue
         out = joined(M)
         if out is None:
-            # a half may have no profile longer than its minimum: move the
-            # reversal (bisection in position, then in acceleration) to where
-            # the two minima add up to T
+            # a half may have no profile longer than its minimum: move M
+            # (bisection in position, then in the free coordinate) to where the
+            # two minima add up to T
             for side in ((hi, z[1]), (lo, z[1]), (z[0], c_top), (z[0], -c_top)):
                 if not total(side) > T:
                     continue
