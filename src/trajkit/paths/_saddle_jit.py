@@ -34,6 +34,7 @@ import numpy as np
 
 from ..profiles._compile import ENABLED
 from ..profiles._compile import jit as _jit
+from ..profiles._phase import phase_end
 
 __all__ = ["AVAILABLE", "BLOCK", "axis_peaks", "theta_of_s"]
 
@@ -254,11 +255,8 @@ def axis_peaks(grid, bounds, tb, P, V, A, J, s0, s_end, length,
             # k: np.searchsorted(tb[1:nk], x, "right"), walked forward (the times increase)
             while k < nk - 1 and tb[k + 1] <= x:
                 k += 1
-            h = x - tb[k]
             j = J[k]
-            s = P[k] + h * (V[k] + h * (0.5 * A[k] + h * j / 6.0))
-            v = V[k] + h * (A[k] + 0.5 * h * j)
-            a = A[k] + h * j
+            s, v, a = phase_end(P[k], V[k], A[k], j, x - tb[k])
             s = min(max(s, lo), hi)
         sb[fill] = min(max(s, 0.0), length)
         vb[fill] = v
