@@ -266,7 +266,7 @@ def check_axes(plan_curve: SaddleCurve, feed_plan: FeedPlan, machine: SaddleMach
             *plan_curve._inversion_args(), plan_curve.branch_radius ** 2, peaks)
         if count > 0:
             return AxisCheck(peaks, lim, peaks / lim, int(count))
-    t = np.unique(np.concatenate([grid, bounds]))
+    t = check_times(feed_plan, period)
     st = axis_states(plan_curve, feed_plan.sample(t, points=False))
     peaks = np.max(np.abs(st[:, 1:]), axis=2)
     return AxisCheck(peaks, lim, peaks / lim, int(t.size))

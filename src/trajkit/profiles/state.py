@@ -554,8 +554,14 @@ def _family_name(c: int) -> str:
     return f"{direction} {SHAPE_NAMES[c]}"
 
 
-def _fail(ws, s, g, limits, what):
-    st = int(ws[K.OUT_STATUS])
+def _blocked(ws) -> list[tuple[float, float]]:
+    """The blocked intervals [s] the kernel wrote into ``ws``."""
+    return [(float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1]))
+            for i in range(int(ws[K.OUT_NBLK]))]
+
+
+def _fail(st, s, g, limits, what):
+    """Raise the error of the kernel's status ``st`` (not OK)."""
     name = axis_label(limits.name)
     if st == K.ST_BRAKE:
         raise InfeasibleError(
@@ -608,9 +614,7 @@ def _durations_or_none(s, g, limits: AxisLimits):
     ws = _run(s, g, limits, K.TASK_BLOCK)
     if int(ws[K.OUT_STATUS]) != K.ST_OK:
         return None
-    nb = int(ws[K.OUT_NBLK])
-    return float(ws[K.OUT_TMIN]), [(float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1]))
-                                   for i in range(nb)]
+    return float(ws[K.OUT_TMIN]), _blocked(ws)
 
 
 def _fixed_or_none(s, g, limits: AxisLimits, T: float):
@@ -842,10 +846,8 @@ def feasible_durations(start: Sequence[float], goal: Sequence[float],
     limits, s, g = _prepare(start, goal, limits)
     ws = _run(s, g, limits, K.TASK_BLOCK)
     if int(ws[K.OUT_STATUS]) != K.ST_OK:
-        _fail(ws, s, g, limits, "")
-    nb = int(ws[K.OUT_NBLK])
-    blk = tuple((float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1])) for i in range(nb))
-    return DurationSet(float(ws[K.OUT_TMIN]), blk)
+        _fail(int(ws[K.OUT_STATUS]), s, g, limits, "")
+    return DurationSet(float(ws[K.OUT_TMIN]), tuple(_blocked(ws)))
 
 
 def plan_state_to_state(
@@ -953,23 +955,20 @@ def plan_state_to_state(
                 f"duration {T!r} s{name} is below the minimum duration {tmin!r} s from state "
                 f"{s!r} to {g!r}", minimum=tmin)
         if st == K.ST_BLOCKED:
-            lo, hi = next((float(ws[K.OUT_BLK + 2 * i]), float(ws[K.OUT_BLK + 2 * i + 1]))
-                          for i in range(int(ws[K.OUT_NBLK]))
-                          if ws[K.OUT_BLK + 2 * i] < T < ws[K.OUT_BLK + 2 * i + 1])
+            assert T is not None  # a duration is blocked only when one is requested
+            lo, hi = next(iv for iv in _blocked(ws) if iv[0] < T < iv[1])
             raise BlockedDurationError(
                 f"duration {T!r} s{name} lies in a blocked interval ({lo!r}, {hi!r}) s of the "
                 f"move from state {s!r} to {g!r}: no profile of that duration keeps the limits; "
                 f"the minimum is {tmin!r} s", minimum=tmin, interval=(lo, hi))
         if st == K.ST_NONE and T is not None:
             # a profile the shape families miss: two halves
-            tmin = float(ws[K.OUT_TMIN])
             split = _split_fixed(s, g, limits, T)
             if split is not None:
                 table, nb, code = split
                 return _check_range(_from_table(s, g, table.ravel().tolist(), table.shape[0], nb,
                                                 tmin, _family(code), limits), limits)
-            ws = _run(s, g, limits, K.TASK_FIXED, T)  # (the status and minimum for the message)
-        _fail(ws, s, g, limits, "" if T is None else f"of duration {T!r} s")
+        _fail(st, s, g, limits, "" if T is None else f"of duration {T!r} s")
     n = int(ws[K.OUT_N])
     flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()
     prof = _from_table(s, g, flat, n, int(ws[K.OUT_NB]), float(ws[K.OUT_TMIN]),
@@ -1067,7 +1066,7 @@ def _velocity(s, vf, af, limits) -> StateProfile:
     g = (math.nan, vf, af)
     ws = _run(s, g, limits, K.TASK_VELOCITY)
     if int(ws[K.OUT_STATUS]) != K.ST_OK:
-        _fail(ws, s, (None, vf, af), limits, "to the velocity")
+        _fail(int(ws[K.OUT_STATUS]), s, (None, vf, af), limits, "to the velocity")
     n = int(ws[K.OUT_N])
     flat = ws[K.OUT_PH:K.OUT_PH + 3 * n].tolist()
     return _velocity_profile(s, list(zip(flat[0::3], flat[1::3], flat[2::3])),
