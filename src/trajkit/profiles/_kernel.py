@@ -154,7 +154,12 @@ _NSAVE = OUT_PH + 3 * NPH - OUT_STATUS
 _FOUND = _SAVE + _NSAVE
 #: The time-reversed move of step 2 (separate legs): its limits and its problem.
 _REV = _FOUND + 2 * NBLK
-NWS = _REV + 12
+#: The valid step-1 durations of every brake candidate (NCAND x NVALID, brake
+#: included), their counts, and all of them merged (a start outside the limits).
+_VALL = _REV + 12
+_VCNT = _VALL + NCAND * NVALID
+_VUNI = _VCNT + NCAND
+NWS = _VUNI + NCAND * NVALID
 
 
 def workspace() -> np.ndarray:
@@ -313,6 +318,9 @@ def solve(ws):
     if trivial:
         # (the valid set of the loop still bounds the blocked durations)
         ncand = 1 if (task == TASK_BLOCK or task == TASK_FIXED) else 0
+    vall = ws[_VALL:_VALL + NCAND * NVALID].reshape((NCAND, NVALID))
+    vcnt = ws[_VCNT:_VCNT + NCAND]
+    vcnt[:] = 0.0
     for cand in range(ncand):
         nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
         if nb < 0:
@@ -322,7 +330,15 @@ def solve(ws):
         if not (res[R_T] < math.inf):
             continue
         n = int(res[R_N])
-        if nb + n > NPH or not (tb + res[R_T] < best_total):
+        if nb + n > NPH:
+            continue
+        # every candidate's valid durations (the blocked intervals of a start
+        # outside the limits are those that no brake candidate reaches)
+        nv = int(res[R_NV])
+        for k in range(nv):
+            vall[cand, k] = res[R_V0 + k] + tb
+        vcnt[cand] = nv
+        if not (tb + res[R_T] < best_total):
             continue
         best_total = tb + res[R_T]
         ws[OUT_SHAPE] = res[R_SHAPE]
@@ -349,8 +365,14 @@ def solve(ws):
     if task == TASK_MIN or task == TASK_VELOCITY:
         return
     legs_equal = lim[1] == lim[3] and lim[2] == lim[4]
+    if not start_inside:
+        # several brakes: the valid durations of all of them bound the feasible set
+        valid = ws[_VUNI:_VUNI + NCAND * NVALID]
+        nvalid = _union_valid(vall, vcnt, valid)
     nblk = 0
-    if legs_equal:
+    if legs_equal and not start_inside:
+        nblk = _blocks_union(valid, nvalid, vall, vcnt, ws)
+    elif legs_equal:
         nblk = _blocks(valid, nvalid, best_total, ws)
     elif task == TASK_BLOCK:
         _blocks_probed(ws, valid, nvalid, best_total, start_inside, st0, lim, brk, bbuf, s1, best,
@@ -854,6 +876,57 @@ def _blocks_probed(ws, valid, nvalid, tmin, start_inside, st0, lim, brk, bbuf, s
         ws[OUT_STATUS + k] = ws[_SAVE + k]
     for k in range(2 * nblk):
         ws[OUT_BLK + k] = found[k]
+    ws[OUT_NBLK] = nblk
+    return nblk
+
+
+@jit_raw
+def _union_valid(vall, vcnt, out):
+    """Sort and merge every brake candidate's valid durations (``vall[c,
+    :vcnt[c]]``, in place, counts updated) and all of them into ``out``;
+    returns the count in ``out``."""
+    m = 0
+    for c in range(vcnt.size):
+        nc = int(vcnt[c])
+        if nc == 0:
+            continue
+        sort_ascending(vall[c], nc)
+        nc = merge_equal(vall[c], nc, BLOCK_MERGE_RTOL)
+        vcnt[c] = nc
+        for k in range(nc):
+            out[m] = vall[c, k]
+            m += 1
+    sort_ascending(out, m)
+    return merge_equal(out, m, BLOCK_MERGE_RTOL)
+
+
+@jit_raw
+def _blocks_union(uni, m, vall, vcnt, ws):
+    """Blocked intervals of a start outside the limits with equal legs: the gaps
+    between consecutive durations of ``uni[:m]`` (every candidate's valid
+    durations, merged) where no brake candidate has a feasible duration. For
+    one candidate, with ``k`` of its ``n`` valid durations below a point of a
+    gap, the point is feasible where ``k`` and ``n`` are both odd or both even
+    and ``k > 0`` (the parity rule of :func:`_blocks`). The intervals go to
+    ``OUT_BLK`` (their count returned)."""
+    nblk = 0
+    for i in range(m - 1):
+        if nblk >= NBLK:
+            break
+        x = 0.5 * (uni[i] + uni[i + 1])
+        feasible = False
+        for c in range(vcnt.size):
+            nc = int(vcnt[c])
+            k = 0
+            while k < nc and vall[c, k] < x:
+                k += 1
+            if k > 0 and k % 2 == nc % 2:
+                feasible = True
+                break
+        if not feasible:
+            ws[OUT_BLK + 2 * nblk] = uni[i] * ws[_TS]
+            ws[OUT_BLK + 2 * nblk + 1] = uni[i + 1] * ws[_TS]
+            nblk += 1
     ws[OUT_NBLK] = nblk
     return nblk
 
