@@ -536,3 +536,52 @@ def test_split_fixed_durations_in_a_batch():
         assert q.min_duration == pytest.approx(one.min_duration, rel=1e-12)
         np.testing.assert_allclose(q.phase_durations, one.phase_durations, rtol=1e-12, atol=1e-12 * dur)
         _check(q, AxisLimits(*lims))
+
+
+#: Fixed durations that the families and both splits above miss (the same
+#: study): start, goal, limits, duration. The grid oracle of the study
+#: (``grid_feasible``) finds motions at both.
+SPLIT_ALONG = [
+    ((0.6187550785149055, -0.27456421657591734, 0.02564325945629974),
+     (0.6187550785149055, 0.49612463890246916, 0.4189994001738286),
+     (0.7164173192714507, 4.765936629726697, 0.10460399919917958, 18.055150802606523, 0.2735280483655923),
+     3.3737563630588183),
+    ((0.1732567002296881, -1.5351027606498149, 1.237627938595218),
+     (0.1732567002296881, 0.8587389431775003, 0.24595813825826812),
+     (1.6089338623966496, 3.968520670774027, 0.5690007632352301, 1.6465346660623077, 0.376124796584371),
+     3.2393195706185844),
+]
+
+
+@pytest.mark.parametrize("s, g, L, T", SPLIT_ALONG)
+def test_fixed_durations_split_along_the_minimum(s, g, L, T):
+    """The last stage: two halves through a state of the minimum-time profile.
+    Exactly the duration, within the limits by the independent exact check,
+    and one phase boundary of the profile lies on the minimum-time profile."""
+    lim = AxisLimits(*L)
+    q = plan_state_to_state(s, g, lim, duration=T)
+    assert q.duration == pytest.approx(T, rel=1e-12)
+    assert q.family == "fixed split_along_minimum", q.family
+    _check(q, lim)
+    fast = plan_state_to_state(s, g, lim)
+    path = fast.sample(np.linspace(0.0, fast.duration, 200001))
+    bounds = q.sample(np.cumsum(q.phase_durations)[:-1])
+    scale = (abs(g[0] - s[0]) + lim.v_max * fast.duration, lim.v_max, max(lim.a_max, lim.a_max_decel))
+    gap = [min(np.max(np.abs(np.array([path.position - b_p, path.velocity - b_v, path.acceleration - b_a]))
+                      / np.array(scale)[:, None], axis=0))
+           for b_p, b_v, b_a in zip(bounds.position, bounds.velocity, bounds.acceleration)]
+    assert min(gap) < 1e-4, gap
+
+
+def test_split_along_in_a_batch():
+    from trajkit.profiles.state_batch import plan_state_moves
+
+    L = np.array([c[2] for c in SPLIT_ALONG]).T
+    T = np.array([c[3] for c in SPLIT_ALONG])
+    b = plan_state_moves(np.array([c[0] for c in SPLIT_ALONG]), np.array([c[1] for c in SPLIT_ALONG]),
+                         *L, durations=T)
+    np.testing.assert_allclose(b.duration, T, rtol=1e-12)
+    for i, case in enumerate(SPLIT_ALONG):
+        q = b.profile(i)
+        assert q.family == "fixed split_along_minimum"
+        _check(q, AxisLimits(*case[2]))

@@ -520,6 +520,8 @@ _FAMILIES: dict[int, str] = {}
 #: the kernel).
 SHAPE_SPLIT = 1024
 SHAPE_SPLIT_EXTREMUM = 1025
+#: ... or through a state of the minimum-time profile (:func:`_split_along`).
+SHAPE_SPLIT_ALONG = 1026
 
 
 def _family(code: float) -> str:
@@ -536,6 +538,8 @@ def _family_name(c: int) -> str:
         return "fixed split_at_reversal"
     if c == SHAPE_SPLIT_EXTREMUM:
         return "fixed split_at_velocity_extremum"
+    if c == SHAPE_SPLIT_ALONG:
+        return "fixed split_along_minimum"
     if c >= K.SHAPE_REVERSED:
         return _family_name(c - K.SHAPE_REVERSED).replace("fixed ", "fixed reversed ", 1)
     fixed = c >= 32
@@ -571,8 +575,9 @@ def _fail(st, s, g, limits, what):
         raise InfeasibleError(
             f"no profile found {what}{name} from state {s!r} to {g!r} within the limits: with "
             "separate accel/decel limits the fixed-duration search (the shape families, then "
-            "two halves through a velocity reversal or extremum) misses a few durations of "
-            "profiles that reverse; a longer duration may be feasible")
+            "two halves through a velocity reversal, a velocity extremum or a state of the "
+            "minimum-time profile) may miss a duration of a profile that reverses; a longer "
+            "duration may be feasible")
     raise InfeasibleError(
         f"no profile found {what}{name} from state {s!r} to {g!r} within the limits "
         "(please report this input)")
@@ -636,11 +641,100 @@ def _stop_reach(v: float, a: float, A: float, J: float) -> float:
 def _split_fixed(s: tuple, g: tuple, limits: AxisLimits, T: float):
     """A profile of exactly ``T`` [s] as two halves where every shape family
     missed it (:func:`_split_at`, through a velocity reversal, then through a
-    velocity extremum): ``(table (n, 3), brake phases, shape code)``, or None."""
+    velocity extremum; then :func:`_split_along`, through a state of the
+    minimum-time profile): ``(table (n, 3), brake phases, shape code)``, or None."""
     for code, extremum in ((SHAPE_SPLIT, False), (SHAPE_SPLIT_EXTREMUM, True)):
         out = _split_at(s, g, limits, T, extremum)
         if out is not None:
             return out[0], out[1], code
+    out = _split_along(s, g, limits, T)
+    if out is not None:
+        return out[0], out[1], SHAPE_SPLIT_ALONG
+    return None
+
+
+def _joined(s: tuple, g: tuple, limits: AxisLimits, T: float, M: tuple):
+    """The two halves ``s`` to ``M`` and ``M`` to ``g`` with ``T`` [s] shared
+    between their feasible durations (minimum and blocked intervals of each,
+    at most ``SPLIT_TRIES`` shares), the joined table checked exactly (after
+    any brake pre-phase): ``(table (n, 3), brake phases)``, or None."""
+    d1 = _durations_or_none(s, M, limits)
+    d2 = _durations_or_none(M, g, limits) if d1 is not None else None
+    if d1 is None or d2 is None:
+        return None
+    (t1, blk1), (t2, blk2) = d1, d2
+    lo, hi = t1, T - t2
+    if not hi >= lo - K.DURATION_RTOL * T:
+        return None
+    free = [(lo, max(hi, lo))]
+    for a, b in list(blk1) + [(T - b, T - a) for a, b in blk2]:
+        free = [piece for c, d in free for piece in ((c, min(d, a)), (max(c, b), d))
+                if piece[1] >= piece[0]]
+    k1 = 0.0 if limits.j_max == math.inf else 1.0 / limits.j_max
+    k2 = 0.0 if limits.j_max_decel == math.inf else 1.0 / limits.j_max_decel
+    pf, vf, af = g
+    for c, d in sorted(free, key=lambda iv: iv[0] - iv[1])[:SPLIT_TRIES]:
+        T1 = 0.5 * (c + d)
+        first = _fixed_or_none(s, M, limits, T1)
+        if first is None:
+            continue
+        second = _fixed_or_none(M, g, limits, T - T1)
+        if second is None:
+            continue
+        table = np.concatenate([first[0], second[0]])
+        if abs(math.fsum(table[:, 0]) - T) > K.DURATION_RTOL * T:
+            continue
+        nb = first[1]
+        q = s
+        for dt, j, a in table[:nb].tolist():  # the state after the brake pre-phase
+            q = phase_end(q[0], q[1], a, j, dt)
+        if _check_table(np.ascontiguousarray(table[nb:]), table.shape[0] - nb, q[0], q[1],
+                        q[2], pf, vf, af, limits.v_max, limits.a_max, k1,
+                        limits.a_max_decel, k2):
+            return table, nb
+    return None
+
+
+#: States of the minimum-time profile tried by :func:`_split_along`: this many
+#: evenly spaced in time, and its phase boundaries.
+ALONG_POINTS = 64
+
+
+def _split_along(s: tuple, g: tuple, limits: AxisLimits, T: float):
+    """A phase table of exactly ``T`` [s] made of two profiles of the kernel
+    through a state ``M`` of the minimum-time profile (``(table (n, 3), brake
+    phases)``, or None).
+
+    Every such ``M`` splits the move into halves whose minima add up to at most
+    the minimum duration; ``T`` is shared between their feasible durations
+    (:func:`_joined`). This reaches profiles with more free parameters than
+    one family or one split through a reversal or an extremum spans: each half
+    is a shape of the kernel.
+    """
+    ws = _run(s, g, limits, K.TASK_MIN)
+    if int(ws[K.OUT_STATUS]) != K.ST_OK:
+        return None
+    n = int(ws[K.OUT_N])
+    table = ws[K.OUT_PH:K.OUT_PH + 3 * n].reshape(n, 3).copy()
+    ends = np.cumsum(table[:, 0])
+    t_min = float(ends[-1])
+    times = np.unique(np.concatenate([np.linspace(0.0, t_min, ALONG_POINTS + 2)[1:-1], ends[:-1]]))
+    nb = int(ws[K.OUT_NB])
+    times = times[times > (ends[nb - 1] if nb else 0.0)]  # (after any brake)
+    q = s
+    k = 0
+    t0 = 0.0
+    for t in times.tolist():
+        while t > ends[k]:  # the state at the start of the phase that holds t
+            q = phase_end(q[0], q[1], table[k, 2], table[k, 1], table[k, 0])
+            t0 = float(ends[k])
+            k += 1
+        M = phase_end(q[0], q[1], table[k, 2], table[k, 1], t - t0)
+        if _goal_violation(M[1], M[2], limits) is not None:
+            continue
+        out = _joined(s, g, limits, T, M)
+        if out is not None:
+            return out
     return None
 
 
@@ -716,44 +810,8 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
             (total((pm + i * dp, cm + k * dc)), pm + i * dp, cm + k * dc)
             for _f, pm, cm in grid[:SPLIT_STARTS] for i in range(-5, 6) for k in range(-5, 6)
             if i or k])
-    k1 = 0.0 if limits.j_max == math.inf else 1.0 / limits.j_max
-    k2 = 0.0 if limits.j_max_decel == math.inf else 1.0 / limits.j_max_decel
-
     def joined(M):
-        """The two halves through ``M`` with ``T`` shared between their feasible
-        durations (minimum and blocked intervals of each), checked; or None."""
-        d1 = _durations_or_none(s, M, limits)
-        d2 = _durations_or_none(M, g, limits) if d1 is not None else None
-        if d1 is None or d2 is None:
-            return None
-        (t1, blk1), (t2, blk2) = d1, d2
-        lo_, hi_ = t1, T - t2
-        if not hi_ >= lo_ - K.DURATION_RTOL * T:
-            return None
-        free = [(lo_, max(hi_, lo_))]
-        for a, b in list(blk1) + [(T - b, T - a) for a, b in blk2]:
-            free = [piece for c, d in free for piece in ((c, min(d, a)), (max(c, b), d))
-                    if piece[1] >= piece[0]]
-        for c, d in sorted(free, key=lambda iv: iv[0] - iv[1])[:SPLIT_TRIES]:
-            T1 = 0.5 * (c + d)
-            first = _fixed_or_none(s, M, limits, T1)
-            if first is None:
-                continue
-            second = _fixed_or_none(M, g, limits, T - T1)
-            if second is None:
-                continue
-            table = np.concatenate([first[0], second[0]])
-            if abs(math.fsum(table[:, 0]) - T) > K.DURATION_RTOL * T:
-                continue
-            nb = first[1]
-            q = s
-            for dt, j, a in table[:nb].tolist():  # the state after the brake pre-phase
-                q = phase_end(q[0], q[1], a, j, dt)
-            if _check_table(np.ascontiguousarray(table[nb:]), table.shape[0] - nb, q[0], q[1],
-                            q[2], pf, vf, af, limits.v_max, limits.a_max, k1,
-                            limits.a_max_decel, k2):
-                return table, nb
-        return None
+        return _joined(s, g, limits, T, M)
 
     for f, pm, cm in grid[:SPLIT_STARTS]:
         if not math.isfinite(f):
