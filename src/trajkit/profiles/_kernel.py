@@ -523,10 +523,14 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
     if _step1_at(ws, T, tmin, start_inside, st0, lim, brk, bbuf, s1, best, res, W, vec, ivl, cfg,
                  st, keep, out, ts, js, as_):
         return
-    if (start_inside and (lim[1] != lim[3] or lim[2] != lim[4])
-            and _step2_reversed(ws, T, tmin, st0, lim, best, res, W, vec, ivl, cfg, st, keep,
-                                out, ts, js, as_)):
-        return
+    if lim[1] != lim[3] or lim[2] != lim[4]:
+        for cand in range(NCAND):
+            nb, tb = _brake_cand(cand, start_inside, st0, lim, brk, bbuf, s1)
+            if nb < 0 or not (T - tb > 0.0):
+                continue
+            if _step2_reversed(ws, T - tb, tb, tmin, s1, nb, brk, lim, best, res, W, vec, ivl,
+                               cfg, st, keep, out, ts, js, as_):
+                return
     ws[OUT_STATUS] = ST_NONE
     for b in range(nblk):
         if ws[OUT_BLK + 2 * b] / ts < T < ws[OUT_BLK + 2 * b + 1] / ts:
@@ -534,11 +538,12 @@ def _step2(ws, T, tmin, nblk, start_inside, st0, lim, brk, bbuf, s1, best, res, 
 
 
 @jit_raw
-def _step2_reversed(ws, T, tmin, st0, lim, best, res, W, vec, ivl, cfg, st, keep, out, ts, js,
-                    as_):
+def _step2_reversed(ws, T, tb, tmin, s0, nb, brk, lim, best, res, W, vec, ivl, cfg, st, keep,
+                    out, ts, js, as_):
     """Step 2's last stage (the pairs from :data:`REVERSED_FIRST_PAIR` on) on the
-    time-reversed move (separate legs, a start inside the limits); True when it
-    emitted a profile.
+    time-reversed move (separate legs) from ``s0`` (the state where brake
+    candidate's ``nb`` phases ``brk`` of duration ``tb`` end, the goal, as
+    ``s1``) in ``T`` (after the brake); True when it emitted a profile.
 
     Played backwards, a motion from ``(p0, v0, a0)`` to ``(pf, vf, af)`` is one
     from ``(pf, -vf, af)`` to ``(p0, -v0, a0)`` with the jerk negated, and
@@ -557,28 +562,31 @@ def _step2_reversed(ws, T, tmin, st0, lim, best, res, W, vec, ivl, cfg, st, keep
     limr[3] = lim[1]
     limr[4] = lim[2]
     sr[0] = 0.0
-    sr[1] = -st0[4]
-    sr[2] = st0[5]
-    sr[3] = -st0[3]
-    sr[4] = -st0[1]
-    sr[5] = st0[2]
+    sr[1] = -s0[4]
+    sr[2] = s0[5]
+    sr[3] = -(s0[3] - s0[0])
+    sr[4] = -s0[1]
+    sr[5] = s0[2]
     sr[6] = T
     res[R_ALL] = 0.0
     step2_pairs(sr, limr, best, res, W, vec, ivl, cfg, st, REVERSED_FIRST_PAIR)
     if not (res[R_T] < math.inf):
         return False
     n = int(res[R_N])
-    total = 0.0
+    if nb + n > NPH:
+        return False
+    total = tb
     for i in range(n):
         k = n - 1 - i
-        keep[i, 0] = best[k, 0]
-        keep[i, 1] = -best[k, 1]
-        keep[i, 2] = st0[2] if i == 0 else best[k + 1, 2]
-        total += keep[i, 0]
-    if not check(keep, n, st0[0], st0[1], st0[2], st0[3], st0[4], st0[5],
+        keep[nb + i, 0] = best[k, 0]
+        keep[nb + i, 1] = -best[k, 1]
+        keep[nb + i, 2] = s0[2] if i == 0 else best[k + 1, 2]
+        total += keep[nb + i, 0]
+    if not check(keep[nb:], n, s0[0], s0[1], s0[2], s0[3], s0[4], s0[5],
                  lim[0], lim[1], lim[2], lim[3], lim[4]):
         return False
-    _emit(ws, out, keep, n, 0, total, tmin, ts, js, as_)
+    _copy_rows(keep, 0, brk, nb)
+    _emit(ws, out, keep, nb + n, nb, total, tmin, ts, js, as_)
     ws[OUT_SHAPE] = res[R_SHAPE] + 32 + SHAPE_REVERSED
     return True
 
