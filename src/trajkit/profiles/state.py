@@ -810,9 +810,6 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
             (total((pm + i * dp, cm + k * dc)), pm + i * dp, cm + k * dc)
             for _f, pm, cm in grid[:SPLIT_STARTS] for i in range(-5, 6) for k in range(-5, 6)
             if i or k])
-    def joined(M):
-        return _joined(s, g, limits, T, M)
-
     for f, pm, cm in grid[:SPLIT_STARTS]:
         if not math.isfinite(f):
             break
@@ -828,7 +825,7 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
         M = state(z)
         if M is None:
             continue
-        out = joined(M)
+        out = _joined(s, g, limits, T, M)
         if out is None:
             # a half may have no profile longer than its minimum: move M
             # (bisection in position, then in the free coordinate) to where the
@@ -844,7 +841,7 @@ def _split_at(s: tuple, g: tuple, limits: AxisLimits, T: float, extremum: bool):
                     else:
                         w_out = w
                 M2 = state((z[0] + w_in * (side[0] - z[0]), z[1] + w_in * (side[1] - z[1])))
-                out = None if M2 is None else joined(M2)
+                out = None if M2 is None else _joined(s, g, limits, T, M2)
                 if out is not None:
                     break
         if out is not None:
