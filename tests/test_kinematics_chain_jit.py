@@ -77,6 +77,77 @@ def test_compiled_joint_jets_recover_the_joint_motion(name, tmp_path):
     np.testing.assert_array_equal(got[:, 0], qj[:, 0])
 
 
+def _redundant_motion(robot, n, seed):
+    """Joint jets of a 7-joint arm that keep ``c . (q - sigma) = 0`` (order by order),
+    with their pose jets: random points, directions near the null space, seeds."""
+    rng = np.random.default_rng(seed)
+    m = robot.n_joints
+    lo, hi = robot.joint_ranges[:, 0], robot.joint_ranges[:, 1]
+    qj = np.zeros((n, 4, m))
+    qj[:, 0] = rng.uniform(np.maximum(lo, -2.0), np.minimum(hi, 2.0), (n, m))
+    qj[:, 1:] = rng.standard_normal((n, 3, m))
+    null = np.linalg.svd(robot.jacobian_many(qj[:, 0]))[2][:, -1]
+    cj = np.zeros((n, 4, m))
+    cj[:, 0] = null + 0.05 * rng.standard_normal((n, m))
+    cj[:, 1:] = rng.standard_normal((n, 3, m))
+    sj = qj + 1e-3 * rng.standard_normal((n, 4, m))
+    # the seeds' coefficients made to keep the condition at every order
+    for k in range(4):
+        gap = sum(np.einsum("nj,nj->n", cj[:, i], qj[:, k - i] - sj[:, k - i]) for i in range(k + 1))
+        sj[:, k] += (gap / np.einsum("nj,nj->n", cj[:, 0], cj[:, 0]))[:, None] * cj[:, 0]
+    pos, rot = robot.fk_jet(qj)
+    return qj, pos, rot, (cj, sj)
+
+
+def test_compiled_joint_jets_of_a_redundant_arm_recover_the_joint_motion():
+    """The seventh equation ``c . (q - sigma) = 0``: both versions give back the
+    joint jet that made the pose jet and keeps it."""
+    robot = load_arm("panda")
+    n = 200
+    qj, pos, rot, null = _redundant_motion(robot, n, 12)
+    ref, sing_ref = _jets.joint_taylor(robot.fk_jet, qj[:, 0], pos, rot, None, null)
+    outs = [ref]
+    if _chain_jit.AVAILABLE:
+        got, sing = robot.joint_taylor_many(qj[:, 0], pos, rot, null)
+        np.testing.assert_array_equal(sing, sing_ref)
+        outs.append(got)
+    lhs = np.concatenate([robot.jacobian_many(qj[:, 0]), null[0][:, :1]], axis=1)
+    sv = np.linalg.svd(lhs, compute_uv=False)
+    good = sv[:, 0] < 1e3 * sv[:, -1]
+    assert good.sum() > n // 2
+    for out in outs:
+        err = np.abs(out[good] - qj[good]).max(axis=(1, 2)) / np.abs(qj[good]).max(axis=(1, 2))
+        assert err.max() < 1e-9
+    with pytest.raises(ValueError, match="7 joints"):
+        _jets.joint_taylor(robot.fk_jet, qj[:, 0], pos, rot)
+    assert robot.joint_taylor_many(qj[:, 0], pos, rot) is None  # no resolution given
+
+
+def test_the_projection_of_a_redundant_arm_compiled_and_in_numpy():
+    """Newton steps onto the pose and ``c . (q - sigma) = 0`` from a nearby start:
+    both versions land on the same joints, which keep both."""
+    robot = load_arm("panda")
+    n = 200
+    qj, pos, rot, (cj, sj) = _redundant_motion(robot, n, 13)
+    start = qj[:, 0] + 1e-4 * np.random.default_rng(1).standard_normal(qj[:, 0].shape)
+    ref, ok_ref = _jets.project(robot.fk_jet, pos[:, 0], rot[:, 0], start, cj[:, 0], sj[:, 0])
+    outs = [(ref, ok_ref)]
+    if _chain_jit.AVAILABLE:
+        outs.append(robot.ik_project_many(pos[:, 0], rot[:, 0], start, cj[:, 0], sj[:, 0]))
+    lhs = np.concatenate([robot.jacobian_many(qj[:, 0]), cj[:, :1, :]], axis=1)
+    sv = np.linalg.svd(lhs, compute_uv=False)
+    good = sv[:, 0] < 1e3 * sv[:, -1]
+    assert good.sum() > n // 2
+    for q, ok in outs:
+        assert ok[good].all()
+        np.testing.assert_allclose(q[good], qj[good, 0], rtol=0, atol=1e-10)
+        np.testing.assert_array_equal(q[~ok], start[~ok])  # (not converged: the start)
+    far = start.copy()
+    far[0] += 2.5  # another branch of the rotation: left as it is
+    q, ok = _jets.project(robot.fk_jet, pos[:1, 0], rot[:1, 0], far[:1], cj[:1, 0], sj[:1, 0])
+    assert not ok[0] and np.array_equal(q[0], far[0])
+
+
 def test_compiled_joint_jets_flag_the_singular_points():
     if not _chain_jit.AVAILABLE:
         pytest.skip("numba is not available: the numpy version is the only one")

@@ -95,7 +95,8 @@ def _paths():
     """(robot name, start joints, motions): a LIN with a turn of the tool, a CIRC, a zone blend."""
     out = []
     for name, q0 in (("ur5", np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])),
-                     ("arm6", np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1]))):
+                     ("arm6", np.array([0.3, -0.4, 0.5, 0.2, 0.6, 0.1])),
+                     ("panda", np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]))):
         robot = _robot(name)
         p = robot.fk(q0)
         turn = rot_z(0.6) @ rot_x(0.3) @ p.rotation
@@ -110,7 +111,7 @@ def _paths():
     return out
 
 
-@pytest.mark.parametrize("case", range(6))
+@pytest.mark.parametrize("case", range(9))
 def test_joint_path_derivatives_equal_those_of_the_inverse_kinematics(case):
     name, q0, motions = _paths()[case]
     robot = _robot(name)
@@ -173,15 +174,40 @@ def test_joint_path_derivatives_in_a_tight_corner_blend(name, turn):
                                    err_msg=f"{name}, {turn} deg: derivative {order + 1}")
 
 
-def test_a_redundant_arm_keeps_the_stencil_of_the_inverse_kinematics():
+def test_a_redundant_arm_keeps_the_seeds_part_along_its_null_direction():
+    """The Panda (7 joints): the joints along a path are the inverse kinematics
+    from the walked seeds, resolved exactly by ``c . (q - seeds) = 0`` with ``c``
+    the Jacobian's null direction interpolated along the walk; the table's
+    joints keep it, the inverse kinematics from the seeds alone lands on the same
+    joints, and ``c`` stays close to the null space between the table's points."""
     robot = _robot("panda")
     q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
     p = robot.fk(q0)
-    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position + np.array([0.1, 0.0, 0.0]),
-                                                          p.rotation)), 1.0, label="L")])
-    assert jp._fk_jet is None
-    with pytest.raises(ValueError, match="non-redundant"):
+    turn = rot_z(0.6) @ rot_x(0.3) @ p.rotation
+    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position + np.array([0.1, 0.05, 0.0]),
+                                                          turn)), 1.0, label="L")])
+    assert jp._fk_jet is not None and jp._null is not None  # from the kinematics
+    s = np.linspace(0.0, jp.length, 801)
+    q = jp.joints(s)
+    c, seeds = jp._null(s), jp.seeds(s)
+    assert np.abs(np.einsum("ij,ij->i", c, q - seeds)).max() < 1e-12
+    pos, rot = jp.poses(s, jp.piece_of(s))
+    for i in range(0, s.size, 40):
+        pose = robot.fk(q[i])
+        assert np.abs(pose.position - pos[i]).max() < 1e-12
+        assert np.abs(pose.rotation - rot[i]).max() < 1e-12
+        plain = robot.ik_near(Pose(pos[i], rot[i]), seeds[i])
+        assert np.abs(plain - q[i]).max() < 1e-9
+    np.testing.assert_allclose(jp.joints(jp.table_s), jp.table_q, rtol=0, atol=1e-12)
+    jac = robot.jacobian_many(q)
+    cn = c / np.linalg.norm(c, axis=1)[:, None]
+    assert np.abs(np.einsum("nij,nj->ni", jac, cn)).max() < 1e-3 * np.abs(jac).max()
+    with pytest.raises(ValueError, match="7 joints"):
         _jets.joint_taylor(robot.fk_jet, np.zeros((1, 7)), np.zeros((1, 4, 3)), np.zeros((1, 4, 3, 3)))
+    with pytest.raises(ValueError, match="one redundant joint"):
+        z = np.zeros((1, 4, 8))
+        _jets.joint_taylor(robot.fk_jet, np.zeros((1, 8)), np.zeros((1, 4, 3)),
+                           np.zeros((1, 4, 3, 3)), None, (z, z))
 
 
 def test_a_singular_jacobian_is_flagged_and_the_path_falls_back_to_differences():

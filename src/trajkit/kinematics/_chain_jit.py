@@ -26,7 +26,7 @@ from ..profiles._compile import ENABLED
 from ..profiles._compile import jit as _jit
 from ._jets import COND_MAX, ORDER
 
-__all__ = ["AVAILABLE", "chain_joint_taylor", "chain_ik_near"]
+__all__ = ["AVAILABLE", "chain_joint_taylor", "chain_ik_near", "chain_ik_project"]
 
 #: True when the compiled loop is used (numba installed and not disabled).
 AVAILABLE = ENABLED
@@ -264,7 +264,7 @@ def _singular(jac, lhs, square, lu, piv, col, work):
 
 
 @_jit
-def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, q0, pos, rot):
+def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, q0, pos, rot, cj, sj):
     """Joint Taylor coefficients that follow a tool-pose jet, point by point.
 
     Parameters
@@ -286,6 +286,11 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
         Joints at the expansion points [rad or m].
     pos, rot : ndarray, shapes (n, 4, 3), (n, 4, 3, 3)
         Taylor coefficients of the tool position [m] and rotation.
+    cj, sj : ndarray, shapes (n, 4, m) or (0, 4, m)
+        For one redundant joint (``m = 7``): the Taylor coefficients of the
+        direction ``c`` and of the seeds ``sigma`` of ``c . (q - sigma) = 0``,
+        the seventh equation (as ``null`` of :func:`._jets.joint_taylor`);
+        empty otherwise.
 
     Returns
     -------
@@ -296,6 +301,8 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
     """
     n, m = q0.shape
     nj = parent.shape[0]
+    aug = cj.shape[0] > 0  # the seventh row of a redundant arm
+    nr = 7 if aug else 6
     qj = np.zeros((n, _N, m))
     singular = np.zeros(n, dtype=np.bool_)
     R = np.empty((nj + 1, _N, 3, 3))
@@ -308,10 +315,11 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
     kx, k2 = _skews(axis)
     pt = np.empty((_N, 3))
     rt = np.empty((_N, 3, 3))
-    jac = np.zeros((6, m))
-    jt = np.empty((m, 6))
+    jw = np.zeros((6, m))
+    jac = np.zeros((nr, m))
+    jt = np.empty((m, nr))
     lhs = np.empty((m, m))
-    rhs = np.empty(6)
+    rhs = np.empty(nr)
     dr = np.empty((3, 3))
     x = np.empty((3, 3))
     cur = np.zeros((_N, m))
@@ -328,15 +336,21 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
         # (the first coefficient needs the frames alone: the Jacobian)
         _frames(cur, parent, iq, r_pl, t_pl, axis, kx, k2, rev, R, P, W, O, rj, pj, mot, 0)
         _tool(R, P, tpar, r_tool, t_tool, pt, rt, 0)
-        _world_jacobian(W, O, pt[0, 0], pt[0, 1], pt[0, 2], iq, rev, jac)
+        _world_jacobian(W, O, pt[0, 0], pt[0, 1], pt[0, 2], iq, rev, jw)
         for r in range(6):
             for c in range(m):
+                jac[r, c] = jw[r, c]
+        if aug:
+            for c in range(m):
+                jac[6, c] = cj[p, 0, c]
+        for r in range(nr):
+            for c in range(m):
                 jt[c, r] = jac[r, c]
-        if m == 6:
+        if m == nr:
             lhs[:] = jac
         else:  # fewer joints: the normal equations
             lhs[:] = jt @ jac
-        if _singular(jac, lhs, m == 6, lu, piv, col, sol):
+        if _singular(jac, lhs, m == nr, lu, piv, col, sol):
             singular[p] = True
             for k in range(1, _N):
                 for j in range(m):
@@ -360,12 +374,19 @@ def chain_joint_taylor(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, 
             rhs[3] = 0.5 * (x[2, 1] - x[1, 2])
             rhs[4] = 0.5 * (x[0, 2] - x[2, 0])
             rhs[5] = 0.5 * (x[1, 0] - x[0, 1])
-            if m == 6:
+            if aug:  # sum_i c_i . (q_{k-i} - sigma_{k-i}) = 0, the term of q_k on the left
+                acc = 0.0
+                for j in range(m):
+                    acc += cj[p, 0, j] * sj[p, k, j]
+                    for i in range(1, k + 1):
+                        acc -= cj[p, i, j] * (qj[p, k - i, j] - sj[p, k - i, j])
+                rhs[6] = acc
+            if m == nr:
                 _lu_solve(lu, piv, rhs, sol)
             else:
                 for j in range(m):
                     acc = 0.0
-                    for r in range(6):
+                    for r in range(nr):
                         acc += jt[j, r] * rhs[r]
                     rhs_m[j] = acc
                 _lu_solve(lu, piv, rhs_m, sol)
@@ -511,6 +532,100 @@ def chain_ik_near(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, posit
             f = max_step / step if step > max_step else 1.0
             for j in range(m):
                 q[j] = min(max(q[j] + (dq[j] * f if f != 1.0 else dq[j]), lo[j]), hi[j])
+            if err < tol:  # this step was the polishing one
+                ok[p] = True
+                for j in range(m):
+                    out[p, j] = q[j]
+                break
+    return out, ok
+
+
+@_jit
+def chain_ik_project(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, positions, rotations,
+                     q_init, c, sig, max_iter, tol):
+    """Newton steps onto the joints of one redundant joint's resolution, point by point.
+
+    For each pose: the joints ``q`` (m = 7) with the tool pose and
+    ``c . (q - sigma) = 0`` (the seeds' part along the direction ``c``, close to
+    the Jacobian's null space), from ``q_init`` close to them: steps
+    ``[J; c] dq = [e; c . (sigma - q)]`` (world-frame Jacobian, the pose error
+    ``e`` in the world frame: the position's difference and the vector part of
+    the relative rotation) until the residual before a step is below ``tol``
+    (that step, the polishing one, included), at most ``max_iter`` steps.
+
+    Parameters
+    ----------
+    parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool
+        The chain, as for :func:`chain_joint_taylor`.
+    positions, rotations : ndarray, shapes (n, 3), (n, 3, 3)
+        Tool poses [m].
+    q_init, c, sig : ndarray, shape (n, m)
+        Starting joints, directions and seeds [rad or m].
+    max_iter : int
+    tol : float
+        Residual [m, rad].
+
+    Returns
+    -------
+    q : ndarray, shape (n, m)
+        The joints (``q_init`` where not converged).
+    ok : ndarray of bool, shape (n,)
+        Converged.
+    """
+    n, m = q_init.shape
+    nj = parent.shape[0]
+    k1, k2 = _skews(axis)
+    R = np.empty((nj + 1, 3, 3))
+    P = np.empty((nj + 1, 3))
+    W = np.empty((nj, 3))
+    O = np.empty((nj, 3))
+    pt = np.empty(3)
+    rt = np.empty((3, 3))
+    rj = np.empty((3, 3))
+    mot = np.empty((3, 3))
+    jw = np.zeros((6, m))
+    A = np.empty((m, m))
+    b = np.empty(m)
+    dq = np.empty(m)
+    piv = np.zeros(m, dtype=np.int64)
+    rel = np.empty((3, 3))
+    out = q_init.copy()
+    ok = np.zeros(n, dtype=np.bool_)
+    q = np.empty(m)
+    for p in range(n):
+        for j in range(m):
+            q[j] = q_init[p, j]
+        for _it in range(max_iter):
+            _pose(q, parent, iq, r_pl, t_pl, axis, k1, k2, rev, tpar, r_tool, t_tool,
+                  R, P, W, O, pt, rt, rj, mot)
+            for r in range(3):
+                b[r] = positions[p, r] - pt[r]
+                for cc in range(3):  # R_target R^T
+                    rel[r, cc] = (rotations[p, r, 0] * rt[cc, 0] + rotations[p, r, 1] * rt[cc, 1]
+                                  + rotations[p, r, 2] * rt[cc, 2])
+            b[3] = 0.5 * (rel[2, 1] - rel[1, 2])
+            b[4] = 0.5 * (rel[0, 2] - rel[2, 0])
+            b[5] = 0.5 * (rel[1, 0] - rel[0, 1])
+            acc = 0.0
+            for j in range(m):
+                acc += c[p, j] * (sig[p, j] - q[j])
+            b[6] = acc
+            err = 0.0
+            for r in range(7):
+                err = max(err, abs(b[r]))
+            if not (rel[0, 0] + rel[1, 1] + rel[2, 2] > 1.0):
+                break  # not on the principal branch of the rotation: too far
+            _world_jacobian(W, O, pt[0], pt[1], pt[2], iq, rev, jw)
+            for r in range(6):
+                for j in range(m):
+                    A[r, j] = jw[r, j]
+            for j in range(m):
+                A[6, j] = c[p, j]
+            if not _lu(A, piv):
+                break
+            _lu_solve(A, piv, b, dq)
+            for j in range(m):
+                q[j] += dq[j]
             if err < tol:  # this step was the polishing one
                 ok[p] = True
                 for j in range(m):

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["ORDER", "cos_sin", "mat_mul", "mat_vec", "scale", "axis_motion", "constant", "jacobian",
-           "joint_taylor", "vee", "COND_MAX"]
+           "joint_taylor", "project", "vee", "COND_MAX", "PROJECT_ITER", "PROJECT_TOL"]
 
 #: Highest Taylor coefficient carried.
 ORDER = 3
@@ -112,7 +112,8 @@ def jacobian(fk_jet, q0: np.ndarray) -> np.ndarray:
 
 
 def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
-                 jac: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                 jac: np.ndarray | None = None,
+                 null: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Taylor coefficients of the joints that follow a tool-pose jet.
 
     Parameters
@@ -127,23 +128,35 @@ def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
         Taylor coefficients of the tool position [m] and rotation along the path.
     jac : ndarray, shape (n, 6, m), optional
         The world-frame Jacobian at ``q0`` (:func:`jacobian` when not given).
+    null : tuple of 2 ndarray, shapes (n, 4, m), optional
+        For an arm with one redundant joint (``m = 7``): the Taylor coefficients
+        of a direction ``c`` and of the seed joints ``sigma`` along the path;
+        the joints keep ``c . (q - sigma) = 0`` (the seed's part along ``c``, a
+        direction close to the Jacobian's null space), the seventh equation of
+        every order.
 
     Returns
     -------
     qj : ndarray, shape (n, 4, m)
         Joint Taylor coefficients ``q_0 .. q_3``: ``q_k = q^(k) / k!`` [rad or m per
         path unit^k]. Least squares where the robot has fewer than 6 joints (a
-        reachable pose path is matched exactly); the robot must not be redundant.
+        reachable pose path is matched exactly); a redundant robot needs ``null``.
     singular : ndarray of bool, shape (n,)
         Points where the Jacobian is singular (condition number above
         :data:`COND_MAX`): their higher coefficients are not computed (NaN).
     """
     n, m = q0.shape
-    if m > 6:
-        raise ValueError("joint_taylor needs a non-redundant robot (at most 6 joints)")
+    if null is None and m > 6:
+        raise ValueError("joint_taylor needs a non-redundant robot (at most 6 joints) or, "
+                         "for 7 joints, the redundancy's direction and seeds (null)")
+    if null is not None and m != 7:
+        raise ValueError(f"joint_taylor resolves one redundant joint (7 joints), got {m}")
     if jac is None:
         jac = jacobian(fk_jet, q0)
-    if m == 6:
+    if null is not None:  # the seventh row: the direction c
+        cj, sj = null
+        jac = np.concatenate([jac, cj[:, 0][:, None, :]], axis=1)
+    if jac.shape[1] == m:
         lhs, jt = jac, None
     else:  # fewer joints: the normal equations (the pose path lies in the reachable set)
         jt = np.swapaxes(jac, 1, 2)
@@ -165,6 +178,70 @@ def joint_taylor(fk_jet, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
         else:  # the coefficient k of the motion so far (q_k still 0): jets of k + 1 terms
             p_now, r_now = fk_jet(qj[ok, :k + 1])
             dp, dr = pos[ok, k] - p_now[:, k], rot[ok, k] - r_now[:, k]
-        rhs = np.concatenate([dp, vee(dr @ r0t)], axis=1)[..., None]
+        rows = [dp, vee(dr @ r0t)]
+        if null is not None:
+            # sum_i c_i . (q_{k-i} - sigma_{k-i}) = 0, the term of q_k on the left
+            c, sg = cj[ok], sj[ok]
+            extra = np.einsum("nj,nj->n", c[:, 0], sg[:, k])
+            for i in range(1, k + 1):
+                extra -= np.einsum("nj,nj->n", c[:, i], qj[ok, k - i] - sg[:, k - i])
+            rows.append(extra[:, None])
+        rhs = np.concatenate(rows, axis=1)[..., None]
         qj[ok, k] = np.linalg.solve(lhs, rhs if jt is None else jt @ rhs)[..., 0]
     return qj, singular
+
+
+#: Newton steps of :func:`project` at most, and the residual [m, rad] below which
+#: the next step is the last (the polishing one).
+PROJECT_ITER = 6
+PROJECT_TOL = 1e-12
+
+
+def project(fk_jet, pos: np.ndarray, rot: np.ndarray, q: np.ndarray, c: np.ndarray,
+            sig: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joints of a 7-joint arm with the tool poses and ``c . (q - sig) = 0``.
+
+    Newton steps on the seven equations (the pose error in the world frame: the
+    position's difference and the vector part of the relative rotation; the
+    seeds' part along the direction ``c``) from ``q``, close to the solutions.
+
+    Parameters
+    ----------
+    fk_jet : callable
+        As for :func:`joint_taylor`.
+    pos, rot : ndarray, shapes (n, 3), (n, 3, 3)
+        Tool poses [m].
+    q, c, sig : ndarray, shape (n, 7)
+        Starting joints, the directions ``c`` and the seeds [rad or m].
+
+    Returns
+    -------
+    q : ndarray, shape (n, 7)
+        The joints (the starting ones where the steps did not converge).
+    ok : ndarray of bool, shape (n,)
+        Converged.
+    """
+    q0 = np.array(q, dtype=float)
+    x = q0.copy()
+    n = x.shape[0]
+    ok = np.zeros(n, dtype=bool)
+    active = np.arange(n)
+    for _ in range(PROJECT_ITER):
+        if not active.size:
+            break
+        xa = x[active]
+        p_now, r_now = fk_jet(xa[:, None, :])
+        rel = rot[active] @ np.swapaxes(r_now[:, 0], -1, -2)
+        res = np.concatenate([pos[active] - p_now[:, 0], vee(rel),
+                              np.einsum("nj,nj->n", c[active], sig[active] - xa)[:, None]], axis=1)
+        good = np.trace(rel, axis1=1, axis2=2) > 1.0
+        lhs = np.concatenate([jacobian(fk_jet, xa), c[active][:, None, :]], axis=1)
+        good &= np.isfinite(lhs).all(axis=(1, 2)) & (np.abs(np.linalg.det(lhs)) > 0.0)
+        step = np.zeros_like(xa)
+        step[good] = np.linalg.solve(lhs[good], res[good][..., None])[..., 0]
+        x[active] = xa + step
+        done = good & (np.abs(res).max(axis=1) < PROJECT_TOL)
+        ok[active[done]] = True
+        active = active[good & ~done]
+    x[~ok] = q0[~ok]
+    return x, ok

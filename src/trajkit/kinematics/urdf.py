@@ -364,8 +364,9 @@ class UrdfRobot(RobotModel):
         return (p_par + r_par @ np.array(frame.placement.translation),
                 r_par @ np.array(frame.placement.rotation))
 
-    def joint_taylor_many(self, q0: np.ndarray, pos: np.ndarray,
-                          rot: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    def joint_taylor_many(self, q0: np.ndarray, pos: np.ndarray, rot: np.ndarray,
+                          null: tuple[np.ndarray, np.ndarray] | None = None
+                          ) -> tuple[np.ndarray, np.ndarray] | None:
         """:func:`trajkit.kinematics._jets.joint_taylor` of this robot, compiled.
 
         Parameters
@@ -374,20 +375,60 @@ class UrdfRobot(RobotModel):
             Joints at the expansion points [rad or m].
         pos, rot : ndarray, shapes (n, 4, 3), (n, 4, 3, 3)
             Taylor coefficients of the tool position [m] and rotation.
+        null : tuple of 2 ndarray, shapes (n, 4, n_joints), optional
+            A 7-joint arm's redundancy resolution, as for ``joint_taylor``.
 
         Returns
         -------
         (qj, singular) as ``joint_taylor`` returns them, or None when the compiled
         loop is not available (no numba, a chain the vectorised kinematics does
-        not cover, or a redundant robot): then ``joint_taylor`` with
-        :meth:`fk_jet` gives the same coefficients to round-off.
+        not cover, or a redundant robot without ``null``): then ``joint_taylor``
+        with :meth:`fk_jet` gives the same coefficients to round-off.
         """
         arrays = self._chain_arrays()
-        if arrays is None or self.n_joints > 6:
+        m = self.n_joints
+        if arrays is None or m > 7 or (m == 7) != (null is not None):
             return None
+        if null is None:
+            cj = sj = np.zeros((0, _jets.ORDER + 1, m))
+        else:
+            cj, sj = (np.ascontiguousarray(a, dtype=np.float64) for a in null)
         return _chain_jit.chain_joint_taylor(
             *arrays, np.ascontiguousarray(q0, dtype=np.float64),
-            np.ascontiguousarray(pos, dtype=np.float64), np.ascontiguousarray(rot, dtype=np.float64))
+            np.ascontiguousarray(pos, dtype=np.float64), np.ascontiguousarray(rot, dtype=np.float64),
+            cj, sj)
+
+    def ik_project_many(self, positions: np.ndarray, rotations: np.ndarray, q_init: np.ndarray,
+                        direction: np.ndarray, seeds: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Joints of a 7-joint arm with the tool poses and ``c . (q - seeds) = 0``.
+
+        Newton steps on the seven equations from ``q_init`` (close to the
+        solutions, e.g. :meth:`ik_near_many`'s), in one compiled loop.
+
+        Parameters
+        ----------
+        positions : ndarray, shape (n, 3)
+            Tool positions [m].
+        rotations : ndarray, shape (n, 3, 3)
+            Tool rotation matrices.
+        q_init, direction, seeds : ndarray, shape (n, 7)
+            Starting joints, the directions ``c`` and the seeds [rad or m].
+
+        Returns
+        -------
+        (q, ok) : ndarray (n, 7) and ndarray of bool (n,)
+            The joints (``q_init`` where not converged) and where they converged;
+            None when the compiled loop is not available (no numba, a chain the
+            vectorised kinematics does not cover, or not 7 joints).
+        """
+        arrays = self._chain_arrays()
+        if arrays is None or self.n_joints != 7:
+            return None
+        return _chain_jit.chain_ik_project(
+            *arrays, *(np.ascontiguousarray(a, dtype=np.float64)
+                       for a in (positions, rotations, q_init, direction, seeds)),
+            _jets.PROJECT_ITER, _jets.PROJECT_TOL)
 
     def _chain_arrays(self) -> tuple | None:
         """The chain as the arrays the compiled kinematics take

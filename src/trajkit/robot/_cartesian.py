@@ -190,24 +190,12 @@ class CartesianChain:
         """IK at every sample time ``t`` (n,) [s] (local to the chain)."""
         s, v, a, _ = self.timing.sample(t)
         pos, quat, rate, mid = self.geometry(s)
-        rots = matrix_from_quat(quat)
-        nj = self.robot.n_joints
-        q = np.empty((s.size, nj))
-        seeds = self.path.seeds(s)
-        for i in range(s.size):
-            q[i] = self._ik(Pose.trusted(pos[i], rots[i]), seeds[i], int(mid[i]), pos[i])
+        q = self.path.joints(s)
         dq, ddq, _ = self.timing.grid_interpolated(s)
         qd = dq * v[:, None]
         qdd = dq * a[:, None] + ddq * (v * v)[:, None]
         return {"q": q, "qd": qd, "qdd": qdd, "xyz": pos, "quat": quat,
                 "tool_speed": v * rate, "motion": mid}
-
-    def _ik(self, pose: Pose, seed: np.ndarray, motion: int, p: np.ndarray) -> np.ndarray:
-        try:
-            return self.robot.ik_near(pose, seed)
-        except UnreachableError as exc:
-            lab = self.labels[self.motion_ids.index(motion)] if motion in self.motion_ids else ""
-            raise UnreachableError(f"{lab}: point {_mm(p)} is unreachable: {exc}") from None
 
 
 def _mm(p: Any) -> str:

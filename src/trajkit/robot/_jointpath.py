@@ -16,11 +16,17 @@ inside the piece, never across a junction of two pieces (a one-sided
 stencil there).
 
 A robot that offers its forward kinematics on Taylor series (``fk_jet``, see
-:mod:`trajkit.kinematics._jets`) and is not redundant gets the joints'
-derivatives from the kinematics: one inverse kinematics per point, then the
-joints' Taylor coefficients order by order through the Jacobian and the
-exact higher-order terms of the forward kinematics. Another robot (a
-redundant arm, whose null-space motion comes from the seeds) gets central
+:mod:`trajkit.kinematics._jets`) gets the joints' derivatives from the
+kinematics: one inverse kinematics per point, then the joints' Taylor
+coefficients order by order through the Jacobian and the exact higher-order
+terms of the forward kinematics. An arm with one redundant joint (7 joints)
+has its null-space motion from the seeds: its joints keep
+``c . (q - seeds) = 0``, with ``c`` the Jacobian's null direction at the
+walked joints, interpolated as the seeds are (a spline through them). That
+is the seventh equation of the inverse kinematics (Newton steps from the
+seeded solution, which already lies on it to round-off where the seeds lie
+on the path) and of every Taylor order. Another robot (more redundant
+joints, or no ``fk_jet``) gets central
 differences of the inverse kinematics along the tool pose's cubic Taylor
 polynomial at the point: the joints along it have the path's first three
 derivatives, and the stencil's truncation error comes from the kinematics
@@ -108,6 +114,13 @@ class ChainJointPath:
 
         k = min(5, table_s.size - 1)
         self._seed = make_interp_spline(table_s, table_q, k=k) if k >= 1 else None
+        # one redundant joint: the direction of the Jacobian's null space along the
+        # walked joints, as a spline of the same kind (see _null_direction)
+        self._null = None
+        if self._fk_jet is not None and self.n_joints == 7:
+            self._null = self._null_direction(k) if k >= 3 else None
+            if self._null is None:
+                self._fk_jet = None
 
     # ---- geometry
     def piece_of(self, s: np.ndarray, side: Literal["left", "right"] = "right") -> np.ndarray:
@@ -131,8 +144,56 @@ class ChainJointPath:
         return self._seed(np.clip(s, self.table_s[0], self.table_s[-1]))
 
     def ik(self, s: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
+        """The path's joints (n, m) at ``s`` (n,) on pieces ``k`` (n,), the inverse
+        kinematics started from ``seeds`` (n, m) (a redundant arm's then resolved
+        as the path resolves it)."""
         pos, rot = self.poses(s, k)
-        return self._solve(pos, rot, k, seeds)
+        return self._ik_at(pos, rot, k, seeds, s)
+
+    def joints(self, s: np.ndarray) -> np.ndarray:
+        """The path's joints (n, m) at ``s`` (n,) [path unit]."""
+        s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length)
+        return self.ik(s, self.piece_of(s), self.seeds(s))
+
+    def _null_direction(self, k: int):
+        """Spline of degree ``k`` through the unit null vectors of the Jacobian at the
+        walked joints (one sign along the path), or None where the table has a
+        singular point (a null space of more than one dimension)."""
+        from scipy.interpolate import make_interp_spline
+
+        many = getattr(self.robot, "jacobian_many", None)
+        jac = many(self.table_q) if many is not None else _jets.jacobian(self._fk_jet, self.table_q)
+        _u, sv, vt = np.linalg.svd(jac)
+        if not (sv[:, -1] * _jets.COND_MAX > sv[:, 0]).all():
+            return None
+        c = vt[:, -1, :]
+        sign = np.cumprod(np.where(np.einsum("ij,ij->i", c[1:], c[:-1]) < 0.0, -1.0, 1.0))
+        c[1:] *= sign[:, None]
+        return make_interp_spline(self.table_s, c, k=k)
+
+    def _resolution(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Taylor coefficients (n, 4, m) of the direction ``c`` and of the seeds along
+        the path at ``s`` (n,): a redundant arm's joints keep ``c . (q - seeds) = 0``."""
+        assert self._null is not None and self._seed is not None
+        at = np.clip(s, self.table_s[0], self.table_s[-1])
+        fact = (1.0, 1.0, 2.0, 6.0)
+        cj = np.stack([self._null(at, nu) / fact[nu] for nu in range(_jets.ORDER + 1)], axis=1)
+        sj = np.stack([self._seed(at, nu) / fact[nu] for nu in range(_jets.ORDER + 1)], axis=1)
+        return cj, sj
+
+    def _project(self, pos: np.ndarray, rot: np.ndarray, s: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """A redundant arm's joints at the poses ``pos`` (n, 3), ``rot`` (n, 3, 3) of
+        ``s`` (n,): Newton steps from ``q`` (n, m) (the inverse kinematics from the
+        seeds) onto ``c . (q - seeds) = 0``, the seeds' part along the null
+        direction (a point where they do not converge keeps ``q``)."""
+        at = np.clip(s, self.table_s[0], self.table_s[-1])
+        assert self._null is not None and self._seed is not None
+        c, sig = self._null(at), self._seed(at)
+        many = getattr(self.robot, "ik_project_many", None)
+        got = None if many is None else many(pos, rot, q, c, sig)
+        if got is None:
+            got = _jets.project(self._fk_jet, pos, rot, q, c, sig)
+        return got[0]
 
     def _solve(self, pos: np.ndarray, rot: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
         """IK of the poses ``pos`` (n, 3), ``rot`` (n, 3, 3) on pieces ``k`` from ``seeds``
@@ -151,15 +212,21 @@ class ChainJointPath:
                     f"of the path is unreachable: {exc}") from None
         return out
 
-    def _ik_at(self, pos: np.ndarray, rot: np.ndarray, k: np.ndarray, seeds: np.ndarray) -> np.ndarray:
+    def _ik_at(self, pos: np.ndarray, rot: np.ndarray, k: np.ndarray, seeds: np.ndarray,
+               s: np.ndarray | None = None) -> np.ndarray:
         """IK of the poses ``pos`` (n, 3), ``rot`` (n, 3, 3) on pieces ``k`` (n,) from
-        ``seeds`` (n, m), all at once where the robot offers it (``ik_near_many``)."""
+        ``seeds`` (n, m), all at once where the robot offers it (``ik_near_many``);
+        with the poses' path parameters ``s`` (n,), a redundant arm's joints are
+        then resolved as the path resolves them (:meth:`_project`)."""
         many = getattr(self.robot, "ik_near_many", None)
         if many is None:
-            return self._solve(pos, rot, k, seeds)
-        q, ok = many(pos, rot, seeds)
-        if not ok.all():  # raises at the first failure, with the robot's message
-            q[~ok] = self._solve(pos[~ok], rot[~ok], k[~ok], seeds[~ok])
+            q = self._solve(pos, rot, k, seeds)
+        else:
+            q, ok = many(pos, rot, seeds)
+            if not ok.all():  # raises at the first failure, with the robot's message
+                q[~ok] = self._solve(pos[~ok], rot[~ok], k[~ok], seeds[~ok])
+        if s is not None and self._null is not None:
+            q = self._project(pos, rot, s, q)
         return q
 
     def _stencil_ik(self, pts: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -169,14 +236,15 @@ class ChainJointPath:
         kk = np.repeat(k, 7)
         flat = pts.ravel()
         pos, rot = self.poses(flat, kk)
-        seeds = self.seeds(np.clip(flat, 0.0, self.length))
-        return self._ik_at(pos, rot, kk, seeds).reshape(n, 7, self.n_joints)
+        at = np.clip(flat, 0.0, self.length)
+        return self._ik_at(pos, rot, kk, self.seeds(at), at).reshape(n, 7, self.n_joints)
 
     @staticmethod
     def _jet_kinematics(robot: RobotModel):
-        """The robot's ``fk_jet`` when it covers this robot (not redundant, chain supported)."""
+        """The robot's ``fk_jet`` when it covers this robot (at most one redundant
+        joint, chain supported)."""
         fk_jet = getattr(robot, "fk_jet", None)
-        if fk_jet is None or robot.n_joints > 6:
+        if fk_jet is None or robot.n_joints > 7:
             return None
         probe = np.zeros((1, _jets.ORDER + 1, robot.n_joints))
         return fk_jet if fk_jet(probe) is not None else None
@@ -324,12 +392,14 @@ class ChainJointPath:
 
     def _jet_derivatives(self, s: np.ndarray):
         k, pj, rj = self._pose_taylor(s)
-        q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s))
+        q = self._ik_at(pj[:, 0], rj[:, 0], k, self.seeds(s), s)
+        null = None if self._null is None else self._resolution(s)
         compiled = getattr(self.robot, "joint_taylor_many", None)
-        got = None if compiled is None else compiled(q, pj, rj)
+        got = None if compiled is None else (compiled(q, pj, rj) if null is None
+                                              else compiled(q, pj, rj, null))
         if got is None:
             many = getattr(self.robot, "jacobian_many", None)
-            got = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q))
+            got = _jets.joint_taylor(self._fk_jet, q, pj, rj, None if many is None else many(q), null)
         qj, singular = got
         d1, d2, d3 = qj[:, 1], 2.0 * qj[:, 2], 6.0 * qj[:, 3]
         if singular.any():  # on a singularity: differences of the inverse kinematics there
