@@ -286,3 +286,41 @@ def test_timings_agree(monkeypatch, cheap):
     assert a.grid.size == b.grid.size and a.info == b.info
     assert_ulp_close(a.limit_use.worst, b.limit_use.worst, 64)
     assert a.limit_use.worst <= 1.0 + engine.CHECK_RTOL
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("source", ["interp", "corrected", "exact"])
+def test_a_check_in_two_halves_on_two_threads_equals_one_pass(seed, source, monkeypatch):
+    """A large check runs in two halves at once (a piece's samples in one half):
+    every sample's values and the limit use are those of one pass, bit for bit
+    (the same kernel on the same samples), whatever the number of cores."""
+    if not _checks.AVAILABLE:
+        pytest.skip("the two halves are a compiled check's")
+    from concurrent.futures import ThreadPoolExecutor
+
+    rng, nodes, der, t, st, jerk, lim, path, breaks, left = _setup(30 + seed, curved=seed != 1,
+                                                                   capped=seed != 2, cap_fn=seed == 0)
+    src = _sources(path, nodes, der, breaks, left, rng)[source]
+    npp = 40
+    assert jerk.size * (npp + 2) >= 2 * 400  # both halves hold many pieces
+    monkeypatch.setattr(engine, "PARALLEL_SAMPLES", 10**12)
+    one = _check(nodes, der, t, st, jerk, lim, src, npp)
+    calls = []
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        class _Pool:
+            def submit(self, fn, *args):
+                calls.append(args)
+                return pool.submit(fn, *args)
+
+        monkeypatch.setattr(engine, "PARALLEL_SAMPLES", 400)
+        monkeypatch.setattr(engine, "_second_core", lambda: _Pool())
+        two = _check(nodes, der, t, st, jerk, lim, src, npp)
+        zoom = _zoom(nodes, der, t, st, jerk, lim, src, one[6] / one[6].max(), npp + 2)
+    assert len(calls) == 1  # the check was split (the zoom's pieces repeat: one pass)
+    lo, hi = calls[0]
+    assert 0 < lo < hi and lo % (npp + 2) == 0  # at a piece boundary
+    for x, y in zip(one[1:], two[1:]):
+        np.testing.assert_array_equal(x, y)
+    for name in ("velocity", "acceleration", "jerk", "path_acceleration", "path_jerk", "path_speed"):
+        np.testing.assert_array_equal(getattr(one[0], name), getattr(two[0], name), err_msg=name)
+    assert zoom.worst > 0.0

@@ -128,6 +128,52 @@ CHECK_CHUNK = 4096
 #: Points checked inside every piece by the final check of the chosen timing.
 FINAL_CHECK_PER_PIECE = 64
 
+#: A compiled check of at least this many samples, in pieces of increasing index,
+#: runs in two halves at once where a second core is free (the kernel releases
+#: the GIL; the halves hold different pieces, the results are the same).
+PARALLEL_SAMPLES = 4000
+
+
+@functools.cache
+def _second_core():
+    """A one-thread pool for the other half of a large check, or None (one core)."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # (not on Linux)
+        cores = os.cpu_count() or 1
+    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="trajkit-check") if cores > 1 else None
+
+
+def _sample_ratios(t, st, jerk, s_grid, piece, dt, F, cap_s, args, mid, have):
+    """:func:`._checks.sample_ratios` of the samples, in two halves on two threads
+    where :data:`PARALLEL_SAMPLES` and :func:`_second_core` allow it and the
+    pieces increase (a piece's samples in one half only: its row of ``mid`` is
+    filled by one thread). ``F``: ``(F1, F2, F3)``; ``args``: the kernel's
+    arguments from ``d1`` to ``xs``, then from ``vlim`` to ``cap``."""
+    n = piece.size
+    pool = _second_core() if n >= PARALLEL_SAMPLES else None
+    h = n // 2
+    while pool is not None and 0 < h < n and piece[h] == piece[h - 1]:
+        h += 1
+    if pool is None or not 0 < h < n or not bool(np.all(piece[1:] >= piece[:-1])):
+        return _checks.sample_ratios(t, st, jerk, s_grid, piece, dt, *args[:9], *F, *args[9:],
+                                     cap_s, mid, have)
+
+    def half(lo, hi):
+        return _checks.sample_ratios(t, st, jerk, s_grid, piece[lo:hi], dt[lo:hi], *args[:9],
+                                     *(f[lo:hi] if f.shape[0] else f for f in F), *args[9:],
+                                     cap_s[lo:hi] if cap_s.size else cap_s, mid, have)
+
+    other = pool.submit(half, h, n)
+    a = half(0, h)
+    b = other.result()
+    return (*(np.concatenate([x, y]) for x, y in zip(a[:6], b[:6])),
+            np.maximum(a[6], b[6]), np.maximum(a[7], b[7]))
+
+
 #: The final check looks again at every piece that comes within ZOOM_ABOVE of a
 #: limit: ZOOM_LEVELS times ZOOM_POINTS points in a bracket narrowing around its
 #: largest values (see ``_zoom``).
@@ -939,11 +985,12 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
     cap = empty if lim.cap is None else np.ascontiguousarray(lim.cap, dtype=f64)
     cap_s = empty if (lim.cap is None or lim.cap_fn is None) else \
         np.ascontiguousarray(lim.cap_fn(S), dtype=f64)
-    cell, rv, ra, rj, rs, worst, peak, path_peak = _checks.sample_ratios(
-        t, st, jerk, s_grid, piece, dt, d1, d2, d3, r1, r2, r3, done, err, xs, F1, F2, F3,
-        np.ascontiguousarray(lim.vlim, dtype=f64), np.ascontiguousarray(lim.alim_acc, dtype=f64),
-        np.ascontiguousarray(lim.alim_dec, dtype=f64), np.ascontiguousarray(lim.jacc, dtype=f64),
-        np.ascontiguousarray(lim.jdec, dtype=f64), tol, kappa, cap, cap_s, mid, have)
+    cell, rv, ra, rj, rs, worst, peak, path_peak = _sample_ratios(
+        t, st, jerk, s_grid, piece, dt, (F1, F2, F3), cap_s,
+        (d1, d2, d3, r1, r2, r3, done, err, xs,
+         np.ascontiguousarray(lim.vlim, dtype=f64), np.ascontiguousarray(lim.alim_acc, dtype=f64),
+         np.ascontiguousarray(lim.alim_dec, dtype=f64), np.ascontiguousarray(lim.jacc, dtype=f64),
+         np.ascontiguousarray(lim.jdec, dtype=f64), tol, kappa, cap), mid, have)
     a_use = float(path_peak[0] / lim.a_path) if math.isfinite(lim.a_path) else 0.0
     j_use = float(path_peak[1] / lim.j_path) if math.isfinite(lim.j_path) else 0.0
     use = LimitUse(peak[0], peak[1], peak[2], a_use, j_use, float(path_peak[2]))
