@@ -516,3 +516,34 @@ def test_paths_without_cheap_derivatives_keep_their_true_limits(b, w, c):
     assert max(a, j) > 0.999  # the limits are used
     assert tm.limit_use.worst <= 1.0 + LIMIT_RTOL
     assert tm.state[-1, 0] == 1.0 and tm.state[-1, 1] == 0.0
+
+
+def _plan_in_child(_: int) -> float:
+    from trajkit.timing import LinearJointPath
+
+    return plan_path_timing(LinearJointPath([0.0, 0.0], [1.0, 0.5]),
+                            [AxisLimits(1.0, 5.0, 50.0), AxisLimits(1.0, 5.0, 50.0)]).duration
+
+
+def test_a_forked_process_gets_its_own_thread_for_the_checks(monkeypatch):
+    """A process forked after the engine started its check thread has no thread
+    behind the pool it inherited: it makes its own (else its first large check
+    would wait for ever)."""
+    import multiprocessing as mp
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    from trajkit.timing import engine
+
+    if "fork" not in mp.get_all_start_methods():
+        pytest.skip("no fork on this platform")
+    monkeypatch.setattr(engine, "PARALLEL_SAMPLES", 50)  # every check in two halves
+    pool = ThreadPoolExecutor(max_workers=1)
+    monkeypatch.setattr(engine, "_POOLS", {os.getpid(): pool})
+    try:
+        here = _plan_in_child(0)  # the thread exists here
+        with mp.get_context("fork").Pool(1) as child:
+            there = child.map_async(_plan_in_child, [0]).get(timeout=120)
+    finally:
+        pool.shutdown()
+    assert there == [here]

@@ -134,17 +134,26 @@ FINAL_CHECK_PER_PIECE = 64
 PARALLEL_SAMPLES = 4000
 
 
-@functools.cache
+_POOLS: dict[int, Any] = {}
+
+
 def _second_core():
-    """A one-thread pool for the other half of a large check, or None (one core)."""
+    """A one-thread pool for the other half of a large check, or None (one core).
+    One per process: a process forked from one that had the pool gets its own
+    (the forked copy has no thread behind it)."""
     import os
     from concurrent.futures import ThreadPoolExecutor
 
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # (not on Linux)
-        cores = os.cpu_count() or 1
-    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="trajkit-check") if cores > 1 else None
+    pid = os.getpid()
+    if pid not in _POOLS:
+        try:
+            cores = len(os.sched_getaffinity(0))
+        except AttributeError:  # (not on Linux)
+            cores = os.cpu_count() or 1
+        _POOLS.clear()
+        _POOLS[pid] = (ThreadPoolExecutor(max_workers=1, thread_name_prefix="trajkit-check")
+                       if cores > 1 else None)
+    return _POOLS[pid]
 
 
 def _sample_ratios(t, st, jerk, s_grid, piece, dt, F, cap_s, args, mid, have):
