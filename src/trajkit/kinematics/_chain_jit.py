@@ -405,6 +405,14 @@ def _mat3(a, b, out):
 
 
 @_jit
+def _pose_work(nj):
+    """Scratch arrays of :func:`_pose` for a chain of ``nj`` joints: ``R``, ``P``,
+    ``W``, ``O``, ``pt``, ``rt``, ``rj``, ``mot``."""
+    return (np.empty((nj + 1, 3, 3)), np.empty((nj + 1, 3)), np.empty((nj, 3)), np.empty((nj, 3)),
+            np.empty(3), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)))
+
+
+@_jit
 def _pose(q, parent, iq, r_pl, t_pl, axis, k1, k2, rev, tpar, r_tool, t_tool, R, P, W, O, pt, rt,
           rj, mot):
     """Forward kinematics at ``q`` (m,): every joint frame (``R``, ``P`` of
@@ -464,22 +472,14 @@ def chain_ik_near(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, posit
         Converged.
     """
     n, m = seeds.shape
-    nj = parent.shape[0]
     k1, k2 = _skews(axis)
-    R = np.empty((nj + 1, 3, 3))
-    P = np.empty((nj + 1, 3))
-    W = np.empty((nj, 3))
-    O = np.empty((nj, 3))
-    pt = np.empty(3)
-    rt = np.empty((3, 3))
+    R, P, W, O, pt, rt, rj, mot = _pose_work(parent.shape[0])
     jw = np.zeros((6, m))
     js = np.empty((6, m))
     es = np.empty(6)
     out = seeds.copy()
     ok = np.zeros(n, dtype=np.bool_)
     q = np.empty(m)
-    rj = np.empty((3, 3))
-    mot = np.empty((3, 3))
     rel = np.empty((3, 3))
     lin = np.empty(3)
     A = np.empty((6, 6))
@@ -573,16 +573,8 @@ def chain_ik_project(parent, iq, r_pl, t_pl, axis, rev, tpar, r_tool, t_tool, po
         Converged.
     """
     n, m = q_init.shape
-    nj = parent.shape[0]
     k1, k2 = _skews(axis)
-    R = np.empty((nj + 1, 3, 3))
-    P = np.empty((nj + 1, 3))
-    W = np.empty((nj, 3))
-    O = np.empty((nj, 3))
-    pt = np.empty(3)
-    rt = np.empty((3, 3))
-    rj = np.empty((3, 3))
-    mot = np.empty((3, 3))
+    R, P, W, O, pt, rt, rj, mot = _pose_work(parent.shape[0])
     jw = np.zeros((6, m))
     A = np.empty((m, m))
     b = np.empty(m)
