@@ -232,3 +232,26 @@ def test_a_singular_jacobian_is_flagged_and_the_path_falls_back_to_differences()
                                                r"\(600\.000, 0\.000, 150\.000\) mm .* cannot follow"):
         _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position - np.array([0.2, 0.05, 0.0]),
                                                          p.rotation)), 0.5, label="L")])
+
+
+def test_a_redundant_arm_with_a_singular_walk_falls_back_to_differences(monkeypatch):
+    """Where the walked joints pass a point whose Jacobian is singular (its null space
+    wider than one direction), the path keeps the differences of the inverse
+    kinematics along the pose's Taylor polynomial: still the derivatives of its
+    inverse kinematics (forced here by a condition-number bound no point meets)."""
+    robot = _robot("panda")
+    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+    p = robot.fk(q0)
+    monkeypatch.setattr(_jets, "COND_MAX", 1.0)
+    jp = _chain_path(robot, q0, [Lin(CartesianTarget(Pose(p.position + np.array([0.1, 0.05, 0.0]),
+                                                          p.rotation)), 1.0, label="L")])
+    assert jp._fk_jet is None and jp._null is None
+    monkeypatch.undo()
+    s = np.array([0.03, 0.06, 0.09])
+    q, d1, d2, d3 = jp.derivatives(s)
+    for i, si in enumerate(s):
+        e = np.linspace(-0.004, 0.004, 61)
+        ref = _fit(e, jp.ik(si + e, np.zeros(e.size, dtype=int), jp.seeds(si + e)), 10)
+        for order, got in enumerate((q[i], d1[i], d2[i] / 2.0, d3[i] / 6.0)):
+            scale = max(1.0, np.abs(ref[order]).max())
+            np.testing.assert_allclose(got, ref[order], rtol=0, atol=5e-5 * scale)
