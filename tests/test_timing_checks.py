@@ -324,3 +324,26 @@ def test_a_check_in_two_halves_on_two_threads_equals_one_pass(seed, source, monk
     for name in ("velocity", "acceleration", "jerk", "path_acceleration", "path_jerk", "path_speed"):
         np.testing.assert_array_equal(getattr(one[0], name), getattr(two[0], name), err_msg=name)
     assert zoom.worst > 0.0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_corrections_of_middles_and_full_cells_in_one_evaluation(seed):
+    """``_Corrected.add_both``: the middles of some cells and every point of others
+    in one evaluation of the path's derivatives give the corrections of the two
+    ``add`` calls made one after the other (the full cells' replace their middles')."""
+    rng, nodes, der, t, st, jerk, lim, path, breaks, left = _setup(40 + seed)
+    middle = rng.choice(nodes.size - 1, nodes.size // 3, replace=False)
+    full = np.concatenate([rng.choice(middle, middle.size // 3, replace=False),
+                           rng.choice(nodes.size - 1, 3, replace=False)])
+    one = _Corrected(path, nodes, der, breaks, left)
+    changed = one.add_both(middle, full)
+    two = _Corrected(path, nodes, der, breaks, left)
+    a = two.add(middle)
+    b = two.add(full, full=True)
+    np.testing.assert_array_equal(changed, np.union1d(a, b))
+    np.testing.assert_array_equal(one.done, two.done)
+    np.testing.assert_array_equal(one.full, two.full)
+    np.testing.assert_array_equal(one.err, two.err)
+    # nothing left to evaluate: nothing changes
+    assert one.add_both(middle, full).size == 0
+    assert one.evaluated < two.evaluated  # (the full cells' middles once, not twice)

@@ -712,28 +712,44 @@ class _Corrected(_Interp):
         parabola through it, so that the correction is that parabola), or with
         ``full`` at every point (those not full yet). Returns the cells whose
         derivatives changed (sorted)."""
-        cells = np.unique(cells)
-        cells = cells[~(self.full if full else self.done)[cells]]
-        if not cells.size:
-            return cells
-        w = np.asarray(VERIFY_POINTS) if full else np.array([0.5])
-        s0, s1 = self.s[cells], self.s[cells + 1]
-        S = (s0[:, None] * (1.0 - w[None, :]) + s1[:, None] * w[None, :]).ravel()
+        none = np.zeros(0, dtype=int)
+        return self.add_both(none, cells) if full else self.add_both(cells, none)
+
+    def add_both(self, middle: np.ndarray, full: np.ndarray) -> np.ndarray:
+        """:meth:`add` of the cells ``middle`` and, with ``full``, of the cells
+        ``full`` (those take every point, not their middle first), with one
+        evaluation of the path's derivatives. Returns the cells whose derivatives
+        changed (sorted)."""
+        full = np.unique(full)
+        full = full[~self.full[full]]
+        middle = np.setdiff1d(middle, full)
+        middle = middle[~self.done[middle]]
+        vp = np.asarray(VERIFY_POINTS)
+        parts = [(middle, np.array([0.5])), (full, vp)]
+        S = np.concatenate([(self.s[c][:, None] * (1.0 - w[None, :])
+                             + self.s[c + 1][:, None] * w[None, :]).ravel() for c, w in parts])
+        if not S.size:
+            return np.union1d(middle, full)
         _, t1, t2, t3 = self.path.derivatives(S)
         _, (i1, i2, i3) = self._base(S)
-        k, npt = cells.size, w.size
-        vp = np.asarray(VERIFY_POINTS)
-        for order, (tv, iv) in enumerate(((t1, i1), (t2, i2), (t3, i3))):
-            e = (tv - iv).reshape(k, npt, -1)
-            if full:
-                self.err[cells, :, order, :] = e
-            else:  # the parabola 4 e w (1 - w) through the middle's error
-                self.err[cells, :, order, :] = (4.0 * vp * (1.0 - vp))[None, :, None] * e
-        self.done[cells] = True
-        if full:
-            self.full[cells] = True
+        at = 0
+        for (cells, w), is_full in zip(parts, (False, True)):
+            k, npt = cells.size, w.size
+            if not k:
+                continue
+            part = slice(at, at + k * npt)
+            at += k * npt
+            for order, (tv, iv) in enumerate(((t1, i1), (t2, i2), (t3, i3))):
+                e = (tv[part] - iv[part]).reshape(k, npt, -1)
+                if is_full:
+                    self.err[cells, :, order, :] = e
+                else:  # the parabola 4 e w (1 - w) through the middle's error
+                    self.err[cells, :, order, :] = (4.0 * vp * (1.0 - vp))[None, :, None] * e
+            self.done[cells] = True
+            if is_full:
+                self.full[cells] = True
         self.evaluated += S.size
-        return cells
+        return np.union1d(middle, full)
 
     def derivatives(self, S: np.ndarray):
         S = np.atleast_1d(np.asarray(S, dtype=np.float64))
@@ -1409,8 +1425,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left, unresolved)
             if sol is not None:  # the true derivatives where the rounds' check came close
-                corrected.add(close[0])
-                corrected.add(close[1], full=True)
+                corrected.add_both(close[0], close[1])
         src = exact if exact is not None else corrected
         res = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
         if corrected is not None:
