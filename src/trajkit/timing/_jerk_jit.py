@@ -3,13 +3,14 @@
 Every round of the grid problem (:mod:`._socp`) linearises the joints' jerk
 at both ends of every free interval around the previous round's node states
 (both signs; the leg where ``qdot * qddot`` has one sign at both ends of the
-interval, else the tighter of both), and the
-path's jerk; :func:`jerk_rows` writes those rows, normalised, in one pass
-over the intervals and joints, in the order and with the operations of the
-numpy formulation (``_socp._jerk_rows_numpy``): the same rows to a few ulps
-(the tests compare the two). Compiled by numba when it is installed and
-enabled (``TRAJKIT_NO_JIT``); the engine uses the numpy formulation
-otherwise. Pure math: arrays in, arrays out.
+interval, else the tighter of both; the node terms at the speed factor
+``max(rho, (1 + rho) / 2)``, ``rho`` the node's speed over the interval's
+mean speed), and the path's jerk; :func:`jerk_rows` writes those rows,
+normalised, in one pass over the intervals and joints, in the order and with
+the operations of the numpy formulation (``_socp._jerk_coefs_numpy``): the
+same rows to a few ulps (the tests compare the two). Compiled by numba when
+it is installed and enabled (``TRAJKIT_NO_JIT``); the engine uses the numpy
+formulation otherwise. Pure math: arrays in, arrays out.
 """
 
 from __future__ import annotations
@@ -79,6 +80,9 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
             xi = x_bar[i]
             xj = x_bar[i + 1]
             nd = i + e
+            # the node terms' speed factor: the node's speed over the mean
+            rs = 2.0 * (si if e == 0 else sj) / S
+            fac = max(rs, 0.5 * (1.0 + rs))
             for k in range(m):
                 # the leg of the interval: where the joint speeds up (slows down)
                 # at both of its ends, else (a leg change inside) the tighter of both
@@ -97,8 +101,8 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
                 for h in range(2):
                     sgn = 1.0 if h == 0 else -1.0
                     w = sgn * d1[nd, k] / D[i]
-                    c3 = sgn * d3[nd, k]
-                    c2 = sgn * 3.0 * d2[nd, k]
+                    c3 = sgn * fac * d3[nd, k]
+                    c2 = sgn * fac * 3.0 * d2[nd, k]
                     row = (2 * e + h) * G * m + kg * m + k
                     if e == 0:
                         C[row, 0] = c3 - gi

@@ -16,8 +16,17 @@ in s):
 - velocity   ``|q'| sqrt(x) <= v_max``,
 - acceleration ``q'' x + q' u`` within the leg limits (``a_max`` while the
   joint speeds up, ``a_max_decel`` while it slows down),
-- jerk       ``|q''' x + 3 q'' u + q' w| <= j / v`` with ``w = (u_{i+1} - u_i) / D_i``
-  and ``v`` the interval's mean speed,
+- jerk       ``|r (q''' x + 3 q'' u) + q' w| <= j / v`` at both ends of every
+  interval, with ``w = (u_{i+1} - u_i) / D_i``, ``v`` the interval's mean
+  speed and ``r`` the node terms' speed factor: the joint jerk at a node is
+  ``sdot (q''' x + 3 q'' u) + q' v w``, so the factor is exact at
+  ``r = rho``, the node's speed over ``v``. The rows take ``max(rho, (1 +
+  rho) / 2)``: the node's own speed at the interval's faster end (the
+  largest over the interval), the mean speed of the node's half interval at
+  its slower end (the jerk between the node and the middle, not only at the
+  node: with ``r = rho`` there, the check found excesses inside such
+  intervals, and ``r = 1`` at both ends leaves the faster end's jerk too
+  loose, which the check corrects by re-solving),
 
 and the path's own limits (speed cap per node, tangential acceleration and
 jerk). The time ``sum D_i / mean speed`` is convex in ``x`` (a second-order
@@ -26,9 +35,11 @@ convex function of ``x``, so replacing it by its tangent plane at the
 previous round's solution restricts the feasible set: every round's solution
 satisfies the true constraints of the model, the previous solution stays
 feasible, and the time decreases monotonically until the rounds agree
-(sequential convex restriction). The quadratic term of the node relation and
-the mean-speed correction are taken from the previous round (linearised);
-the first round drops the jerk constraints (the jerk-free optimum on the
+(sequential convex restriction). The quadratic term of the node relation, the
+mean-speed correction and the jerk rows' speed factor are taken from the
+previous round (linearised; with them the decrease is only nearly
+monotone: a round slower than the one before ends the rounds, the fastest
+kept); the first round drops the jerk constraints (the jerk-free optimum on the
 grid: a lower bound).
 
 A start or end at rest is exact: the first (last) interval is one jerk
@@ -500,9 +511,11 @@ def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr
         gi = -jl / (S2 * si)
         gj = -jl / (S2 * sj)
         r = (f - gi * xi - gj * xj).ravel()
+        rs = 2.0 * (si if e == 0 else sj) / S[:, None]  # the node's speed over the mean
+        fac = np.maximum(rs, 0.5 * (1.0 + rs))
         for sgn in (1.0, -1.0):
             w = sgn * d1[nd] / Dg
-            c3, c2 = sgn * d3[nd], sgn * 3.0 * d2[nd]
+            c3, c2 = sgn * fac * d3[nd], sgn * fac * 3.0 * d2[nd]
             if e == 0:
                 c = (c3 - gi, -gj, c2 - w, w)
             else:
