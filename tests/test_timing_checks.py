@@ -250,7 +250,8 @@ def test_recheck_after_corrections_equals_a_full_check(seed, compiled):
 
 def test_python_body_matches_numpy(monkeypatch):
     """The kernels' plain-Python source (what runs with ``TRAJKIT_NO_JIT=1``)."""
-    for name in ("sample_ratios", "sample_states", "sample_positions", "rest_pieces", "mid_products"):
+    for name in ("sample_ratios", "sample_ratios_into", "sample_states", "sample_positions",
+                 "rest_pieces", "mid_products"):
         fn = getattr(_checks, name)
         monkeypatch.setattr(_checks, name, getattr(fn, "py_func", fn))
     rng, nodes, der, t, st, jerk, lim, path, breaks, left = _setup(3)

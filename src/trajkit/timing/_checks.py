@@ -44,7 +44,7 @@ from ..profiles._compile import ENABLED, numba
 from ..profiles._compile import jit as _jit
 
 __all__ = ["AVAILABLE", "sample_positions", "sample_states", "rest_pieces", "mid_products", "sample_ratios",
-           "splice_ratios"]
+           "sample_ratios_into", "splice_ratios"]
 
 
 def _inline(fn):
@@ -316,13 +316,28 @@ def sample_ratios(t, st, jerk, s, piece, dt, d1, d2, d3, r1, r2, r3, done, err, 
     """
     n = piece.size
     m = vlim.size
-    given = F1.shape[0] > 0
     cell = np.empty(n, dtype=np.int64)
     rv = np.empty((n, m))
     ra = np.empty((n, m))
     rj = np.empty((n, m))
-    rs = np.zeros(n)
+    rs = np.empty(n)
     worst = np.empty(n)
+    peak, path_peak = sample_ratios_into(t, st, jerk, s, piece, dt, d1, d2, d3, r1, r2, r3, done,
+                                         err, xs, F1, F2, F3, vlim, aacc, adec, jacc, jdec, tol,
+                                         kappa, cap, cap_s, mid, have, cell, rv, ra, rj, rs, worst)
+    return cell, rv, ra, rj, rs, worst, peak, path_peak
+
+
+@_jit
+def sample_ratios_into(t, st, jerk, s, piece, dt, d1, d2, d3, r1, r2, r3, done, err, xs,
+                       F1, F2, F3, vlim, aacc, adec, jacc, jdec, tol, kappa, cap, cap_s, mid,
+                       have, cell, rv, ra, rj, rs, worst):
+    """:func:`sample_ratios` into the given arrays ``cell`` (n,), ``rv, ra, rj``
+    (n, m), ``rs, worst`` (n,) (``n = piece.size``: for instance slices of
+    larger ones, one per thread): returns ``peak, path_peak``."""
+    n = piece.size
+    m = vlim.size
+    given = F1.shape[0] > 0
     peak = np.zeros((3, m))
     path_peak = np.zeros(3)
     basis = np.empty(xs.size - 2)
@@ -409,6 +424,7 @@ def sample_ratios(t, st, jerk, s, piece, dt, d1, d2, d3, r1, r2, r3, done, err, 
             acc = abs(A)
         acc_peak = _nanmax(acc_peak, acc)
         jerk_peak = _nanmax(jerk_peak, abs(jk))
+        rs[i] = 0.0
         if capped:
             cp = min(cap[c], cap[c + 1])
             if cap_fn:
@@ -425,7 +441,7 @@ def sample_ratios(t, st, jerk, s, piece, dt, d1, d2, d3, r1, r2, r3, done, err, 
     path_peak[0] = acc_peak
     path_peak[1] = jerk_peak
     path_peak[2] = speed_peak
-    return cell, rv, ra, rj, rs, worst, peak, path_peak
+    return peak, path_peak
 
 
 @_jit

@@ -171,16 +171,20 @@ def _sample_ratios(t, st, jerk, s_grid, piece, dt, F, cap_s, args, mid, have):
         return _checks.sample_ratios(t, st, jerk, s_grid, piece, dt, *args[:9], *F, *args[9:],
                                      cap_s, mid, have)
 
-    def half(lo, hi):
-        return _checks.sample_ratios(t, st, jerk, s_grid, piece[lo:hi], dt[lo:hi], *args[:9],
-                                     *(f[lo:hi] if f.shape[0] else f for f in F), *args[9:],
-                                     cap_s[lo:hi] if cap_s.size else cap_s, mid, have)
+    m = args[9].size
+    out = (np.empty(n, dtype=np.int64), np.empty((n, m)), np.empty((n, m)), np.empty((n, m)),
+           np.empty(n), np.empty(n))
+
+    def half(lo, hi):  # (each half writes its rows of the results)
+        return _checks.sample_ratios_into(t, st, jerk, s_grid, piece[lo:hi], dt[lo:hi], *args[:9],
+                                          *(f[lo:hi] if f.shape[0] else f for f in F), *args[9:],
+                                          cap_s[lo:hi] if cap_s.size else cap_s, mid, have,
+                                          *(x[lo:hi] for x in out))
 
     other = pool.submit(half, h, n)
     a = half(0, h)
     b = other.result()
-    return (*(np.concatenate([x, y]) for x, y in zip(a[:6], b[:6])),
-            np.maximum(a[6], b[6]), np.maximum(a[7], b[7]))
+    return (*out, np.maximum(a[0], b[0]), np.maximum(a[1], b[1]))
 
 
 #: The final check looks again at every piece that comes within ZOOM_ABOVE of a
