@@ -25,14 +25,18 @@ pivoting (quasi-definite, with the small regularisation ``delta``: any order
 is stable) in ``O(N)``; the solves are not refined against the unregularised
 matrix (:data:`REFINE`: the convergence tests are on the true residuals, and
 a step of refinement changed neither the iterations nor the round times
-beyond 2e-9 on the benchmark's motions, at an eighth of the method's time). The rows are grouped by their
-interval, so that every pass over them reads the interval's four unknowns
-once and adds one 4 x 4 block (or four entries) into the system per
-interval. The start is centred (every slack
+beyond 2e-9 on the benchmark's motions, at an eighth of the method's time).
+The rows are grouped by their interval, so that every pass over them reads
+the interval's four unknowns once and adds one 4 x 4 block (or four
+entries) into the system per interval. The start is centred (every slack
 times its multiplier equal), or, for a round whose rows are those of the
 round before (the rounds have settled), starts the multipliers from that
-round's; the step goes 0.99 of the way to the boundary
-of ``s, lam > 0`` and of ``x > 0`` (the objective's domain).
+round's. The steps go 0.99 of the way to the boundary at most, with
+separate lengths: the primal one (``x, u`` and the slacks) to the boundary
+of ``s > 0`` and of ``x > 0`` (the objective's domain), the dual one (the
+multipliers ``lam`` and ``nu``) to that of ``lam > 0``. One common length,
+the smaller, took 12-17 % more iterations (the benchmark's arm motions, 80
+random lines and arcs on two arms, waypoints and seams).
 
 Compiled by numba when it is installed (the engine uses the cone solver
 otherwise; the plain-Python run gives the same results, slowly). Pure math:
@@ -53,8 +57,9 @@ __all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_MAXITER", "S
 #: gap over the objective.
 IPM_TOL = 1e-8
 
-#: Iterations at most (a solved round takes 9-48).
-IPM_MAX_ITER = 60
+#: Iterations at most (most rounds take fewer than 45; the first round with the
+#: jerk rows on the coarse grid of a hard path up to 85).
+IPM_MAX_ITER = 100
 
 #: Regularisation of the quasi-definite system: a constant and a part proportional
 #: to its largest diagonal entry (refinement steps, if any, remove its effect).
@@ -611,18 +616,17 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
                     out_s[r] = -rin[r] - gdz
                     out_l[r] = Dg[r] * (gdz + rin[r]) - rc[r] / s[r]
         ap, ad = _max_steps(s, lam, ds, dl, z, sol, px, N, STEP_FRACTION)
-        alpha = min(ap, ad)
-        if not alpha > 0.0:
+        if not (ap > 0.0 and ad > 0.0):
             status = ST_FAILED
             break
         for k in range(1, N):
-            z[px[k]] += alpha * sol[px[k]]
-            z[pu[k]] += alpha * sol[pu[k]]
+            z[px[k]] += ap * sol[px[k]]
+            z[pu[k]] += ap * sol[pu[k]]
         for j in range(p):
-            z[pe[j]] += alpha * sol[pe[j]]
+            z[pe[j]] += ad * sol[pe[j]]
         for r in range(m):
-            s[r] += alpha * ds[r]
-            lam[r] += alpha * dl[r]
+            s[r] += ap * ds[r]
+            lam[r] += ad * dl[r]
         it += 1
     for k in range(1, N):
         X[k] = z[px[k]]
