@@ -668,6 +668,46 @@ def test_compiled_blend_points_equal_the_numpy_steps():
         np.testing.assert_array_equal(bz.point(s), pts if _bezier_jit.AVAILABLE else ref)
 
 
+def test_compiled_blend_derivatives_equal_the_numpy_formulas():
+    """The blend's derivatives in arc length: the compiled de Casteljau evaluation
+    (``_bezier_jit.arc_derivatives``) and the numpy Bernstein sums
+    (``BezierBlend._arc_derivatives``) at the same curve parameters agree to
+    round-off, and ``BezierBlend.derivatives`` returns the compiled ones when
+    numba is there."""
+    from trajkit.robot import _bezier_jit
+    from trajkit.robot._pieces import _GL_W, _GL_X, BLEND_NEWTON
+
+    rng = np.random.default_rng(10)
+    done = 0
+    for _ in range(20):
+        ta, tb = rng.normal(size=(2, 3))
+        ta /= np.linalg.norm(ta)
+        tb /= np.linalg.norm(tb)
+        if float(ta @ tb) < -0.95:
+            continue
+        r = float(rng.uniform(0.005, 0.05))
+        corner = rng.normal(size=3)
+        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+        u = np.concatenate([[0.0, 1.0], rng.uniform(0.0, 1.0, 300)])
+        ref = BezierBlend._arc_derivatives(bz.ctrl, u)
+        got = _bezier_jit.arc_derivatives(bz.ctrl, u)
+        for a, b in zip(got, ref):
+            # (Bernstein sums against de Casteljau, then divisions by powers of |B'|:
+            # round-off of the derivative's scale, up to 5e-14 of it on 200 random blends)
+            assert np.abs(a - b).max() <= 1e-12 * float(np.abs(b).max()), np.abs(a - b).max()
+        s = np.linspace(0.0, bz.length, 50)
+        p, d1, d2, d3 = bz.derivatives(s)
+        if _bezier_jit.AVAILABLE:
+            _, uu = _bezier_jit.points_at(bz.ctrl, bz._u, bz._cum, _GL_X, _GL_W, BLEND_NEWTON, s)
+            for a, b in zip((d1, d2, d3), _bezier_jit.arc_derivatives(bz.ctrl, uu)):
+                np.testing.assert_array_equal(a, b)
+        # a unit tangent, the curvature vector normal to it
+        np.testing.assert_allclose(np.linalg.norm(d1, axis=1), 1.0, rtol=1e-12)
+        assert np.abs(np.sum(d1 * d2, axis=1)).max() <= 1e-9 * max(1.0, float(np.abs(d2).max()))
+        done += 1
+    assert done >= 15
+
+
 def test_blend_ends_are_g3_with_lines_and_arcs():
     """At both ends the blend has the piece's tangent and curvature vector, and the
     normal part of its third derivative by arc length is zero (that of a line or an

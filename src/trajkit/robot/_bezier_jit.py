@@ -1,4 +1,5 @@
-"""Compiled arc-length inversion of a blend's Bezier curve: :func:`points_at`.
+"""Compiled arc-length inversion of a blend's Bezier curve (:func:`points_at`)
+and its derivatives in arc length (:func:`arc_derivatives`).
 
 The same steps as :meth:`trajkit.robot._pieces.BezierBlend.u_of_s` (the
 arc-length table, then Newton steps on the arc length from the table node
@@ -6,7 +7,12 @@ below, each integrated by Gauss-Legendre quadrature) and the curve's point
 there, point by point in one compiled loop; the point by de Casteljau's
 algorithm, the speed |B'(u)| by Horner's scheme on the derivative's
 power-basis coefficients; a point's steps end early at a fixed point. The
-same values as the numpy version to round-off. Used only when numba is available (:data:`AVAILABLE`).
+same values as the numpy version to round-off. :func:`arc_derivatives`
+evaluates the curve's first three derivatives in its parameter by de
+Casteljau's algorithm on the differenced control points and turns them into
+derivatives in arc length with the formulas of
+:meth:`trajkit.robot._pieces.BezierBlend.derivatives`. Used only when numba
+is available (:data:`AVAILABLE`).
 
 Pure math: arrays in, arrays out.
 """
@@ -18,7 +24,7 @@ import numpy as np
 from ..profiles._compile import ENABLED
 from ..profiles._compile import jit as _jit
 
-__all__ = ["AVAILABLE", "points_at"]
+__all__ = ["AVAILABLE", "arc_derivatives", "points_at"]
 
 #: True when the compiled loop is used (numba installed and not disabled).
 AVAILABLE = ENABLED
@@ -155,3 +161,58 @@ def points_at(ctrl, utab, cum, gl_x, gl_w, newton, s):
         for d in range(3):
             pts[p, d] = tmp[d]
     return pts, us
+
+
+@_jit
+def _differenced(c):
+    """Control points (k - 1, 3) of the derivative of the Bezier curve ``c`` (k, 3)."""
+    k = c.shape[0]
+    out = np.empty((max(k - 1, 0), 3))
+    for i in range(k - 1):
+        for d in range(3):
+            out[i, d] = (k - 1) * (c[i + 1, d] - c[i, d])
+    return out
+
+
+@_jit
+def arc_derivatives(ctrl, u):
+    """First three derivatives in arc length of the Bezier curve ``ctrl`` (k, 3)
+    at the curve parameters ``u`` (n,): ``p', p'', p'''`` (each (n, 3)) [1],
+    [1/m], [1/m^2].
+
+    With ``B', B'', B'''`` the curve's derivatives in ``u`` and
+    ``sigma = |B'|``: ``p' = B' / sigma``, ``p'' = N / sigma^3`` with
+    ``N = B'' sigma - B' sigma'``, ``p''' = (N' / sigma^3 - 3 N sigma' /
+    sigma^4) / sigma`` with ``N' = B''' sigma - B' sigma''``.
+    """
+    c1 = _differenced(ctrl)
+    c2 = _differenced(c1)
+    c3 = _differenced(c2)
+    k = ctrl.shape[0]
+    work = np.empty((k, 3))
+    b1 = np.zeros(3)
+    b2 = np.zeros(3)
+    b3 = np.zeros(3)
+    n = u.shape[0]
+    d1 = np.empty((n, 3))
+    d2 = np.empty((n, 3))
+    d3 = np.empty((n, 3))
+    for p in range(n):
+        if c1.shape[0]:
+            _casteljau(c1, u[p], work, b1)
+        if c2.shape[0]:
+            _casteljau(c2, u[p], work, b2)
+        if c3.shape[0]:
+            _casteljau(c3, u[p], work, b3)
+        sig = np.sqrt(b1[0] * b1[0] + b1[1] * b1[1] + b1[2] * b1[2])
+        d12 = b1[0] * b2[0] + b1[1] * b2[1] + b1[2] * b2[2]
+        sig1 = d12 / sig
+        sig2 = (b2[0] * b2[0] + b2[1] * b2[1] + b2[2] * b2[2]
+                + b1[0] * b3[0] + b1[1] * b3[1] + b1[2] * b3[2]) / sig - d12 * sig1 / sig**2
+        for d in range(3):
+            num = b2[d] * sig - b1[d] * sig1
+            num1 = b3[d] * sig - b1[d] * sig2
+            d1[p, d] = b1[d] / sig
+            d2[p, d] = num / sig**3
+            d3[p, d] = (num1 / sig**3 - 3.0 * num * sig1 / sig**4) / sig
+    return d1, d2, d3

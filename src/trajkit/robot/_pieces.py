@@ -290,13 +290,18 @@ class BezierBlend:
             [m], [1], [1/m], [1/m^2].
         """
         s = np.atleast_1d(np.asarray(s, dtype=np.float64)).ravel()
-        if _bezier_jit.AVAILABLE:
+        if _bezier_jit.AVAILABLE:  # the same formulas, compiled
             p, u = _bezier_jit.points_at(self.ctrl, self._u, self._cum, _GL_X, _GL_W, BLEND_NEWTON,
                                          np.ascontiguousarray(s))
-        else:
-            u = self.u_of_s(s)
-            p = self._eval(self.ctrl, u)
-        b1, b2, b3 = (self._eval(self.ctrl, u, k) for k in (1, 2, 3))
+            return (p, *_bezier_jit.arc_derivatives(self.ctrl, u))
+        u = self.u_of_s(s)
+        return (self._eval(self.ctrl, u), *self._arc_derivatives(self.ctrl, u))
+
+    @classmethod
+    def _arc_derivatives(cls, ctrl: np.ndarray, u: np.ndarray) -> tuple:
+        """``p', p'', p'''`` (each (n, 3)) at the curve parameters ``u`` (n,), in
+        numpy (:func:`._bezier_jit.arc_derivatives` is the compiled twin)."""
+        b1, b2, b3 = (cls._eval(ctrl, u, k) for k in (1, 2, 3))
         sig = np.linalg.norm(b1, axis=1)[:, None]
         d12 = np.sum(b1 * b2, axis=1)[:, None]
         sig1 = d12 / sig
@@ -304,7 +309,7 @@ class BezierBlend:
             - d12 * sig1 / sig**2
         num = b2 * sig - b1 * sig1
         num1 = b3 * sig - b1 * sig2
-        return p, b1 / sig, num / sig**3, (num1 / sig**3 - 3.0 * num * sig1 / sig**4) / sig
+        return b1 / sig, num / sig**3, (num1 / sig**3 - 3.0 * num * sig1 / sig**4) / sig
 
 
 class Piece:
