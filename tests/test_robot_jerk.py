@@ -643,14 +643,10 @@ def test_blend_is_curvature_continuous_and_arc_length_exact():
             assert np.linalg.norm(pts - corner, axis=1).max() <= r * (1 + 1e-12)
 
 
-def test_compiled_blend_points_equal_the_numpy_steps():
-    """``BezierBlend.point`` (compiled when numba is there) and the numpy steps
-    (``u_of_s``, then the Bernstein sum) give the same points to round-off."""
-    from trajkit.robot import _bezier_jit
-    from trajkit.robot._pieces import _GL_W, _GL_X, BLEND_NEWTON
-
-    rng = np.random.default_rng(9)
-    for _ in range(20):
+def _random_blends(rng, tries: int = 20):
+    """Corner blends of 5-50 mm between random unit tangents (not near a
+    reversal), drawn from ``rng`` (the caller may draw more between them)."""
+    for _ in range(tries):
         ta, tb = rng.normal(size=(2, 3))
         ta /= np.linalg.norm(ta)
         tb /= np.linalg.norm(tb)
@@ -658,7 +654,17 @@ def test_compiled_blend_points_equal_the_numpy_steps():
             continue
         r = float(rng.uniform(0.005, 0.05))
         corner = rng.normal(size=3)
-        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+        yield BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+
+
+def test_compiled_blend_points_equal_the_numpy_steps():
+    """``BezierBlend.point`` (compiled when numba is there) and the numpy steps
+    (``u_of_s``, then the Bernstein sum) give the same points to round-off."""
+    from trajkit.robot import _bezier_jit
+    from trajkit.robot._pieces import _GL_W, _GL_X, BLEND_NEWTON
+
+    rng = np.random.default_rng(9)
+    for bz in _random_blends(rng):
         s = np.concatenate([[0.0, bz.length, -1.0, 2.0 * bz.length], rng.uniform(0.0, bz.length, 500)])
         ref_u = bz.u_of_s(s)
         ref = BezierBlend._eval(bz.ctrl, ref_u)
@@ -679,15 +685,7 @@ def test_compiled_blend_derivatives_equal_the_numpy_formulas():
 
     rng = np.random.default_rng(10)
     done = 0
-    for _ in range(20):
-        ta, tb = rng.normal(size=(2, 3))
-        ta /= np.linalg.norm(ta)
-        tb /= np.linalg.norm(tb)
-        if float(ta @ tb) < -0.95:
-            continue
-        r = float(rng.uniform(0.005, 0.05))
-        corner = rng.normal(size=3)
-        bz = BezierBlend(corner - r * ta, ta, corner + r * tb, tb, r, corner=corner)
+    for bz in _random_blends(rng):
         u = np.concatenate([[0.0, 1.0], rng.uniform(0.0, 1.0, 300)])
         ref = BezierBlend._arc_derivatives(bz.ctrl, u)
         got = _bezier_jit.arc_derivatives(bz.ctrl, u)
