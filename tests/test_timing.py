@@ -547,3 +547,31 @@ def test_a_forked_process_gets_its_own_thread_for_the_checks(monkeypatch):
     finally:
         pool.shutdown()
     assert there == [here]
+
+
+
+def test_a_failed_optimisation_gives_the_always_feasible_fallback(monkeypatch):
+    """Where the grid problem fails, the engine returns its always-feasible
+    fallback: one rest-to-rest S-curve of the path parameter, flagged in
+    ``info["status"]``, keeping every limit and reaching the end."""
+    from trajkit.timing import engine
+
+    lims = [AxisLimits(2.0, 10.0, 100.0), AxisLimits(1.5, 8.0, 60.0, 6.0, 40.0),
+            AxisLimits(3.0, 20.0, 150.0)]
+    goal = np.array([1.2, -0.4, 0.6])
+    path = LinearJointPath(np.array([0.0, 0.5, -0.3]), goal)
+    optimum = plan_path_timing(path, lims).duration
+
+    def failing(*args, **kwargs):
+        raise RuntimeError("path timing: the jerk-free grid problem failed (test)")
+
+    monkeypatch.setattr(engine, "solve_grid", failing)
+    tm = plan_path_timing(path, lims)
+    assert tm.info["status"] == "fallback" and math.isnan(tm.jerk_free_time)
+    assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+    q, qd, qdd, _ = tm.joint_states([0.0, tm.duration])
+    np.testing.assert_allclose(q[-1], goal, rtol=0, atol=1e-12)
+    assert np.abs(qd[-1]).max() <= 1e-12 and np.abs(qdd[-1]).max() <= 1e-9
+    # one S-curve of the path parameter under the smallest limits: never faster than
+    # the optimum, and on a straight joint line not far from it
+    assert optimum * (1 - 1e-9) <= tm.duration <= 3.0 * optimum, (tm.duration, optimum)

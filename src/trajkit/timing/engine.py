@@ -85,6 +85,10 @@ CAP_GRID = 4097
 #: A change of the speed cap between two samples that counts as a step (fraction).
 CAP_STEP = 0.01
 
+#: A point of that sampling within this fraction of its spacing of a grid node is
+#: not added as a node (the node is there already, to round-off).
+CAP_MERGE = 1e-3
+
 #: Refinement passes at most (each halves the cells still over GRID_RTOL: a
 #: corner blend of 0.05 mm radius on a 0.2 m line needs 9). Cells still over it
 #: after the last pass, or left whole at GRID_MAX, are checked with the true
@@ -445,6 +449,24 @@ def _cap_edges(cap_fn, L: float) -> np.ndarray:
         jump = (fin[:-1] != fin[1:]) | (fin[:-1] & fin[1:] & (np.abs(b - a) > CAP_STEP * np.minimum(a, b)))
     k = np.nonzero(jump)[0]
     return np.unique(np.concatenate([g[k], g[k + 1]]))
+
+
+def _add_nodes(s: np.ndarray, pts: np.ndarray, gap: float) -> np.ndarray:
+    """The grid ``s`` (increasing) with the points ``pts`` added, except those within
+    ``gap`` of one of its nodes or of a point added before them: two nodes a few
+    ulps apart (the same parameter value reached by two roundings) would make an
+    interval whose duration is round-off, and its pieces' jerk the solver's error
+    over that duration squared."""
+    pts = np.unique(pts)
+    if not pts.size:
+        return s
+    at = np.searchsorted(s, pts)
+    left = s[np.maximum(at - 1, 0)]
+    right = s[np.minimum(at, s.size - 1)]
+    pts = pts[(np.abs(pts - left) > gap) & (np.abs(right - pts) > gap)]
+    if pts.size > 1:
+        pts = pts[np.concatenate([[True], np.diff(pts) > gap])]
+    return np.unique(np.concatenate([s, pts]))
 
 
 def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
@@ -1226,7 +1248,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     breaks = np.unique(breaks[(breaks > 0.0) & (breaks < L)])
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
-        s = np.unique(np.concatenate([s, _cap_edges(cap_fn, L)]))
+        s = _add_nodes(s, _cap_edges(cap_fn, L), CAP_MERGE * L / (CAP_GRID - 1))
     cached = _Cached(path)
     der = cached.derivatives(s)
     alim = np.minimum(aacc, adec)
