@@ -35,7 +35,7 @@ round's. The steps go 0.99 of the way to the boundary at most, with
 separate lengths: the primal one (``x, u`` and the slacks) to the boundary
 of ``s > 0`` and of ``x > 0`` (the objective's domain), the dual one (the
 multipliers ``lam`` and ``nu``) to that of ``lam > 0``. One common length,
-the smaller, took 12-17 % more iterations (the benchmark's arm motions, 80
+the smaller, takes 12-17 % more iterations (the benchmark's arm motions, 80
 random lines and arcs on two arms, waypoints and seams).
 
 Compiled by numba when it is installed (the engine uses the cone solver

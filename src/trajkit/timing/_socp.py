@@ -24,7 +24,7 @@ in s):
   rho) / 2)``: the node's own speed at the interval's faster end (the
   largest over the interval), the mean speed of the node's half interval at
   its slower end (the jerk between the node and the middle, not only at the
-  node: with ``r = rho`` there, the check found excesses inside such
+  node: with ``r = rho`` there, the check finds excesses inside such
   intervals, and ``r = 1`` at both ends leaves the faster end's jerk too
   loose, which the check corrects by re-solving),
 
