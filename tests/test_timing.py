@@ -575,3 +575,41 @@ def test_a_failed_optimisation_gives_the_always_feasible_fallback(monkeypatch):
     # one S-curve of the path parameter under the smallest limits: never faster than
     # the optimum, and on a straight joint line not far from it
     assert optimum * (1 - 1e-9) <= tm.duration <= 3.0 * optimum, (tm.duration, optimum)
+
+
+def test_an_attempt_that_needs_a_large_slow_down_gives_way_to_the_fallback(monkeypatch):
+    """A best attempt whose check finds a large excess (here made by a speed spike
+    at one node of every solution) would be slowed down uniformly by a large
+    factor; the engine takes the always-feasible fallback where that is shorter,
+    and the fallback keeps a speed cap with narrow dips (its few long pieces are
+    checked at least as densely as the cap is sampled for its steps)."""
+    from trajkit.timing import engine
+
+    lims = [AxisLimits(2.0, 10.0, 100.0), AxisLimits(1.5, 8.0, 60.0, 6.0, 40.0)]
+    path = LinearJointPath(np.array([0.0, 0.5]), np.array([1.2, -0.4]))
+    centres, widths = np.array([0.3, 0.9, 1.2]), np.array([0.004, 0.01, 0.002])
+
+    def cap(s):
+        dips = 0.6 * np.exp(-(((np.asarray(s)[..., None] - centres) / widths) ** 2))
+        return 1.0 * (1.0 - dips.max(axis=-1))
+
+    optimum = plan_path_timing(path, lims, speed=cap).duration
+    real = engine.solve_grid
+
+    def spiked(p, *args, **kwargs):
+        sol = real(p, *args, **kwargs)
+        sol.x[sol.x.size // 2] *= 1e4
+        return sol
+
+    monkeypatch.setattr(engine, "solve_grid", spiked)
+    tm = plan_path_timing(path, lims, speed=cap)
+    assert tm.info["status"] == "fallback"
+    assert optimum * (1 - 1e-9) <= tm.duration <= 10.0 * optimum, (tm.duration, optimum)
+    assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+    t = np.unique(np.concatenate([np.linspace(0.0, tm.duration, 200001), tm.t]))
+    s, sdot = tm.sample(t)[:2]
+    assert np.all(sdot <= cap(s) * (1 + 1e-9)), float(np.max(sdot / cap(s)))
+    # (without the comparison: the spiked attempt, slowed down by its large factor)
+    monkeypatch.setattr(engine, "FALLBACK_ABOVE", math.inf)
+    slowed = plan_path_timing(path, lims, speed=cap)
+    assert slowed.info["status"] != "fallback" and slowed.duration > 10.0 * optimum

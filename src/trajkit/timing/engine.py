@@ -231,6 +231,11 @@ TIGHTEN_ABOVE = 1e-6
 #: when the attempts are compared.
 SCALED_PENALTY = 2e-3
 
+#: A best attempt that needs a uniform slow-down by more than this factor is
+#: compared with the always-feasible fallback, and the shorter one kept (a
+#: safeguard: on the benchmark's motions every attempt needs less than 1 %).
+FALLBACK_ABOVE = 1.1
+
 #: Rounds of a solve after a limit was lowered locally (it starts from the previous one).
 TIGHTEN_ROUNDS = 3
 
@@ -1424,6 +1429,15 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 np.minimum.at(xmid_scale, c, f * xmid_scale[c])
     except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
         best = None
+    if best is not None and rest0 and restN and best[5] > FALLBACK_ABOVE:
+        # the best attempt needs a large uniform slow-down (its rounds went wrong):
+        # the always-feasible fallback instead where that is shorter
+        s_b, der_b, cap_b, kappa_b, vcap_b = best[7]
+        dur_fb, _ = _fallback(s_b, der_b, L, vlim, aacc, adec, jacc, jdec, cap_b, a_path, j_path,
+                              kappa_b)
+        if float(np.sum(dur_fb)) < float(np.sum(best[2])) * best[5]:
+            s, der, cap, kappa, vcap = s_b, der_b, cap_b, kappa_b, vcap_b
+            best = None
     if best is None:
         if not (rest0 and restN):
             raise InfeasibleError("no timing found for a path with a moving boundary state")
@@ -1433,6 +1447,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     else:
         _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap), close = best
     corrected: _Corrected | None = None
+    # (the fallback's few long pieces: at least as many points each as the speed
+    # cap's sampling for its steps has over the whole path)
+    per_piece = FINAL_CHECK_PER_PIECE if sol is not None else max(FINAL_CHECK_PER_PIECE, CAP_GRID)
     for _final in range(4):
         if k_scale > 1.0 and not (rest0 and restN):
             raise InfeasibleError(
@@ -1453,18 +1470,18 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             if sol is not None:  # the true derivatives where the rounds' check came close
                 corrected.add_both(close[0], close[1])
         src = exact if exact is not None else corrected
-        res = _check(s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+        res = _check(s, der, t, st, jk, lim, src, per_piece)
         if corrected is not None:
             # the true derivatives in the cells that come close to a limit, then again
             res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_ABOVE]),
-                           s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+                           s, der, t, st, jk, lim, src, per_piece)
             # ... and at every point of VERIFY_POINTS where that comes very close
             res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_FULL_ABOVE], full=True),
-                           s, der, t, st, jk, lim, src, FINAL_CHECK_PER_PIECE)
+                           s, der, t, st, jk, lim, src, per_piece)
         use, worst = res[0], res[6]
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
-        zu = _zoom(s, der, t, st, jk, lim, src, worst, FINAL_CHECK_PER_PIECE + 2)
+        zu = _zoom(s, der, t, st, jk, lim, src, worst, per_piece + 2)
         use = _max_use(use, zu)
         extra = _uniform_scale(use)
         if extra <= 1.0:
