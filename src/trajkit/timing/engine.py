@@ -1429,19 +1429,21 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 np.minimum.at(xmid_scale, c, f * xmid_scale[c])
     except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
         best = None
+    fallback = None  # (durations, jerks) of the fallback once made
     if best is not None and rest0 and restN and best[5] > FALLBACK_ABOVE:
         # the best attempt needs a large uniform slow-down (its rounds went wrong):
         # the always-feasible fallback instead where that is shorter
         s_b, der_b, cap_b, kappa_b, vcap_b = best[7]
-        dur_fb, _ = _fallback(s_b, der_b, L, vlim, aacc, adec, jacc, jdec, cap_b, a_path, j_path,
-                              kappa_b)
-        if float(np.sum(dur_fb)) < float(np.sum(best[2])) * best[5]:
+        fallback = _fallback(s_b, der_b, L, vlim, aacc, adec, jacc, jdec, cap_b, a_path, j_path,
+                             kappa_b)
+        if float(np.sum(fallback[0])) < float(np.sum(best[2])) * best[5]:
             s, der, cap, kappa, vcap = s_b, der_b, cap_b, kappa_b, vcap_b
             best = None
     if best is None:
         if not (rest0 and restN):
             raise InfeasibleError("no timing found for a path with a moving boundary state")
-        dur0, jk0 = _fallback(s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
+        dur0, jk0 = fallback if fallback is not None else _fallback(
+            s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
         sol, piv, k_scale, tightened = None, None, 1.0, 0
         jerk_free_time = math.nan
     else:
