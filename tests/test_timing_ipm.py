@@ -325,3 +325,28 @@ def test_the_jerk_free_rounds_start_is_the_speed_the_ends_allow():
     finite = np.isfinite(want)
     assert finite.sum() > n // 2 and got[0] == 0.0 and got[-1] == 0.04
     np.testing.assert_allclose(got[finite], want[finite], rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_pivot_that_cancels_is_raised_not_a_failure(sign):
+    """Two nearly parallel active rows make terms of 1e16 whose difference cancels
+    to zero in floating point: the factorisation raises that pivot, with the sign
+    it has in exact arithmetic, to PIVOT_RTOL of its diagonal entry (a dynamic
+    regularisation) instead of failing; a pivot that is not a number fails."""
+    big = 1e16
+    # lower band storage (half-width 1) of [[big, big], [big, big + sign]]: the
+    # second pivot is +-1 exactly, 0.0 after the round-off of big + sign
+    M = np.array([[big, 0.0], [big + sign, big]])
+    L = np.zeros((2, 2))
+    d = np.zeros(2)
+    signs = np.array([1.0, sign])
+    raised = _ipm._ldl(M, 1, L, d, signs)
+    assert raised == 1
+    assert d[0] == big and L[1, 1] == 1.0
+    assert d[1] == sign * _ipm.PIVOT_RTOL * big
+    # a well-conditioned matrix keeps its exact pivots
+    M2 = np.array([[4.0, 0.0], [3.0, 1.0]])
+    assert _ipm._ldl(M2, 1, L, d, np.ones(2)) == 0
+    np.testing.assert_allclose(d, [4.0, 3.0 - 0.25], rtol=1e-15)
+    M3 = np.array([[np.nan, 0.0], [1.0, 1.0]])
+    assert _ipm._ldl(M3, 1, L, d, np.ones(2)) == -1

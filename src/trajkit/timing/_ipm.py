@@ -22,7 +22,10 @@ Eliminating ``s`` and ``lam`` leaves the symmetric quasi-definite system
 ordered node by node (``x_k, u_k``, then the equalities whose last node is
 ``k``): a band of half-width about 6, factored as ``L D L^T`` without
 pivoting (quasi-definite, with the small regularisation ``delta``: any order
-is stable) in ``O(N)``; the solves are not refined against the unregularised
+is stable) in ``O(N)``; a pivot that cancels in floating point (nearly
+dependent active rows, whose terms ``lam / s`` grow past 1e14) is raised to a
+small fraction of its diagonal entry with its exact sign instead of failing
+the round (:data:`PIVOT_RTOL`); the solves are not refined against the unregularised
 matrix (:data:`REFINE`: the convergence tests are on the true residuals, and
 a step of refinement changed neither the iterations nor the round times
 beyond 2e-9 on the benchmark's motions, at an eighth of the method's time).
@@ -65,6 +68,10 @@ IPM_MAX_ITER = 100
 #: to its largest diagonal entry (refinement steps, if any, remove its effect).
 REG = 1e-10
 REG_PROP = 1e-30
+
+#: Pivots of the factorisation that cancel to below this fraction of their
+#: diagonal entry are raised to it (see ``_ldl``).
+PIVOT_RTOL = 1e-12
 
 #: Status codes.
 ST_SOLVED = 0
@@ -187,23 +194,36 @@ def _band_add(M, a, b, v):
 
 
 @_jit
-def _ldl(M, bw, L, d):
-    """``M = L D L^T`` of the band matrix ``M`` (lower band, half-width ``bw``)."""
+def _ldl(M, bw, L, d, sign):
+    """``M = L D L^T`` of the band matrix ``M`` (lower band, half-width ``bw``).
+
+    ``sign`` (n,): the sign every pivot has in exact arithmetic (the
+    quasi-definite system: + for the unknowns, - for the equalities). A pivot
+    that cancels to below PIVOT_RTOL of its diagonal entry, or to the wrong
+    sign (two rows nearly parallel and both active: their terms ``lam / s``
+    grow to 1e14 and more and swamp the regularisation), is set to that size
+    with its sign (a dynamic regularisation of that one direction). Returns
+    the number of pivots raised, -1 for a pivot that is not a number."""
     n = M.shape[0]
+    raised = 0
     for j in range(n):
         s = M[j, 0]
         for k in range(max(0, j - bw), j):
             ljk = L[j, j - k]
             s -= ljk * ljk * d[k]
+        if s != s:
+            return -1
+        floor = max(PIVOT_RTOL * abs(M[j, 0]), REG)
+        if sign[j] * s < floor:
+            s = sign[j] * floor
+            raised += 1
         d[j] = s
-        if s == 0.0 or s != s:
-            return False
         for i in range(j + 1, min(n, j + bw + 1)):
             s2 = M[i, i - j]
             for k in range(max(0, i - bw), j):
                 s2 -= L[i, i - k] * L[j, j - k] * d[k]
             L[i, i - j] = s2 / d[j]
-    return True
+    return raised
 
 
 @_jit
@@ -245,14 +265,14 @@ def _objective(X, w):
 
 
 @_jit
-def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, diag_reg, refine):
-    """``sol`` from the factors of the regularised matrix, refined against ``M``
-    without the regularisation (``diag_reg``: what was added to the diagonal)."""
+def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, refine):
+    """``sol`` from the factors of the regularised matrix, refined ``refine``
+    times against ``M`` (the matrix without the regularisation)."""
     _ldl_solve(L, dd, bw, rhs, sol)
     for _ in range(refine):
         _band_mul(M, bw, sol, res)
         for q in range(rhs.size):
-            res[q] = rhs[q] - (res[q] - diag_reg[q] * sol[q])
+            res[q] = rhs[q] - res[q]
         _ldl_solve(L, dd, bw, res, tmp)
         for q in range(rhs.size):
             sol[q] += tmp[q]
@@ -408,6 +428,9 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     res = np.zeros(nk)
     tmp = np.zeros(nk)
     reg = np.zeros(nk)
+    sgn = np.ones(nk)  # the pivots' signs: + the unknowns, - the equalities
+    for j in range(p):
+        sgn[pe[j]] = -1.0
     rhs_k = rhs[:nk]
     sol_k = sol[:nk]
     rin = np.zeros(m)
@@ -432,6 +455,14 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         en = max(en, abs(ee[j]))
     status = ST_MAXITER
     it = 0
+    # the step of the previous iteration still to be taken by the slacks and
+    # multipliers (in the next pass over the rows: every pass over the rows reads
+    # and writes them once)
+    ap = 0.0
+    ad = 0.0
+    gt = np.zeros(nk + 1)  # G^T of the predictor's row terms
+    ga = np.zeros(nk + 1)  # G^T of the second-order terms ds_a dl_a / s
+    gb = np.zeros(nk + 1)  # G^T of 1 / s
     while it < max_iter:
         # ---- residuals at the iterate; the objective's gradient and Hessian
         for k in range(1, N):
@@ -457,9 +488,13 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
                 M[px[i + 1], 0] += f3 * Sb * Sb + f2 * 0.25 / (b * X[i + 1])
             if px[i] >= 0 and px[i + 1] >= 0:
                 _band_add(M, px[i + 1], px[i], f3 * (0.5 / a) * (0.5 / b))
-        # r_d = grad f + G^T lam + E^T nu, interval by interval
-        for q in range(nk):
-            rz[q] = gf[q]
+        # one pass over the rows, interval by interval: the previous step of the
+        # slacks and multipliers; the residuals r_in = G z + s - h and r_d = grad f
+        # + G^T lam (+ E^T nu below); the matrix H + G^T D G (a 4 x 4 block per
+        # interval, D = lam / s) and the predictor's G^T (D r_in - lam)
+        for q in range(nk + 1):
+            rz[q] = gf[q] if q < nk else 0.0
+            gt[q] = 0.0
         pres = 0.0
         gap = 0.0
         for i in range(N):
@@ -468,21 +503,76 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
             g1 = 0.0
             g2 = 0.0
             g3 = 0.0
+            h0 = 0.0
+            h1 = 0.0
+            h2 = 0.0
+            h3 = 0.0
+            m00 = 0.0
+            m11 = 0.0
+            m22 = 0.0
+            m33 = 0.0
+            m10 = 0.0
+            m20 = 0.0
+            m21 = 0.0
+            m30 = 0.0
+            m31 = 0.0
+            m32 = 0.0
             for r in range(ptr[i], ptr[i + 1]):
+                sr = s[r] + ap * ds[r]
+                lr = lam[r] + ad * dl[r]
+                s[r] = sr
+                lam[r] = lr
                 c0, c1, c2, c3 = cf[r, 0], cf[r, 1], cf[r, 2], cf[r, 3]
-                v = c0 * z0 + c1 * z1 + c2 * z2 + c3 * z3 + s[r] - hh[r]
+                v = c0 * z0 + c1 * z1 + c2 * z2 + c3 * z3 + sr - hh[r]
                 rin[r] = v
                 pres = max(pres, abs(v))
-                lr = lam[r]
-                gap += s[r] * lr
+                gap += sr * lr
                 g0 += c0 * lr
                 g1 += c1 * lr
                 g2 += c2 * lr
                 g3 += c3 * lr
-            rz[cp[i, 0]] += g0
-            rz[cp[i, 1]] += g1
-            rz[cp[i, 2]] += g2
-            rz[cp[i, 3]] += g3
+                dr = lr / sr
+                Dg[r] = dr
+                t = dr * v - lr
+                h0 += c0 * t
+                h1 += c1 * t
+                h2 += c2 * t
+                h3 += c3 * t
+                t0 = dr * c0
+                t1 = dr * c1
+                t2 = dr * c2
+                t3 = dr * c3
+                m00 += t0 * c0
+                m11 += t1 * c1
+                m22 += t2 * c2
+                m33 += t3 * c3
+                m10 += t1 * c0
+                m20 += t2 * c0
+                m21 += t2 * c1
+                m30 += t3 * c0
+                m31 += t3 * c1
+                m32 += t3 * c2
+            q0, q1, q2, q3 = cp[i, 0], cp[i, 1], cp[i, 2], cp[i, 3]
+            rz[q0] += g0
+            rz[q1] += g1
+            rz[q2] += g2
+            rz[q3] += g3
+            gt[q0] += h0
+            gt[q1] += h1
+            gt[q2] += h2
+            gt[q3] += h3
+            _block_add(M, nk, q0, q0, m00)
+            _block_add(M, nk, q1, q1, m11)
+            _block_add(M, nk, q2, q2, m22)
+            _block_add(M, nk, q3, q3, m33)
+            _block_add(M, nk, q1, q0, m10)
+            _block_add(M, nk, q2, q0, m20)
+            _block_add(M, nk, q2, q1, m21)
+            _block_add(M, nk, q3, q0, m30)
+            _block_add(M, nk, q3, q1, m31)
+            _block_add(M, nk, q3, q2, m32)
+        ap = 0.0
+        ad = 0.0
         pres /= hn  # (the largest quotient is the quotient of the largest: hn > 0)
         for j in range(p):
             req[j] = _dot4(epos, ecf, j, z) - ee[j]
@@ -501,48 +591,8 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         if pres < tol and dres < tol and gap < tol * (1.0 + fval):
             status = ST_SOLVED
             break
-        # ---- the matrix: H + G^T D G (a 4 x 4 block per interval), E, regularisation
-        for i in range(N):
-            m00 = 0.0
-            m11 = 0.0
-            m22 = 0.0
-            m33 = 0.0
-            m10 = 0.0
-            m20 = 0.0
-            m21 = 0.0
-            m30 = 0.0
-            m31 = 0.0
-            m32 = 0.0
-            for r in range(ptr[i], ptr[i + 1]):
-                dr = lam[r] / s[r]
-                Dg[r] = dr
-                c0, c1, c2, c3 = cf[r, 0], cf[r, 1], cf[r, 2], cf[r, 3]
-                t0 = dr * c0
-                t1 = dr * c1
-                t2 = dr * c2
-                t3 = dr * c3
-                m00 += t0 * c0
-                m11 += t1 * c1
-                m22 += t2 * c2
-                m33 += t3 * c3
-                m10 += t1 * c0
-                m20 += t2 * c0
-                m21 += t2 * c1
-                m30 += t3 * c0
-                m31 += t3 * c1
-                m32 += t3 * c2
-            q0, q1, q2, q3 = cp[i, 0], cp[i, 1], cp[i, 2], cp[i, 3]
-            _block_add(M, nk, q0, q0, m00)
-            _block_add(M, nk, q1, q1, m11)
-            _block_add(M, nk, q2, q2, m22)
-            _block_add(M, nk, q3, q3, m33)
-            _block_add(M, nk, q1, q0, m10)
-            _block_add(M, nk, q2, q0, m20)
-            _block_add(M, nk, q2, q1, m21)
-            _block_add(M, nk, q3, q0, m30)
-            _block_add(M, nk, q3, q1, m31)
-            _block_add(M, nk, q3, q2, m32)
-        for j in range(mq):  # the quadratic rows' curvature, lam grad^2 g
+        # ---- the rest of the matrix: the quadratic rows' curvature, E, regularisation
+        for j in range(mq):  # lam grad^2 g
             k = qnode[j]
             M[px[k], 0] += 2.0 * lam[qrow[j]] * qxx[j]
             M[pu[k], 0] += 2.0 * lam[qrow[j]] * quu[j]
@@ -560,63 +610,115 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
             reg[pe[j]] = -delta
         for q in range(nk):
             M[q, 0] += reg[q]
-        ok = _ldl(M, bw, L, dd)
+        raised = _ldl(M, bw, L, dd, sgn)
         for q in range(nk):
             M[q, 0] -= reg[q]
-        if not ok:
+        if raised < 0:
             status = ST_FAILED
             break
-        # ---- predictor (affine, into ds_a, dl_a) and corrector with the same factors
-        sigma_mu = 0.0
-        for corr in range(2):
-            if corr == 1:
-                # the affine step's complementarity and the centring
-                ap, ad = _max_steps(s, lam, ds_a, dl_a, z, sol, px, N, 1.0)
-                mu_aff = 0.0
-                for r in range(m):
-                    mu_aff += (s[r] + ap * ds_a[r]) * (lam[r] + ad * dl_a[r])
-                mu_aff /= max(m, 1)
-                sigma = (mu_aff / mu) ** 3 if mu > 0.0 else 0.0
-                sigma = min(max(sigma, 0.0), 1.0)
-                sigma_mu = sigma * mu
-            # right-hand side: -r_d - G^T (D r_in - r_c / s); -r_eq (r_c: s lam, with
-            # the corrector's second-order term and centring)
-            for q in range(nk):
-                rhs[q] = -rz[q]
-            for i in range(N):
-                h0 = 0.0
-                h1 = 0.0
-                h2 = 0.0
-                h3 = 0.0
-                for r in range(ptr[i], ptr[i + 1]):
-                    if corr == 0:
-                        rcr = s[r] * lam[r]
-                    else:
-                        rcr = s[r] * lam[r] + ds_a[r] * dl_a[r] - sigma_mu
-                    rc[r] = rcr
-                    t = Dg[r] * rin[r] - rcr / s[r]
-                    h0 += cf[r, 0] * t
-                    h1 += cf[r, 1] * t
-                    h2 += cf[r, 2] * t
-                    h3 += cf[r, 3] * t
-                rhs[cp[i, 0]] -= h0
-                rhs[cp[i, 1]] -= h1
-                rhs[cp[i, 2]] -= h2
-                rhs[cp[i, 3]] -= h3
-            for j in range(p):
-                rhs[pe[j]] = -req[j]
-            _solve_linear(M, L, dd, bw, rhs_k, sol_k, res, tmp, reg, REFINE)
-            # ds = -r_in - G dz; dlam = D (G dz + r_in) - r_c / s
-            out_s = ds_a if corr == 0 else ds
-            out_l = dl_a if corr == 0 else dl
-            for i in range(N):
-                x0, x1, x2, x3 = sol[cp[i, 0]], sol[cp[i, 1]], sol[cp[i, 2]], sol[cp[i, 3]]
-                for r in range(ptr[i], ptr[i + 1]):
-                    gdz = cf[r, 0] * x0 + cf[r, 1] * x1 + cf[r, 2] * x2 + cf[r, 3] * x3
-                    out_s[r] = -rin[r] - gdz
-                    out_l[r] = Dg[r] * (gdz + rin[r]) - rc[r] / s[r]
-        ap, ad = _max_steps(s, lam, ds, dl, z, sol, px, N, STEP_FRACTION)
+        # ---- predictor (affine, into ds_a, dl_a) and corrector with the same factors:
+        # right-hand side -r_d - G^T (D r_in - r_c / s); -r_eq (r_c: s lam for the
+        # predictor; the corrector adds its second-order term and the centring)
+        for q in range(nk):
+            rhs[q] = -rz[q] - gt[q]
+        for j in range(p):
+            rhs[pe[j]] = -req[j]
+        _solve_linear(M, L, dd, bw, rhs_k, sol_k, res, tmp, REFINE)
+        # ds = -r_in - G dz; dlam = D (G dz + r_in) - lam; the largest affine steps,
+        # and what the corrector needs: sum (s + ap ds)(lam + ad dlam) in parts and
+        # G^T of ds dlam / s and of 1 / s
+        for q in range(nk + 1):
+            ga[q] = 0.0
+            gb[q] = 0.0
+        aa = 1.0
+        aq = 1.0
+        s_dl = 0.0
+        ds_l = 0.0
+        ds_dl = 0.0
+        for i in range(N):
+            x0, x1, x2, x3 = sol[cp[i, 0]], sol[cp[i, 1]], sol[cp[i, 2]], sol[cp[i, 3]]
+            e0 = 0.0
+            e1 = 0.0
+            e2 = 0.0
+            e3 = 0.0
+            b0 = 0.0
+            b1 = 0.0
+            b2 = 0.0
+            b3 = 0.0
+            for r in range(ptr[i], ptr[i + 1]):
+                c0, c1, c2, c3 = cf[r, 0], cf[r, 1], cf[r, 2], cf[r, 3]
+                sr = s[r]
+                lr = lam[r]
+                gdz = c0 * x0 + c1 * x1 + c2 * x2 + c3 * x3
+                dsr = -rin[r] - gdz
+                dlr = Dg[r] * (gdz + rin[r]) - lr
+                ds_a[r] = dsr
+                dl_a[r] = dlr
+                if dsr < 0.0:
+                    aa = min(aa, -sr / dsr)
+                if dlr < 0.0:
+                    aq = min(aq, -lr / dlr)
+                s_dl += sr * dlr
+                ds_l += dsr * lr
+                ds_dl += dsr * dlr
+                inv = 1.0 / sr
+                t = dsr * dlr * inv
+                e0 += c0 * t
+                e1 += c1 * t
+                e2 += c2 * t
+                e3 += c3 * t
+                b0 += c0 * inv
+                b1 += c1 * inv
+                b2 += c2 * inv
+                b3 += c3 * inv
+            q0, q1, q2, q3 = cp[i, 0], cp[i, 1], cp[i, 2], cp[i, 3]
+            ga[q0] += e0
+            ga[q1] += e1
+            ga[q2] += e2
+            ga[q3] += e3
+            gb[q0] += b0
+            gb[q1] += b1
+            gb[q2] += b2
+            gb[q3] += b3
+        for k in range(1, N):
+            q = px[k]
+            if sol[q] < 0.0:
+                aa = min(aa, -z[q] / sol[q])
+        # the affine step's complementarity and the centring
+        mu_aff = (gap + aq * s_dl + aa * ds_l + aa * aq * ds_dl) / max(m, 1)
+        sigma = (mu_aff / mu) ** 3 if mu > 0.0 else 0.0
+        sigma = min(max(sigma, 0.0), 1.0)
+        sigma_mu = sigma * mu
+        for q in range(nk):
+            rhs[q] = -rz[q] - gt[q] + ga[q] - sigma_mu * gb[q]
+        for j in range(p):
+            rhs[pe[j]] = -req[j]
+        _solve_linear(M, L, dd, bw, rhs_k, sol_k, res, tmp, REFINE)
+        # the corrector's ds, dlam and the step lengths
+        ap = 1.0
+        ad = 1.0
+        for i in range(N):
+            x0, x1, x2, x3 = sol[cp[i, 0]], sol[cp[i, 1]], sol[cp[i, 2]], sol[cp[i, 3]]
+            for r in range(ptr[i], ptr[i + 1]):
+                sr = s[r]
+                lr = lam[r]
+                gdz = cf[r, 0] * x0 + cf[r, 1] * x1 + cf[r, 2] * x2 + cf[r, 3] * x3
+                dsr = -rin[r] - gdz
+                rcr = sr * lr + ds_a[r] * dl_a[r] - sigma_mu
+                dlr = Dg[r] * (gdz + rin[r]) - rcr / sr
+                ds[r] = dsr
+                dl[r] = dlr
+                if dsr < 0.0:
+                    ap = min(ap, -STEP_FRACTION * sr / dsr)
+                if dlr < 0.0:
+                    ad = min(ad, -STEP_FRACTION * lr / dlr)
+        for k in range(1, N):
+            q = px[k]
+            if sol[q] < 0.0:
+                ap = min(ap, -STEP_FRACTION * z[q] / sol[q])
         if not (ap > 0.0 and ad > 0.0):
+            ap = 0.0
+            ad = 0.0
             status = ST_FAILED
             break
         for k in range(1, N):
@@ -624,10 +726,12 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
             z[pu[k]] += ap * sol[pu[k]]
         for j in range(p):
             z[pe[j]] += ad * sol[pe[j]]
+        it += 1
+    # (the last step of the slacks and multipliers, if not taken yet)
+    if ap > 0.0 or ad > 0.0:
         for r in range(m):
             s[r] += ap * ds[r]
             lam[r] += ad * dl[r]
-        it += 1
     for k in range(1, N):
         X[k] = z[px[k]]
         U[k] = z[pu[k]]
@@ -661,24 +765,6 @@ def _quad_rows(qn, qk, qa, px, pu, z, cf, hh, qrow):
         cf[r, 2] = 2.0 * qa[j] * u
         cf[r, 3] = 0.0
         hh[r] = qk[j] * x * x + qa[j] * u * u + 1.0
-
-
-@_jit
-def _max_steps(s, lam, ds, dl, z, dz, px, N, frac):
-    """The largest steps (primal, dual) up to ``frac`` of the way to the boundary
-    of ``s > 0``, ``lam > 0`` and ``x > 0`` (the objective's domain)."""
-    ap = 1.0
-    ad = 1.0
-    for r in range(s.size):
-        if ds[r] < 0.0:
-            ap = min(ap, -frac * s[r] / ds[r])
-        if dl[r] < 0.0:
-            ad = min(ad, -frac * lam[r] / dl[r])
-    for k in range(1, N):
-        q = px[k]
-        if dz[q] < 0.0:
-            ap = min(ap, -frac * z[q] / dz[q])
-    return ap, ad
 
 
 def solve_round(w: np.ndarray, cell: np.ndarray, C: np.ndarray, h: np.ndarray,
