@@ -115,6 +115,11 @@ SCREEN_AROUND = 2
 #: starting point, the first round is compared with the starting point's time.
 SCREEN_SETTLED = 0.02
 
+#: The path's acceleration rows are left out at the nodes where the joints'
+#: velocity and acceleration rows keep its square below this fraction of the
+#: limit's (see ``_solve_scaled``).
+BIND_RTOL = 0.999
+
 #: Node speeds^2 below this fraction of the largest are treated as zero in the
 #: tangent planes (guards a division near a stop in the path's interior).
 TINY_X = 1e-12
@@ -828,9 +833,19 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     sigma = np.ones(n)
     rho = np.ones(N)
 
-    # the path's acceleration vector: ||(u_i, kappa_i x_i)|| <= a_path
+    # the path's acceleration vector: ||(u_i, kappa_i x_i)|| <= a_path, at the nodes
+    # where it can bind: the joints' velocity and acceleration rows bound x and |u|
+    # at every node (|q'| |u| <= a + |q''| x), and where those bounds keep the
+    # vector inside its limit, its rows are left out (they could never be active)
+    reach = np.zeros(n, dtype=bool)
+    if math.isfinite(p.a_path):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u_top = np.min(np.where(np.abs(d1) > 0, (np.maximum(a_hi, a_lo) + np.abs(d2) * xv[:, None])
+                                    / np.abs(d1), np.inf), axis=1)
+            k_top = 0.0 if p.kappa is None else np.asarray(p.kappa) * xv
+            reach = ~(k_top * k_top + u_top * u_top < BIND_RTOL * p.a_path**2)
     if p.kappa is not None and math.isfinite(p.a_path):
-        kn = free[np.asarray(p.kappa)[free] > 0]
+        kn = free[(np.asarray(p.kappa)[free] > 0) & reach[free]]
     else:
         kn = np.zeros(0, dtype=int)
     kr = np.arange(kn.size)
@@ -880,9 +895,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
     static.add(nn, sg * d2[nn, kk], 0.0, sg * d1[nn, kk], 0.0, a_hi[nn, kk])
     static.add(nn, -sg * d2[nn, kk], 0.0, -sg * d1[nn, kk], 0.0, a_lo[nn, kk])
-    if math.isfinite(p.a_path):
-        static.add(inner, 0.0, 0.0, 1.0, 0.0, np.full(inner.size, p.a_path))
-        static.add(inner, 0.0, 0.0, -1.0, 0.0, np.full(inner.size, p.a_path))
+    if math.isfinite(p.a_path):  # (where it can bind and the curvature's rows do not bound it)
+        flat = np.setdiff1d(inner[reach[inner]], kn)
+        static.add(flat, 0.0, 0.0, 1.0, 0.0, np.full(flat.size, p.a_path))
+        static.add(flat, 0.0, 0.0, -1.0, 0.0, np.full(flat.size, p.a_path))
     static.finish()
     b_static = static.b
     use_ipm = USE_IPM and _ipm.AVAILABLE
