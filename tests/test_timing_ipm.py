@@ -203,6 +203,37 @@ def test_rounds_with_the_curvature_rows_equal_the_cone_solvers(monkeypatch):
     np.testing.assert_allclose(a.x, b.x, rtol=0, atol=2e-4 * float(np.max(b.x)))
 
 
+@needs_compiled
+def test_path_acceleration_rows_that_cannot_bind_are_left_out(monkeypatch):
+    """Where the joints' velocity and acceleration rows keep the path's
+    acceleration vector inside its limit, its rows are left out: the same
+    rounds as with every row, with fewer rows, and the limit still binding
+    where the curvature is large."""
+    prob = _grid_problem("curve")
+    prob.kappa = np.linspace(0.0, 12.0, prob.s.size)
+    prob.a_path = 5.0
+    rows = []
+    real = _ipm.solve_round
+
+    def counted(w, cell, *args, **kw):
+        rows.append(cell.size + (0 if args[7] is None else args[7][0].size))
+        return real(w, cell, *args, **kw)
+
+    monkeypatch.setattr(_ipm, "solve_round", counted)
+    monkeypatch.setattr(_socp, "BIND_RTOL", 0.0)  # every row
+    every = solve_grid(prob, max_rounds=4)
+    n_every = sum(rows)
+    rows.clear()
+    monkeypatch.setattr(_socp, "BIND_RTOL", 0.999)
+    some = solve_grid(prob, max_rounds=4)
+    assert sum(rows) < n_every
+    assert some.rounds == every.rounds
+    np.testing.assert_allclose(some.history, every.history, rtol=1e-7)
+    np.testing.assert_allclose(some.x, every.x, rtol=1e-5, atol=1e-6 * float(np.max(every.x)))
+    use = np.hypot(prob.kappa * some.x, some.u) / prob.a_path
+    assert use.max() > 0.999 and use[:5].max() < 0.9
+
+
 def test_static_rows_in_interval_form_equal_the_sparse_assembly():
     """The rounds' fixed rows (``_StaticRows``: interval form, normalised) equal
     the rows assembled entry by entry as a sparse matrix and normalised by
