@@ -169,3 +169,40 @@ def test_slow_downs_are_true_stretches():
     smp = run.sample(np.linspace(0, run.duration, 4001))
     inside = np.linalg.norm(smp.xyz - 0.5 * (slowest.start_xyz + slowest.end_xyz), axis=1) < 0.5 * length
     assert smp.tool_speed[inside].min() == pytest.approx(slowest.speed, rel=2e-2)
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda"])
+def test_the_final_grid_interpolates_the_derivatives_within_the_tolerance(name):
+    """The first solve runs on a grid refined to FIRST_GRID_RTOL only; the grid
+    of the final timing (with the nodes of the jerk phases) is refined to
+    GRID_RTOL where the first grid was not already within it: refining the
+    final grid again finds nothing to split (every cell's middle within the
+    tolerance) on a blended chain of both arms."""
+    from trajkit.robot._cartesian import _tool_curvature
+    from trajkit.timing import engine, plan_path_timing
+
+    robot = load_arm(name)
+    q0 = np.array({"ur5": [0.0, -1.2, 1.5, -1.87, -1.57, 0.0],
+                   "panda": [0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]}[name])
+    p0 = robot.fk(q0)
+
+    def at(d):
+        return CartesianTarget(Pose(p0.position + np.asarray(d), p0.rotation))
+
+    run = run_motions(robot, [Lin(at([0.0, 0.2, 0.0]), 1.0, 0.03), Lin(at([0.1, 0.2, -0.1]), 1.0, 0.03),
+                              Lin(at([0.1, 0.0, -0.1]), 1.0)], q0)
+    path = run.segments[-1].chain.path
+    tm = plan_path_timing(path, robot.limits, speed=lambda s: np.full(np.size(s), 1.0),
+                          accel=robot.cartesian_accel, jerk=robot.cartesian_jerk,
+                          curvature=lambda s: _tool_curvature(path, s))
+    assert engine.FIRST_GRID_RTOL > engine.GRID_RTOL
+    vlim = np.array([lm.v_max for lm in robot.limits])
+    alim = np.array([min(lm.a_max, lm.a_max_decel) for lm in robot.limits])
+    jlim = np.array([min(lm.j_max, lm.j_max_decel) for lm in robot.limits])
+    breaks = np.asarray(path.breakpoints, dtype=float)
+    breaks = np.unique(breaks[(breaks > 0.0) & (breaks < path.length)])
+    grid, _, pending, err = engine._refine(path, tm.grid, tm.grid_derivatives, vlim, alim, jlim,
+                                           lambda s: np.full(np.size(s), 1.0), breaks,
+                                           engine.GRID_RTOL)
+    np.testing.assert_array_equal(grid, tm.grid)
+    assert pending.size == 0 and err.max() <= engine.GRID_RTOL

@@ -79,6 +79,14 @@ GRID_RTOL = 2e-3
 #: (``cheap_derivatives``): the limit check uses the exact ones.
 GRID_RTOL_CHEAP = 2e-2
 
+#: The first solve's grid is refined to this tolerance only (its solution
+#: places the nodes of the jerk phases and starts the second solve); the
+#: second grid, with those nodes, is refined to GRID_RTOL. 10 % less planning
+#: time over the benchmark's arm motions (its blends 9-27 %) than with the
+#: first grid refined to GRID_RTOL, durations within 1.6e-4 (the rounds'
+#: tolerance is 5e-4).
+FIRST_GRID_RTOL = 2e-2
+
 #: Samples of a speed-cap function searched for its steps.
 CAP_GRID = 4097
 
@@ -478,6 +486,12 @@ def _add_nodes(s: np.ndarray, pts: np.ndarray, gap: float) -> np.ndarray:
     return np.unique(np.concatenate([s, pts]))
 
 
+def _finite_derivatives(der: tuple) -> None:
+    """Raise where the joint path's derivatives on the grid are not finite."""
+    if not all(np.isfinite(d).all() for d in der[1:]):
+        raise InfeasibleError("the joint path has no finite derivative somewhere (a singularity)")
+
+
 def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
     """Cubic Hermite value at ``sm`` from values f and slopes g at s0, s1 (broadcast over joints)."""
     h = (s1 - s0)[:, None]
@@ -527,26 +541,35 @@ class _Cached:
 
 
 def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
-            breaks: np.ndarray | None = None, rtol: float = GRID_RTOL) -> tuple:
+            breaks: np.ndarray | None = None, rtol: float = GRID_RTOL,
+            todo: np.ndarray | None = None) -> tuple:
     """Split the grid's cells until the derivatives interpolated at every cell's
     middle are within ``rtol`` of the limits they feed (see GRID_RTOL).
 
-    Returns the grid, its derivatives and the ranges ``(k, 2)`` of ``s`` where the
-    passes or the node budget ran out before that (no cell is known to be resolved
-    there).
+    ``todo`` (cells,): the cells to check (default: all); the others count as
+    within the tolerance (the sub-cells of cells checked before).
+
+    Returns the grid, its derivatives, the ranges ``(k, 2)`` of ``s`` where the
+    passes or the node budget ran out before that (no cell is known to be
+    resolved there), and every cell's error at its middle (the largest of the
+    three, as a fraction of the limits; 0 for a cell not to check, NaN for one
+    split last and not checked since).
     """
     breaks = np.zeros(0) if breaks is None else breaks
     twins = _twins(float(path.length), breaks)
     pending = np.zeros((0, 2))  # the cells split last, not checked since
+    todo = np.ones(s.size - 1, dtype=bool) if todo is None else todo.copy()
+    err = np.where(todo, np.nan, 0.0)
     for _ in range(GRID_PASSES):
-        if s.size >= GRID_MAX:
+        if s.size >= GRID_MAX or not todo.any():
             break
         q, d1, d2, d3 = der
-        sm = 0.5 * (s[:-1] + s[1:])
+        c = np.nonzero(todo)[0]
+        sm = 0.5 * (s[c] + s[c + 1])
         qm, m1, m2, m3 = path.derivatives(sm)
-        i1 = _hermite_interp(s[:-1], s[1:], d1[:-1], d1[1:], d2[:-1], d2[1:], sm)
-        i2 = _hermite_interp(s[:-1], s[1:], d2[:-1], d2[1:], d3[:-1], d3[1:], sm)
-        i3 = 0.5 * (d3[:-1] + d3[1:])
+        i1 = _hermite_interp(s[c], s[c + 1], d1[c], d1[c + 1], d2[c], d2[c + 1], sm)
+        i2 = _hermite_interp(s[c], s[c + 1], d2[c], d2[c + 1], d3[c], d3[c + 1], sm)
+        i3 = 0.5 * (d3[c] + d3[c + 1])
         # the speed the cell could run at: the velocity limits, the path's cap, and
         # the speeds at which the curvature of the joint path alone uses the joints'
         # acceleration and jerk limits (a timing can run somewhat faster than
@@ -564,7 +587,10 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         e1 = np.max(np.abs(i1 - m1) * vcap[:, None] / vlim, axis=1)
         e2 = np.max(np.abs(i2 - m2) * (vcap**2)[:, None] / alim, axis=1)
         e3 = np.max(np.abs(i3 - m3) * (vcap**3)[:, None] / jlim, axis=1)
-        split = np.maximum(np.maximum(e1, e2), e3) > rtol
+        ec = np.maximum(np.maximum(e1, e2), e3)
+        err[c] = ec
+        split = np.zeros(s.size - 1, dtype=bool)
+        split[c] = ec > rtol
         # the twin interval before a breakpoint stays whole (it interpolates towards
         # the values after the breakpoint; the checks take those from before it)
         if breaks.size:
@@ -577,14 +603,25 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         idx = np.nonzero(split)[0]
         pending = np.column_stack([s[idx], s[idx + 1]])
         if idx.size > room:
-            err = np.maximum(np.maximum(e1, e2), e3)[idx]
-            idx = idx[np.argsort(-err)[:room]]
-        new = np.sort(np.concatenate([s, sm[idx]]))
-        order = np.argsort(np.concatenate([s, sm[idx]]), kind="stable")
-        parts = [np.concatenate([a, b[idx]]) for a, b in zip(der, (qm, m1, m2, m3))]
+            idx = idx[np.argsort(-err[idx])[:room]]
+        mids = np.zeros(s.size - 1)
+        mids[c] = sm
+        # (the derivatives at the new nodes: those just evaluated at the middles)
+        dm = [np.zeros((s.size - 1,) + np.shape(v)[1:]) for v in (qm, m1, m2, m3)]
+        for full, v in zip(dm, (qm, m1, m2, m3)):
+            full[c] = v
+        new = np.sort(np.concatenate([s, mids[idx]]))
+        order = np.argsort(np.concatenate([s, mids[idx]]), kind="stable")
+        parts = [np.concatenate([a, b[idx]]) for a, b in zip(der, dm)]
         der = tuple(p[order] for p in parts)
+        # a split cell's halves are checked next, the others are done
+        cell_old = np.concatenate([np.arange(s.size), idx])[order][:-1]
+        halves = np.zeros(s.size - 1, dtype=bool)
+        halves[idx] = True
+        todo = halves[cell_old]
+        err = np.where(todo, np.nan, err[cell_old])
         s = new
-    return s, der, pending
+    return s, der, pending, err
 
 
 # --------------------------------------------------------------------------- check
@@ -1271,11 +1308,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     left = None
     if not cheap and breaks.size:
         left = path.derivatives(np.nextafter(breaks, -np.inf))[1:]
-    s, der, unresolved = _refine(cached, s, der, vlim, alim, jlim, cap_fn, breaks,
-                                 GRID_RTOL_CHEAP if cheap else GRID_RTOL)
+    grid_rtol = GRID_RTOL_CHEAP if cheap else GRID_RTOL
+    s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn, breaks,
+                                           max(grid_rtol, FIRST_GRID_RTOL))
+    _finite_derivatives(der)
     q, d1, d2, d3 = der
-    if not (np.isfinite(d1).all() and np.isfinite(d2).all() and np.isfinite(d3).all()):
-        raise InfeasibleError("the joint path has no finite derivative somewhere (a singularity)")
     cap = cap_fn(s)
     kappa = None
     if curvature is not None:
@@ -1322,10 +1359,16 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                        xN=end_speed**2, uN=end_accel), max_rounds=FIRST_ROUNDS)
         jerk_free_time = first.jerk_free_time
         init = (first.x, first.u)
-        add = _solution_splits(s, first.x, first.u)
-        if add.size:
-            s_new = np.unique(np.concatenate([s, add]))
-            der_new = cached.derivatives(s_new)
+        # the second grid: the nodes of the jerk phases, refined to the full tolerance
+        s_new = np.unique(np.concatenate([s, _solution_splits(s, first.x, first.u)]))
+        der_new = cached.derivatives(s_new)
+        if grid_rtol < FIRST_GRID_RTOL:  # (the cells within it already: not again)
+            parent = np.searchsorted(s, s_new[:-1], side="right") - 1
+            s_new, der_new, unresolved, _ = _refine(cached, s_new, der_new, vlim, alim, jlim, cap_fn,
+                                                    breaks, grid_rtol, ~(cell_err[parent] <= grid_rtol))
+            _finite_derivatives(der_new)
+        regrid = s_new.size > s.size  # (the new grid holds the old one)
+        if regrid:
             init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
             s, der = s_new, der_new
             q, d1, d2, d3 = der
@@ -1355,7 +1398,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
-            sol = first if (attempt == 0 and not add.size and not splits) else solve_grid(
+            sol = first if (attempt == 0 and not regrid and not splits) else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
                 settled=init_settled, near=init_near, duals=init_duals)
             init = (sol.x, sol.u)  # a tightened attempt starts from this one
