@@ -326,12 +326,13 @@ class ChainJointPath:
         rj = np.empty((n, _jets.ORDER + 1, 3, 3))
         pos_done = np.zeros(n, dtype=bool)
         rot_done = np.zeros(n, dtype=bool)
-        for i in np.unique(k):
-            sel = np.flatnonzero(k == i)
+        which = np.unique(k)
+        for i in which:
+            sel = slice(None) if which.size == 1 else np.flatnonzero(k == i)
             loc = s[sel] - self.offsets[i]
             got = self.pieces[i].derivatives(loc)
             if got is not None:
-                pj[sel, 0], pj[sel, 1], pj[sel, 2], pj[sel, 3] = got[0], got[1], 0.5 * got[2], got[3] / 6.0
+                pj[sel] = np.stack([got[0], got[1], 0.5 * got[2], got[3] / 6.0], axis=1)
                 pos_done[sel] = True
             rot = self.pieces[i].rotation_taylor(loc)
             if rot is not None:

@@ -368,6 +368,8 @@ class Piece:
         omega = relative_rotvec(q0, q1) / self.length if self.length > 0 else np.zeros(3)
         self._omega_hat = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]],
                                     [-omega[1], omega[0], 0.0]])
+        self._rate = float(np.linalg.norm(omega))
+        self._rot_basis: np.ndarray | None = None  # (see rotation_taylor)
 
     def point(self, s: np.ndarray) -> np.ndarray:
         return self._point(np.clip(s, 0.0, self.length))
@@ -388,18 +390,30 @@ class Piece:
 
         The slerp from ``q0`` to ``q1`` turns at a constant rate about an axis fixed
         in the tool frame, ``R(s) = R(0) Exp(s hat(omega))``, so the k-th derivative
-        is ``R(s) hat(omega)^k``."""
+        is ``R(s) hat(omega)^k``; with Rodrigues' formula for ``Exp``, every
+        coefficient is a fixed matrix plus ``sin(|omega| s)`` and ``1 - cos(|omega|
+        s)`` times two more (the same rotations as :meth:`quat`'s to a few ulps)."""
         if self.quat_fn is not None:
             taylor = getattr(self.quat_fn, "taylor", None)
             if taylor is None:
                 return None
             return taylor(np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, self.length))
+        # Rodrigues: R(s) = R(0) (I + sin(w s) K + (1 - cos(w s)) K^2), K = hat(omega) / w,
+        # so every coefficient R(s) hat(omega)^k / k! is C0 + sin(w s) C1 + (1 - cos(w s)) C2
+        # with three fixed (4, 3, 3) bases
+        if self._rot_basis is None:
+            w = self._omega_hat
+            K = w / self._rate if self._rate > 0.0 else np.zeros((3, 3))
+            R0 = matrix_from_quat(self.q0)
+            powers = [np.eye(3), w, w @ w / 2.0, w @ w @ w / 6.0]
+            self._rot_basis = np.stack([np.stack([M @ P for P in powers])
+                                        for M in (R0, R0 @ K, R0 @ K @ K)])
         s = np.atleast_1d(np.asarray(s, dtype=np.float64))
-        out = np.empty((s.size, 4, 3, 3))
-        out[:, 0] = matrix_from_quat(self.quat(s))
-        for order in range(1, 4):
-            out[:, order] = (out[:, order - 1] @ self._omega_hat) / order
-        return out
+        th = self._rate * np.clip(s, 0.0, self.length)
+        half = np.sin(0.5 * th)
+        c0, c1, c2 = self._rot_basis
+        return (c0[None] + np.sin(th)[:, None, None, None] * c1[None]
+                + (2.0 * half * half)[:, None, None, None] * c2[None])
 
     def quat(self, s: np.ndarray) -> np.ndarray:
         if self.quat_fn is not None:
@@ -495,10 +509,12 @@ def sub_path_derivatives(path: Path, a: float):
     """``derivatives`` callable (see :class:`Piece`) of a line or a circular arc
     ``path`` from its arc length ``a`` on; None for another path."""
     if isinstance(path, Line):
-        def line(s: np.ndarray):
+        p0, u, length = path.p0, path.direction, path.length
+
+        def line(s: np.ndarray):  # (Line's own formula: p0 + s u)
             z = np.zeros((s.size, 3))
-            at = np.clip(a + s, 0.0, path.length)
-            return path.point(at), path.tangent(at), z, z.copy()
+            at = np.clip(a + s, 0.0, length)
+            return p0 + at[:, None] * u, np.broadcast_to(u, (s.size, 3)).copy(), z, z.copy()
         return line
     if isinstance(path, Arc3):
         def arc(s: np.ndarray):
