@@ -215,6 +215,33 @@ def test_check_and_zoom_agree(seed, source):
     assert za.worst > 0.0
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_the_zoom_finds_the_largest_ratio_inside_the_close_pieces(seed):
+    """The zoom's largest ratio inside a piece is at least the largest of 2000
+    points over that piece (to 1e-9; above it where the maximum is the limit
+    towards a piece's end, a grid node where the joint path's third derivative
+    steps, which the dense points approach more slowly), on the eight pieces with
+    the largest sampled ratios, whether the maximum lies inside the piece or at
+    an end (where the zoom's brackets stop)."""
+    rng, nodes, der, t, st, jerk, lim, path, breaks, left = _setup(30 + seed, curved=seed % 2 == 0)
+    src = _sources(path, nodes, der, breaks, left, rng)["interp"]
+    per_piece = 30
+    npp = per_piece + 2
+    b = _check(nodes, der, t, st, jerk, lim, src, per_piece)
+    peak = b[6].reshape(-1, npp)
+    where = []
+    for piece in np.argsort(-peak.max(axis=1))[:8]:
+        only = np.zeros_like(peak)
+        only[piece] = peak[piece] / peak[piece].max()  # (this piece alone close to a limit)
+        zoomed = _zoom(nodes, der, t, st, jerk, lim, src, only.ravel(), npp)
+        dense = 2000 + 2
+        d = _check(nodes, der, t, st, jerk, lim, src, dense - 2,
+                   select=piece * dense + np.arange(dense))
+        assert zoomed.worst >= d[6].max() * (1.0 - 1e-9)
+        where.append(int(np.argmax(d[6])) in (0, dense - 1))
+    assert any(where) and not all(where)  # (maxima at an end and inside)
+
+
 @pytest.mark.parametrize("seed", range(3))
 @pytest.mark.parametrize("compiled", [True, False])
 def test_recheck_after_corrections_equals_a_full_check(seed, compiled):
