@@ -557,8 +557,9 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
     """
     breaks = np.zeros(0) if breaks is None else breaks
     twins = _twins(float(path.length), breaks)
-    pending = np.zeros((0, 2))  # the cells split last, not checked since
     todo = np.ones(s.size - 1, dtype=bool) if todo is None else todo.copy()
+    # the cells to check and not checked yet (then: those split last)
+    pending = np.column_stack([s[:-1][todo], s[1:][todo]])
     err = np.where(todo, np.nan, 0.0)
     for _ in range(GRID_PASSES):
         if s.size >= GRID_MAX or not todo.any():
