@@ -10,10 +10,12 @@ Steps:
 
 1. a grid of ``s`` (refined at the path's ends, at its breakpoints and
    wherever the joint-path derivatives change faster than their cubic
-   interpolation follows);
+   interpolation follows, to :data:`FIRST_GRID_RTOL`);
 2. the grid problem (:mod:`trajkit.timing._socp`): the jerk-free optimum
    first (a lower bound), then rounds of convex restriction of the jerk
-   constraints until the time settles;
+   constraints; the grid is then split where the path acceleration swings
+   (the jerk phases) and refined to :data:`GRID_RTOL`, and the rounds go on
+   there until the time settles;
 3. exact constant-jerk pieces through the node states
    (:mod:`trajkit.timing._hermite`);
 4. a dense check of every limit on the pieces (every piece boundary plus
@@ -126,8 +128,12 @@ SWING_SPLIT = 0.02
 #: interval), which this absorbs instead of a slow-down of the whole motion.
 JERK_MARGIN = 0.998
 
-#: Points checked inside every piece (besides its ends).
-CHECK_PER_PIECE = 16
+#: Points checked inside every piece (besides its ends) by the rounds' checks,
+#: which lower the limits locally where they find an excess (the final check is
+#: denser). With 8 instead of 16, the 94 arm motions of the robust set (the
+#: benchmark's and random lines and arcs) came out the same to 5.4e-7 of their
+#: durations, with 6 % less planning time over the benchmark's.
+CHECK_PER_PIECE = 8
 
 #: A joint whose |velocity| is below this fraction of its limit is at rest for the
 #: choice of the leg (speeding up or slowing down) in the limit check.
