@@ -1240,8 +1240,9 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
 
 #: The best attempt of :func:`plan_path_timing` so far: (score, solution, piece
 #: durations, piece jerks, limit use, uniform time scale, interval of every
-#: piece, (grid, derivatives, speed cap, curvature, velocity cap), the grid cells
-#: where its check came within VERIFY_ABOVE and VERIFY_FULL_ABOVE of a limit).
+#: piece, (grid, derivatives, speed cap, curvature, velocity cap), (the grid cell
+#: and the largest ratio of every sample of its check: where the final check
+#: corrects the derivatives first)).
 _Best = tuple[float, GridSolution, np.ndarray, np.ndarray, LimitUse, float, np.ndarray,
               tuple[np.ndarray, tuple, np.ndarray, np.ndarray | None, np.ndarray],
               tuple[np.ndarray, np.ndarray]]
@@ -1439,9 +1440,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
             if best is None or score < best[0]:
                 # (the cells close to a limit: the final check corrects them first)
-                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap),
-                        (np.unique(cell[near > 1.0 - VERIFY_ABOVE]),
-                         np.unique(cell[near > 1.0 - VERIFY_FULL_ABOVE])))
+                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), (cell, near))
             if use.worst <= 1.0 + TIGHTEN_ABOVE:
                 break  # a small excess costs less as a uniform slow-down than as another round
             if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
@@ -1535,7 +1534,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left, unresolved)
             if sol is not None:  # the true derivatives where the rounds' check came close
-                corrected.add_both(close[0], close[1])
+                cell_b, near_b = close
+                corrected.add_both(cell_b[near_b > 1.0 - VERIFY_ABOVE],
+                                   cell_b[near_b > 1.0 - VERIFY_FULL_ABOVE])
         src = exact if exact is not None else corrected
         res = _check(s, der, t, st, jk, lim, src, per_piece)
         if corrected is not None:
