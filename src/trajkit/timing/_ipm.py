@@ -499,24 +499,9 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         gap = 0.0
         for i in range(N):
             z0, z1, z2, z3 = z[cp[i, 0]], z[cp[i, 1]], z[cp[i, 2]], z[cp[i, 3]]
-            g0 = 0.0
-            g1 = 0.0
-            g2 = 0.0
-            g3 = 0.0
-            h0 = 0.0
-            h1 = 0.0
-            h2 = 0.0
-            h3 = 0.0
-            m00 = 0.0
-            m11 = 0.0
-            m22 = 0.0
-            m33 = 0.0
-            m10 = 0.0
-            m20 = 0.0
-            m21 = 0.0
-            m30 = 0.0
-            m31 = 0.0
-            m32 = 0.0
+            g0 = g1 = g2 = g3 = 0.0
+            h0 = h1 = h2 = h3 = 0.0
+            m00 = m11 = m22 = m33 = m10 = m20 = m21 = m30 = m31 = m32 = 0.0
             for r in range(ptr[i], ptr[i + 1]):
                 sr = s[r] + ap * ds[r]
                 lr = lam[r] + ad * dl[r]
@@ -552,15 +537,9 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
                 m30 += t3 * c0
                 m31 += t3 * c1
                 m32 += t3 * c2
+            _scatter(rz, cp, i, g0, g1, g2, g3)
+            _scatter(gt, cp, i, h0, h1, h2, h3)
             q0, q1, q2, q3 = cp[i, 0], cp[i, 1], cp[i, 2], cp[i, 3]
-            rz[q0] += g0
-            rz[q1] += g1
-            rz[q2] += g2
-            rz[q3] += g3
-            gt[q0] += h0
-            gt[q1] += h1
-            gt[q2] += h2
-            gt[q3] += h3
             _block_add(M, nk, q0, q0, m00)
             _block_add(M, nk, q1, q1, m11)
             _block_add(M, nk, q2, q2, m22)
@@ -637,14 +616,8 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
         ds_dl = 0.0
         for i in range(N):
             x0, x1, x2, x3 = sol[cp[i, 0]], sol[cp[i, 1]], sol[cp[i, 2]], sol[cp[i, 3]]
-            e0 = 0.0
-            e1 = 0.0
-            e2 = 0.0
-            e3 = 0.0
-            b0 = 0.0
-            b1 = 0.0
-            b2 = 0.0
-            b3 = 0.0
+            e0 = e1 = e2 = e3 = 0.0
+            b0 = b1 = b2 = b3 = 0.0
             for r in range(ptr[i], ptr[i + 1]):
                 c0, c1, c2, c3 = cf[r, 0], cf[r, 1], cf[r, 2], cf[r, 3]
                 sr = s[r]
@@ -671,15 +644,8 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
                 b1 += c1 * inv
                 b2 += c2 * inv
                 b3 += c3 * inv
-            q0, q1, q2, q3 = cp[i, 0], cp[i, 1], cp[i, 2], cp[i, 3]
-            ga[q0] += e0
-            ga[q1] += e1
-            ga[q2] += e2
-            ga[q3] += e3
-            gb[q0] += b0
-            gb[q1] += b1
-            gb[q2] += b2
-            gb[q3] += b3
+            _scatter(ga, cp, i, e0, e1, e2, e3)
+            _scatter(gb, cp, i, b0, b1, b2, b3)
         for k in range(1, N):
             q = px[k]
             if sol[q] < 0.0:
@@ -738,6 +704,15 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     for r0 in range(lam_out.size):
         lam_out[r0] = lam[where[r0]] if where[r0] >= 0 else math.nan
     return X, U, status, it, _objective(X, w)
+
+
+@_jit
+def _scatter(out, cp, i, v0, v1, v2, v3):
+    """Add ``v0 .. v3`` at the positions of interval ``i``'s four unknowns."""
+    out[cp[i, 0]] += v0
+    out[cp[i, 1]] += v1
+    out[cp[i, 2]] += v2
+    out[cp[i, 3]] += v3
 
 
 @_jit
