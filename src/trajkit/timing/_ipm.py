@@ -439,7 +439,6 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     dl = np.zeros(m)
     ds_a = np.zeros(m)
     dl_a = np.zeros(m)
-    rc = np.zeros(m)
     req = np.zeros(p)
     # the scale of the primal residual: the linear rows' right-hand sides (the
     # quadratic rows' change with the iterate)
