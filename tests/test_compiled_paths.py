@@ -128,3 +128,32 @@ def test_step2_last_stage_numba_equals_python():
         np.testing.assert_allclose(a["ph"], b["ph"], rtol=1e-9, atol=1e-12 * a["d"])
         assert_ulp_close(a["jk"], b["jk"], err_msg=f"case {i} jerks")
     assert len(fast) == len(MIDDLE_HOLDS)
+
+
+
+def test_a_kernel_is_compiled_once_per_type_not_per_constant(monkeypatch):
+    """A compiled caller passing the constants 0, 1 and True gets one build of
+    the callee for (float64, int64) and one for (float64, bool), not one per
+    value (numba's literal types), and the values are those of each constant.
+    (Built here without the disk cache: a cached caller holds its callees' code
+    and compiles nothing.)"""
+    numba = _compile.numba
+
+    def add_constant(x, k):
+        return x + k
+
+    callee = _compile._unliteral_calls(numba.njit(add_constant))
+
+    @numba.njit
+    def three_constants(x):
+        return callee(x, 0) + callee(x, 1) + callee(x, True)
+
+    assert three_constants(2.0) == 2.0 + 3.0 + 3.0
+    assert sorted(str(s) for s in callee.signatures) == ["(float64, bool)", "(float64, int64)"]
+    # every kernel decorator builds its functions so
+    seen = []
+    monkeypatch.setattr(_compile, "_unliteral_calls", lambda d: seen.append(d) or d)
+    for deco in (_compile.jit, _compile.jit_raw, _compile.jit_parallel):
+        deco(add_constant)
+    _compile.compiled_twins({"add_constant": add_constant}, ["add_constant"])
+    assert len(seen) == 4

@@ -9,8 +9,9 @@ the tests run both paths and compare them to a few ulps.
 
 numba keys a cached function by its own source file only, but a compiled
 caller contains its callees from other files; here the cache of every
-kernel function is keyed by all kernel sources together, so editing any of
-them recompiles every kernel (no stale machine code).
+kernel function is keyed by all kernel sources together (and this file's,
+which sets how they are compiled), so editing any of them recompiles every
+kernel (no stale machine code).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ ENABLED = numba is not None and os.environ.get("TRAJKIT_NO_JIT", "") in ("", "0"
 
 #: Source files of the compiled kernels (next to this file).
 KERNEL_MODULES = ("_phase.py", "_roots.py", "_check.py", "_brake.py", "_shapes.py", "_symfast.py", "_kernel.py",
-                  "_batch_states.py", "_scalar.py", "_jit.py")
+                  "_batch_states.py", "_scalar.py", "_jit.py", "_compile.py")
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _FILES = tuple(os.path.join(_HERE, f) for f in KERNEL_MODULES)
@@ -72,6 +73,28 @@ if ENABLED:
     _install_cache_locator()
 
 
+def _unliteral_calls(disp):
+    """``disp`` compiled once per argument type, not once per constant value.
+
+    A compiled caller that passes a constant (``0``, ``True``) types it as a
+    literal, and numba compiles the callee again for every such value (one
+    kernel function was compiled 14 times for one call of the state
+    planner). The kernels never branch on a literal's value at typing time,
+    so the callee is compiled for the plain types: the same machine code
+    for every value, a fraction of the first compilation's time.
+    """
+    from numba.core import types as nbtypes
+
+    base = type(disp).get_call_template
+
+    def get_call_template(args, kws):
+        return base(disp, tuple(nbtypes.unliteral(a) for a in args),
+                    {k: nbtypes.unliteral(v) for k, v in kws.items()})
+
+    disp.get_call_template = get_call_template
+    return disp
+
+
 def _numba() -> types.ModuleType:
     """The numba module; called only when :data:`ENABLED` (which implies it is installed)."""
     if numba is None:  # pragma: no cover - ENABLED is False without numba
@@ -85,7 +108,7 @@ def jit(fn):
     the kernels run on numpy floats) when :data:`ENABLED`."""
     if not ENABLED:
         return fn
-    return _numba().njit(cache=True, nogil=True, error_model="numpy")(fn)
+    return _unliteral_calls(_numba().njit(cache=True, nogil=True, error_model="numpy")(fn))
 
 
 def jit_raw(fn):
@@ -100,7 +123,7 @@ def jit_raw(fn):
         return fn
     if not _RAW:  # a numba without the option: the counted build, same results
         return jit(fn)
-    return _numba().njit(cache=True, nogil=True, error_model="numpy", _nrt=False)(fn)
+    return _unliteral_calls(_numba().njit(cache=True, nogil=True, error_model="numpy", _nrt=False)(fn))
 
 
 def _raw_supported() -> bool:
@@ -120,7 +143,7 @@ def jit_parallel(fn):
     run on every core); plain Python when not :data:`ENABLED`."""
     if not ENABLED:
         return fn
-    return _numba().njit(cache=True, nogil=True, parallel=True, error_model="numpy")(fn)
+    return _unliteral_calls(_numba().njit(cache=True, nogil=True, parallel=True, error_model="numpy")(fn))
 
 
 #: ``numba.prange`` when :data:`ENABLED`, else ``range``.
@@ -147,6 +170,6 @@ def compiled_twins(namespace: dict, names) -> dict:
         twin = types.FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__)
         twin.__module__ = f.__module__
         twin.__qualname__ = f.__qualname__
-        out[n] = njit(cache=True, nogil=True, error_model="numpy")(twin)
+        out[n] = _unliteral_calls(njit(cache=True, nogil=True, error_model="numpy")(twin))
     g.update(out)  # compiled lazily: every call between twins resolves to a twin
     return out

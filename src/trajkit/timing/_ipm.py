@@ -52,7 +52,7 @@ import math
 
 import numpy as np
 
-from ..profiles._compile import ENABLED, numba
+from ..profiles._compile import ENABLED, jit, numba
 
 __all__ = ["AVAILABLE", "IPM_TOL", "IPM_MAX_ITER", "ST_SOLVED", "ST_MAXITER", "ST_FAILED", "solve_round"]
 
@@ -98,10 +98,8 @@ WARM_MU = 1e-5
 REFINE = 0
 
 
-def _jit(fn):
-    if not ENABLED or numba is None:
-        return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+#: The method's functions compiled as every kernel (plain Python without numba).
+_jit = jit
 
 
 #: Whether the compiled solver is available (numba installed and enabled).
