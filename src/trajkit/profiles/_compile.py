@@ -77,19 +77,24 @@ def _unliteral_calls(disp):
     """``disp`` compiled once per argument type, not once per constant value.
 
     A compiled caller that passes a constant (``0``, ``True``) types it as a
-    literal, and numba compiles the callee again for every such value (one
-    kernel function was compiled 14 times for one call of the state
-    planner). The kernels never branch on a literal's value at typing time,
-    so the callee is compiled for the plain types: the same machine code
-    for every value, a fraction of the first compilation's time.
+    literal, and numba compiles the callee again for every such value
+    (without this, one kernel function is compiled 14 times for one call of
+    the state planner). The kernels never branch on a literal's value at
+    typing time, so the callee is compiled for the plain types: the same
+    machine code for every value, a fraction of the first compilation's
+    time. A numba whose dispatcher lacks the hook gets ``disp`` unchanged
+    (the same results, only more builds).
     """
-    from numba.core import types as nbtypes
-
-    base = type(disp).get_call_template
+    try:
+        from numba.core.types import unliteral
+    except ImportError:  # pragma: no cover - numba's layout changed
+        return disp
+    base = getattr(type(disp), "get_call_template", None)
+    if base is None:  # pragma: no cover - numba's layout changed
+        return disp
 
     def get_call_template(args, kws):
-        return base(disp, tuple(nbtypes.unliteral(a) for a in args),
-                    {k: nbtypes.unliteral(v) for k, v in kws.items()})
+        return base(disp, tuple(unliteral(a) for a in args), {k: unliteral(v) for k, v in kws.items()})
 
     disp.get_call_template = get_call_template
     return disp
