@@ -98,15 +98,11 @@ WARM_MU = 1e-5
 REFINE = 0
 
 
-#: The method's functions compiled as every kernel (plain Python without numba).
-_jit = jit
-
-
 #: Whether the compiled solver is available (numba installed and enabled).
 AVAILABLE = ENABLED and numba is not None
 
 
-@_jit
+@jit
 def _layout(N, ecell):
     """Positions in the KKT system: ``px[k]``, ``pu[k]`` of the inner nodes'
     ``x`` and ``u`` (-1 for the end nodes), ``pe[j]`` of every equality; size."""
@@ -137,7 +133,7 @@ def _layout(N, ecell):
     return px, pu, pe, pos
 
 
-@_jit
+@jit
 def _fold(cell, C, h, px, pu, X, U):
     """The rows on the unknowns alone: every row's four KKT positions and
     coefficients, the end nodes' (given) values moved to the right-hand side. A
@@ -176,13 +172,13 @@ def _fold(cell, C, h, px, pu, X, U):
     return pos, cf, hh, keep, feasible
 
 
-@_jit
+@jit
 def _dot4(pos, cf, r, z):
     return (cf[r, 0] * z[pos[r, 0]] + cf[r, 1] * z[pos[r, 1]]
             + cf[r, 2] * z[pos[r, 2]] + cf[r, 3] * z[pos[r, 3]])
 
 
-@_jit
+@jit
 def _band_add(M, a, b, v):
     """Add ``v`` at ``(a, b)`` of the symmetric matrix in lower band storage."""
     if a >= b:
@@ -191,7 +187,7 @@ def _band_add(M, a, b, v):
         M[b, b - a] += v
 
 
-@_jit
+@jit
 def _ldl(M, bw, L, d, sign):
     """``M = L D L^T`` of the band matrix ``M`` (lower band, half-width ``bw``).
 
@@ -224,7 +220,7 @@ def _ldl(M, bw, L, d, sign):
     return raised
 
 
-@_jit
+@jit
 def _ldl_solve(L, d, bw, b, x):
     n = b.size
     for i in range(n):
@@ -241,7 +237,7 @@ def _ldl_solve(L, d, bw, b, x):
         x[i] = s
 
 
-@_jit
+@jit
 def _band_mul(M, bw, x, out):
     """``out = M x`` for the symmetric band matrix ``M``."""
     n = x.size
@@ -254,7 +250,7 @@ def _band_mul(M, bw, x, out):
             out[i - k] += v * x[i]
 
 
-@_jit
+@jit
 def _objective(X, w):
     f = 0.0
     for i in range(w.size):
@@ -262,7 +258,7 @@ def _objective(X, w):
     return f
 
 
-@_jit
+@jit
 def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, refine):
     """``sol`` from the factors of the regularised matrix, refined ``refine``
     times against ``M`` (the matrix without the regularisation)."""
@@ -276,7 +272,7 @@ def _solve_linear(M, L, dd, bw, rhs, sol, res, tmp, refine):
             sol[q] += tmp[q]
 
 
-@_jit
+@jit
 def _cells(N, px, pu, nk):
     """The KKT positions of every interval's ``(x_i, x_{i+1}, u_i, u_{i+1})``,
     ``(N, 4)``; ``nk`` (a spare slot past the system, always zero in ``z``)
@@ -289,7 +285,7 @@ def _cells(N, px, pu, nk):
     return cp
 
 
-@_jit
+@jit
 def _fold_cells(N, cell, C, h, px, X, U, qnode):
     """The inequality rows grouped by interval (in their order within one), for
     the per-interval loops: coefficients ``(m, 4)`` with the end nodes' given
@@ -351,7 +347,7 @@ def _fold_cells(N, cell, C, h, px, X, U, qnode):
     return cf, hh, ptr, qrow, feasible, where
 
 
-@_jit
+@jit
 def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol, lam0, lam_out):
     """The compiled solver (see :func:`solve_round`)."""
     px, pu, pe, nk = _layout(N, ecell)
@@ -703,7 +699,7 @@ def _solve(N, w, cell, C, h, ecell, E, e, qnode, qxx, quu, X0, U0, max_iter, tol
     return X, U, status, it, _objective(X, w)
 
 
-@_jit
+@jit
 def _scatter(out, cp, i, v0, v1, v2, v3):
     """Add ``v0 .. v3`` at the positions of interval ``i``'s four unknowns."""
     out[cp[i, 0]] += v0
@@ -712,7 +708,7 @@ def _scatter(out, cp, i, v0, v1, v2, v3):
     out[cp[i, 3]] += v3
 
 
-@_jit
+@jit
 def _block_add(M, nk, a, b, v):
     """Add ``v`` at ``(a, b)`` (``a, b`` positions of one interval) of the band
     matrix, unless one of them is the spare slot or ``v`` is zero (a pair of
@@ -721,7 +717,7 @@ def _block_add(M, nk, a, b, v):
         _band_add(M, a, b, v)
 
 
-@_jit
+@jit
 def _quad_rows(qn, qk, qa, px, pu, z, cf, hh, qrow):
     """The quadratic rows ``g = qk x^2 + qa u^2 - 1 <= 0`` at the iterate (row
     ``qrow[j]``, on the interval starting at its node): the gradient as

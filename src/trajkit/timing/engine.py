@@ -611,16 +611,13 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         pending = np.column_stack([s[idx], s[idx + 1]])
         if idx.size > room:
             idx = idx[np.argsort(-err[idx])[:room]]
-        mids = np.zeros(s.size - 1)
-        mids[c] = sm
-        # (the derivatives at the new nodes: those just evaluated at the middles)
-        dm = [np.zeros((s.size - 1,) + np.shape(v)[1:]) for v in (qm, m1, m2, m3)]
-        for full, v in zip(dm, (qm, m1, m2, m3)):
-            full[c] = v
-        new = np.sort(np.concatenate([s, mids[idx]]))
-        order = np.argsort(np.concatenate([s, mids[idx]]), kind="stable")
-        parts = [np.concatenate([a, b[idx]]) for a, b in zip(der, dm)]
-        der = tuple(p[order] for p in parts)
+        # the new nodes are the middles of the cells split (all of them checked in
+        # this pass), with the derivatives just evaluated there
+        pos = np.searchsorted(c, idx)
+        merged = np.concatenate([s, sm[pos]])
+        order = np.argsort(merged, kind="stable")
+        new = merged[order]
+        der = tuple(np.concatenate([a, b[pos]])[order] for a, b in zip(der, (qm, m1, m2, m3)))
         # a split cell's halves are checked next, the others are done
         cell_old = np.concatenate([np.arange(s.size), idx])[order][:-1]
         halves = np.zeros(s.size - 1, dtype=bool)
