@@ -33,6 +33,7 @@ _COMMAND_MODULES = (
     "trajkit.cli._pallet",
     "trajkit.cli._run",
     "trajkit.cli._hmi",
+    "trajkit.cli._warmup",
 )
 
 

@@ -59,6 +59,12 @@ def _run(args: argparse.Namespace) -> int:
         raise errors.TrajkitError(
             f"the HMI needs fastapi and uvicorn ({exc.name} is missing): pip install 'trajkit[hmi]'"
         ) from None
+    from ..runtime import WARM_UP_PARTS, warm_up, warm_up_pending
+
+    if warm_up_pending(WARM_UP_PARTS):  # before it listens: no request waits for the compiler
+        print("preparing the compiled kernels (minutes the first time after an install; "
+              "`trajkit warmup` does it ahead)", file=sys.stderr, flush=True)
+        warm_up(WARM_UP_PARTS)
     serve(args.host, args.port, args.token, args.programs_dir,
           announce=lambda s: print(s, flush=True, file=sys.stdout),
           allowed_hosts=args.allow_host, allowed_origins=args.allow_origin,

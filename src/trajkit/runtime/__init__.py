@@ -6,6 +6,7 @@ return numbers/arrays; :class:`Streamer` runs them once per control period.
 """
 
 from ._brake import BrakeProfile, brake_profile, stop_position
+from ._warmup import WARM_UP_PARTS, warm_up, warm_up_pending
 from .pulses import PulseAxis, PulseRateFault, edge_times, pulse_count, pulse_counts
 from .safety import QUANTITIES, REACTIONS, RuntimeFault, SafetyConfig
 from .servo import ServoBank, ServoParams, cao2012_servo
@@ -17,6 +18,7 @@ __all__ = [
     "QUANTITIES",
     "REACTIONS",
     "STATES",
+    "WARM_UP_PARTS",
     "BrakeProfile",
     "MotionTiming",
     "ProgramSource",
@@ -38,4 +40,6 @@ __all__ = [
     "cao2012_servo",
     "simulate",
     "stop_position",
+    "warm_up",
+    "warm_up_pending",
 ]

@@ -88,6 +88,7 @@ from ..limits import AxisLimits
 from ..sync import plan_ptp, plan_ptp_states
 from ..trajectory import Trajectory
 from ._brake import BrakeProfile, brake_profile
+from ._warmup import warm_up
 from .pulses import PulseAxis, check_pulse_equivalents, pulse_count
 from .safety import Monitors, RuntimeFault, SafetyConfig
 from .servo import ServoBank, ServoParams
@@ -493,6 +494,13 @@ class Streamer:
     :meth:`resume`, :meth:`stop`, :meth:`estop`, :meth:`reset`,
     :meth:`inject_encoder_jump`) are thread-safe: they are queued and
     applied at the start of the next cycle.
+
+    Making a streamer makes the compiled kernels of its cycle ready
+    (:func:`~trajkit.runtime.warm_up`: the brake of every stop and of the
+    safety look-ahead, the planner of online targets), so that no cycle
+    waits for the compiler. With numba installed, the first streamer after
+    an install therefore takes minutes to make (``trajkit warmup`` does it
+    ahead); later ones, in any process, about a second at most.
     """
 
     def __init__(self, program: Any, period: float, *, limits: Sequence[AxisLimits] | None = None,
@@ -500,6 +508,8 @@ class Streamer:
                  pulse_equivalents: Any = None, max_pulse_rate: Any = math.inf,
                  safety: SafetyConfig | None = None, wait_in_position: bool = False,
                  rate_limits: tuple[float, float] | None = None, max_rate: float = 1.0) -> None:
+        # the kernels of its cycle (brake, online targets) compiled now, not in a cycle
+        warm_up(("runtime",))
         self.source: ProgramSource = as_source(program)
         src = self.source
         self.period = check_positive(period, "period")
