@@ -197,6 +197,11 @@ def create_app(token: str | None = None, programs_dir: str | os.PathLike | None 
 
     @asynccontextmanager
     async def lifespan(app):
+        # the runtime's compiled kernels before the first request: a run's streamer
+        # is made under the session lock, which an emergency stop at rest takes
+        from ..runtime import warm_up
+
+        warm_up(("runtime",))
         yield
         sess.close()
         safety_pool.shutdown(wait=False)
