@@ -1246,6 +1246,13 @@ _Best = tuple[float, GridSolution, np.ndarray, np.ndarray, LimitUse, float, np.n
 
 
 # --------------------------------------------------------------------------- public
+def _speed_caps(d1: np.ndarray, vlim: np.ndarray, cap: np.ndarray) -> np.ndarray:
+    """The largest path speed at every node (n,) that the joints' velocity limits
+    ``vlim`` (m,) allow with ``q'`` = ``d1`` (n, m), and at most ``cap`` (n,)."""
+    with np.errstate(divide="ignore"):
+        return np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1), cap)
+
+
 def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                      speed: float | Callable[[np.ndarray], np.ndarray] = math.inf,
                      accel: float = math.inf, jerk: float = math.inf,
@@ -1335,9 +1342,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         kappa = np.abs(np.asarray(curvature(s), dtype=float))
         if kappa.shape != s.shape or not np.isfinite(kappa).all():
             raise InvalidInputError("curvature(s) must return finite values of the shape of s")
-    with np.errstate(divide="ignore"):
-        vcap = np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1)
-    vcap = np.minimum(vcap, cap)
+    vcap = _speed_caps(d1, vlim, cap)
     n = s.size
     rest0 = start_speed == 0.0 and start_accel == 0.0
     restN = end_speed == 0.0 and end_accel == 0.0
@@ -1389,8 +1394,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             s, der = s_new, der_new
             q, d1, d2, d3 = der
             cap = cap_fn(s)
-            with np.errstate(divide="ignore"):
-                vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf), axis=1), cap)
+            vcap = _speed_caps(d1, vlim, cap)
             if curvature is not None:
                 kappa = np.abs(np.asarray(curvature(s), dtype=float))
             n = s.size
@@ -1463,9 +1467,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 q, d1, d2, d3 = der
                 cap = cap_fn(s)
                 x_cap = np.minimum(x_cap, cap ** 2)
-                with np.errstate(divide="ignore"):
-                    vcap = np.minimum(np.min(np.where(np.abs(d1) > 0, vlim / np.abs(d1), np.inf),
-                                             axis=1), cap)
+                vcap = _speed_caps(d1, vlim, cap)
                 if curvature is not None:
                     kappa = np.abs(np.asarray(curvature(s), dtype=float))
                 splits += 1
