@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -53,7 +54,10 @@ def test_known_optimum_every_node_at_the_cap(N):
     assert status == _ipm.ST_SOLVED and its < _ipm.IPM_MAX_ITER
     assert f == pytest.approx(np.sum(D) / math.sqrt(cap), rel=1e-7)
     np.testing.assert_allclose(X, cap, rtol=1e-7)
-    np.testing.assert_allclose(U, 0.0, atol=1e-7)
+    # (u is held only through the chain of node relations from the ends, where an
+    # alternating +-c is nearly free: it is known to the stopping tolerance 1e-8
+    # times that chain's conditioning, 1e-8 to 1e-7 here)
+    np.testing.assert_allclose(U, 0.0, atol=1e-6)
     assert np.all(X <= cap * (1 + 1e-12))  # an interior method: inside the limits
 
 
@@ -381,3 +385,26 @@ def test_a_pivot_that_cancels_is_raised_not_a_failure(sign):
     np.testing.assert_allclose(d, [4.0, 3.0 - 0.25], rtol=1e-15)
     M3 = np.array([[np.nan, 0.0], [1.0, 1.0]])
     assert _ipm._ldl(M3, 1, L, d, np.ones(2)) == -1
+
+
+@needs_compiled
+def test_a_step_towards_zero_speed_is_damped_so_the_iterates_do_not_cycle():
+    """A jerk-free round of a random UR5 CIRC (its rows stored): a Newton step that
+    goes most of the way to ``x = 0`` at a node puts the iterate where the
+    objective's Hessian is huge, its multipliers collapse and the iterates
+    climb back and fall again (with steps of 0.99 of the way there: 100
+    iterations without converging). With the step to ``x = 0`` damped
+    (:data:`_ipm.X_STEP_FRACTION`) it converges in a few iterations to a feasible point."""
+    d = np.load(Path(__file__).parent / "data" / "ipm_cycling_round.npz")
+    quad = (d["qnode"], d["qxx"], d["quu"])
+    X, U, status, its, f = _ipm.solve_round(d["w"], d["cell"], d["C"], d["h"], d["ecell"], d["E"],
+                                            d["e"], d["x0"], d["u0"], quad)
+    assert status == _ipm.ST_SOLVED and its <= 30, (status, its)
+    x4 = np.column_stack([X[d["cell"]], X[d["cell"] + 1], U[d["cell"]], U[d["cell"] + 1]])
+    assert (np.einsum("ij,ij->i", d["C"], x4) <= d["h"] + 1e-7 * np.maximum(1.0, np.abs(d["h"]))).all()
+    e4 = np.column_stack([X[d["ecell"]], X[d["ecell"] + 1], U[d["ecell"]], U[d["ecell"] + 1]])
+    assert np.abs(np.einsum("ij,ij->i", d["E"], e4) - d["e"]).max() < 1e-7
+    k = d["qnode"]
+    assert (d["qxx"] * X[k] ** 2 + d["quu"] * U[k] ** 2 <= 1.0 + 1e-7).all()
+    assert (X[1:-1] > 0).all()
+    assert f == pytest.approx(np.sum(d["w"] / (np.sqrt(X[:-1]) + np.sqrt(X[1:]))), rel=1e-12)

@@ -19,6 +19,7 @@ from trajkit import plan_move
 from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_x, rot_z
 from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
+from trajkit.timing import _ipm, _socp, engine
 
 DT = 2.5e-4
 
@@ -89,6 +90,43 @@ def test_random_paths_on_real_arms_keep_every_limit(name):
         tm = run.segments[-1].chain.timing
         assert tm.duration >= tm.jerk_free_time * (1 - 1e-6)
     assert done >= sweep_size(2)
+
+
+@pytest.mark.skipif(not _ipm.AVAILABLE, reason="the interior-point method runs compiled only")
+def test_rounds_after_grid_splits_are_solved_by_the_interior_point_method(monkeypatch):
+    """A random Panda LIN whose limit check splits the grid three times: every
+    round, the first ones on each split grid included, converges in the
+    interior-point method (none is handed to the cone solver), in a few
+    hundred iterations over the whole plan, and the limits hold."""
+    robot = load_arm("panda")
+    rng = np.random.default_rng(1)
+    q0 = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785]) + rng.uniform(-0.2, 0.2, robot.n_joints)
+    mot, _ = _random_motion(rng, robot, q0)
+    grids, cone, its = [], [], []
+    solve_grid, clarabel, solve_round = engine.solve_grid, _socp._clarabel_solve, _ipm.solve_round
+
+    def grid(p, *args, **kw):
+        grids.append((p.s.size, kw.get("near", False)))
+        return solve_grid(p, *args, **kw)
+
+    def cone_solver(*args, **kw):
+        cone.append(1)
+        return clarabel(*args, **kw)
+
+    def ipm(*args, **kw):
+        out = solve_round(*args, **kw)
+        its.append(out[3])
+        return out
+
+    monkeypatch.setattr(engine, "solve_grid", grid)
+    monkeypatch.setattr(_socp, "_clarabel_solve", cone_solver)
+    monkeypatch.setattr(_ipm, "solve_round", ipm)
+    run = run_motions(robot, [mot], q0)
+    assert sum(1 for _, near in grids if near) >= 3, grids  # (the case: three splits)
+    assert cone == [] and max(its) < _ipm.IPM_MAX_ITER, its
+    assert sum(its) < 250, its
+    rv, ra, rj, _ = fd_ratios(robot, run)
+    assert (rv <= 1 + FD_RTOL).all() and (ra <= 1 + FD_RTOL).all() and (rj <= 1 + FD_RTOL).all()
 
 
 def test_raising_the_programmed_speed_never_lengthens_a_lin():

@@ -738,7 +738,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
     first round (which then leaves out the rows far from them, see SCREEN_SLACK;
     the result is the same, only sooner). ``near``: ``init`` is a converged
     solution of this grid less a few nodes (cells split in two), interpolated:
-    its active limits are taken for the first round's screening too.
+    the solve stops after its first round when that changed the time by less
+    than SETTLED_RTOL (its first round is screened loosely, SCREEN_SLACK_LOOSE).
     """
     L = float(p.s[-1] - p.s[0])
     T0 = _time_scale(p)
@@ -1016,8 +1017,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         # again for the rows it then violates took longer than all rows at once
         # (2.7 % of the benchmark's arm planning time)
         t_prev = times[-2] if jerk_rounds >= 2 else (t_init if jerk_rounds == 1 else math.nan)
-        # (a settled round also starts from the previous multipliers)
-        warm = z_prev is not None and (((settled or near) and not times)
+        # (a settled round also starts from the previous multipliers; a solution of
+        # the grid before a split, interpolated, is screened loosely: narrowly, its
+        # first round left out rows of the new nodes and took 45-100 iterations)
+        warm = z_prev is not None and ((settled and not times)
                                        or bool(times and abs(times[-1] - t_prev) <= SCREEN_SETTLED * times[-1]))
         if warm and z_prev is not None:
             az_prev = ineq_times(z_prev)
