@@ -180,41 +180,62 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
     i_seg = n_p
     i_joint = n_p + nseg
     nv = n_p + nseg + m
-    blocks, rhs = [], []
+    rows_, cols_, vals_, rhs = [], [], [], []
+    r0 = 0  # rows so far (of the inequalities)
+
+    def add(d: sp.csr_matrix, rr: np.ndarray, col0: int, sgn: float, extra_col: np.ndarray,
+            extra_val: float) -> None:
+        """Rows ``rr`` of ``sgn * d`` at columns ``col0 + ...``, each with one more entry
+        ``extra_val`` at its column of ``extra_col``, as the next rows."""
+        nonlocal r0
+        starts, counts = d.indptr[rr], d.indptr[rr + 1] - d.indptr[rr]
+        k = np.repeat(starts - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts) \
+            + np.arange(int(counts.sum()))
+        rows_.append(np.repeat(r0 + np.arange(rr.size), counts))
+        cols_.append(d.indices[k] + col0)
+        vals_.append(sgn * d.data[k])
+        rows_.append(r0 + np.arange(rr.size))
+        cols_.append(extra_col)
+        vals_.append(np.full(rr.size, extra_val))
+        r0 += rr.size
+
     for order, (d, at, lim) in enumerate(zip((d1, d2, d3), where, (vlim, alim, jlim))):
         w = order + 1.0
         s_lo = np.clip(np.searchsorted(knots, at, side="left") - 1, 0, nseg - 1)
         s_hi = np.clip(np.searchsorted(knots, at, side="right") - 1, 0, nseg - 1)
-        d = d.tocoo()
+        d = d.tocsr()
+        d.sum_duplicates()
+        d.eliminate_zeros()
         r = d.shape[0]
         rows = np.arange(r)
+        two = np.nonzero(s_hi != s_lo)[0]
         for j in range(m):
             if not np.isfinite(lim[j]):
                 continue
             ll = float(lim[j])
             for sgn in (1.0, -1.0):
-                base = sp.coo_matrix((sgn * d.data, (d.row, d.col + j * n)), shape=(r, nv))
-                cols = [i_seg + s_lo]
-                sel = [rows]
+                # every control point of the derivative within the limit of its
+                # stretch's scale (of both stretches where its support's middle is
+                # a waypoint), and of the joint's own scale
+                sel = [(rows, i_seg + s_lo)]
                 if order in JOINT_ORDERS:
-                    cols.append(i_joint + j + np.zeros(r, dtype=int))
-                    sel.append(rows)
-                two = np.nonzero(s_hi != s_lo)[0]
+                    sel.append((rows, i_joint + j + np.zeros(r, dtype=int)))
                 if two.size:
-                    cols.append(i_seg + s_hi[two])
-                    sel.append(two)
-                for rr, cc in zip(sel, cols):
-                    mc = sp.coo_matrix((np.full(rr.size, -w * ll), (np.arange(rr.size), cc)),
-                                       shape=(rr.size, nv))
-                    blocks.append(base.tocsr()[rr] + mc)
+                    sel.append((two, i_seg + s_hi[two]))
+                for rr, cc in sel:
+                    add(d, rr, j * n, sgn, cc, -w * ll)
                     rhs.append(np.full(rr.size, -(w - 1.0) * ll))
     # position range: the control points inside it keep the whole path inside
     for j in range(m):
         for bound, sgn in ((lo[j], -1.0), (hi[j], 1.0)):
             if np.isfinite(bound):
-                blocks.append(sp.csr_matrix((np.full(n, sgn), (np.arange(n), j * n + np.arange(n))),
-                                            shape=(n, nv)))
+                rows_.append(r0 + np.arange(n))
+                cols_.append(j * n + np.arange(n))
+                vals_.append(np.full(n, sgn))
+                r0 += n
                 rhs.append(np.full(n, sgn * float(bound)))
+    ineq = sp.csr_matrix((np.concatenate(vals_), (np.concatenate(rows_), np.concatenate(cols_))),
+                         shape=(r0, nv))
     interp = BSpline.design_matrix(knots, t, _DEG)
     ends = d2[[0, d2.shape[0] - 1]]
     e = sp.vstack([interp, ends]).tocsr()
@@ -226,7 +247,7 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
     c[i_seg:i_joint] = h
     c[i_joint:] = JOINT_WEIGHT * h.sum()
     a_eq = sp.vstack(eqs)
-    a_all = sp.vstack([a_eq] + blocks).tocsc()
+    a_all = sp.vstack([a_eq, ineq]).tocsc()
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = LP_TOL

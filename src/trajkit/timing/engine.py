@@ -447,9 +447,13 @@ def _initial_grid(L: float, breaks: np.ndarray) -> np.ndarray:
     pts = np.concatenate([base, ends, L - ends, breaks, twins])
     pts = np.unique(np.clip(pts, 0.0, L))
     # nodes of the regular grid too close to a breakpoint or its twin are dropped
-    near = np.zeros(pts.size, dtype=bool)
-    for b in np.concatenate([breaks, twins]):
-        near |= (np.abs(pts - b) < 0.25 * h) & (pts != b) & ~np.isin(pts, breaks) & ~np.isin(pts, twins)
+    special = np.unique(np.concatenate([breaks, twins]))
+    if not special.size:
+        return pts
+    at = np.searchsorted(special, pts)
+    gap = np.minimum(np.abs(pts - special[np.maximum(at - 1, 0)]),
+                     np.abs(pts - special[np.minimum(at, special.size - 1)]))
+    near = (gap < 0.25 * h) & ~np.isin(pts, special)
     return pts[~near]
 
 
