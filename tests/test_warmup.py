@@ -63,42 +63,37 @@ def test_a_streamer_compiles_nothing_once_it_is_made():
         st = Streamer(prog, 1e-3, servo=ServoParams(),
                       safety=SafetyConfig(reactions={"following error": "controlled"}))
         mark("made")
+
+        def steps(n, until=None):
+            for _ in range(n):
+                st.step()
+                if st.state == until:
+                    break
+            assert until is None or st.state == until, st.state
+
         st.start()
-        for _ in range(300):
-            st.step()
+        steps(300)
         mark("moving (safety look-ahead)")
         st.stop()
-        for _ in range(3000):
-            st.step()
-            if st.state == "idle":
-                break
-        assert st.state == "idle", st.state
+        steps(3000, "idle")
         mark("controlled stop (brake)")
         st.set_target([0.1, 0.2], [0.3, -0.1], sync="time")
-        for _ in range(50):
-            st.step()
+        steps(50)
         st.set_target([0.4, 0.0], sync="none",
                       limits=[AxisLimits(0.2, 1.0, 10.0, 0.5, 5.0), AxisLimits(0.3, 2.0, 30.0)])
-        for _ in range(200):
-            st.step()
+        steps(200)
         mark("online targets")
         st.start()
-        for _ in range(100):
-            st.step()
+        steps(100)
         mark("re-entry move")
         st.estop()
-        st.step()
+        steps(1)
         st.reset()
-        st.step()
+        steps(1)
         st.start()
-        for _ in range(50):
-            st.step()
+        steps(50)
         st.inject_encoder_jump(0, 0.5)
-        for _ in range(3000):
-            st.step()
-            if st.state == "fault":
-                break
-        assert st.state == "fault", st.state
+        steps(3000, "fault")
         mark("emergency stop, fault brake")
     """)
     assert log["made"], "the streamer made nothing ready (the check would be empty)"
