@@ -129,6 +129,32 @@ def test_rounds_after_grid_splits_are_solved_by_the_interior_point_method(monkey
     assert (rv <= 1 + FD_RTOL).all() and (ra <= 1 + FD_RTOL).all() and (rj <= 1 + FD_RTOL).all()
 
 
+def test_the_jerk_rows_bound_the_jerk_at_the_slower_end_of_an_interval(monkeypatch):
+    """The UR5's 0.8 m lateral LIN decelerates to rest with its elbow at the jerk
+    limit: at the slower end of each interval there, the jerk's node terms
+    oppose the path-jerk term. The rows take the node's own speed factor there
+    (a larger one would loosen the row below the node's jerk): the first
+    check of the pieces finds every joint's jerk within its limit, so that no
+    re-solve is needed for the jerk."""
+    robot = load_arm("ur5")
+    q_home = np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])
+    p0 = robot.fk(q_home)
+    y = np.array([0.0, 0.4, 0.0])
+    q0 = robot.ik_near(Pose(p0.position - y, p0.rotation), q_home)
+    first = []
+    check = engine._check
+
+    def spy(*args, **kw):
+        out = check(*args, **kw)
+        first.append(out[0])
+        return out
+
+    monkeypatch.setattr(engine, "_check", spy)
+    run_motions(robot, [Lin(CartesianTarget(Pose(p0.position + y, p0.rotation)), 3.0, label="L")], q0)
+    assert first[0].jerk.max() <= 1.0, first[0].jerk
+    assert first[0].jerk.max() > 0.99  # (at the limit: the case)
+
+
 def test_raising_the_programmed_speed_never_lengthens_a_lin():
     arm = default_arm6()
     q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])

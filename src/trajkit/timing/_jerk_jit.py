@@ -4,8 +4,9 @@ Every round of the grid problem (:mod:`._socp`) linearises the joints' jerk
 at both ends of every free interval around the previous round's node states
 (both signs; the leg where ``qdot * qddot`` has one sign at both ends of the
 interval, else the tighter of both; the node terms at the speed factor
-``max(rho, (1 + rho) / 2)``, ``rho`` the node's speed over the interval's
-mean speed), and the path's jerk; :func:`jerk_rows` writes those rows,
+``rho``, the node's speed over the interval's mean speed, or ``(1 + rho) / 2``
+at the interval's slower end where the node terms add to the row's value at
+the previous round's states), and the path's jerk; :func:`jerk_rows` writes those rows,
 normalised, in one pass over the intervals and joints, in the order and with
 the operations of the numpy formulation (``_socp._jerk_coefs_numpy``): the
 same rows to a few ulps (the tests compare the two). Compiled by numba when
@@ -82,7 +83,7 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
             nd = i + e
             # the node terms' speed factor: the node's speed over the mean
             rs = 2.0 * (si if e == 0 else sj) / S
-            fac = max(rs, 0.5 * (1.0 + rs))
+            half = 0.5 * (1.0 + rs)
             for k in range(m):
                 # the leg of the interval: where the joint speeds up (slows down)
                 # at both of its ends, else (a leg change inside) the tighter of both
@@ -98,8 +99,13 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
                 gi = -jl / (S2 * si)
                 gj = -jl / (S2 * sj)
                 r = f - gi * xi - gj * xj
+                # (the node terms at the previous round's states: a row whose node
+                # terms add to its value takes the larger factor, one whose node
+                # terms subtract the node's own, so that each bounds both)
+                nt = d3[nd, k] * x_bar[nd] + 3.0 * d2[nd, k] * u_bar[nd]
                 for h in range(2):
                     sgn = 1.0 if h == 0 else -1.0
+                    fac = max(rs, half) if sgn * nt > 0.0 else min(rs, half)
                     w = sgn * d1[nd, k] / D[i]
                     c3 = sgn * fac * d3[nd, k]
                     c2 = sgn * fac * 3.0 * d2[nd, k]
