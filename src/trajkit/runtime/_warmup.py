@@ -88,11 +88,15 @@ def _paths() -> None:
 _WORK = {"runtime": _runtime, "paths": _paths}
 
 
+def _names(parts: str | tuple[str, ...] | list[str]) -> list[str]:
+    """``parts`` as a list of names (one name given alone too)."""
+    return [parts] if isinstance(parts, str) else list(parts)
+
+
 def warm_up_pending(parts: tuple[str, ...] | list[str] = WARM_UP_PARTS) -> bool:
     """True when :func:`warm_up` of ``parts`` still has work to do in this process
     (numba installed and a part not yet ready)."""
-    names = [parts] if isinstance(parts, str) else list(parts)
-    return ENABLED and not set(names) <= _READY
+    return ENABLED and not set(_names(parts)) <= _READY
 
 
 def warm_up(parts: tuple[str, ...] | list[str] = ("runtime",)) -> dict[str, float]:
@@ -122,7 +126,7 @@ def warm_up(parts: tuple[str, ...] | list[str] = ("runtime",)) -> dict[str, floa
     """
     from ..errors import InvalidInputError
 
-    names = [parts] if isinstance(parts, str) else list(parts)
+    names = _names(parts)
     for p in names:
         if p not in _WORK:
             raise InvalidInputError(f"warm-up part must be one of {list(WARM_UP_PARTS)}, got {p!r}")

@@ -759,7 +759,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
     sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None,
-                        near and init is not None, duals if settled else None)
+                        near and init is not None, duals if settled and init is not None else None)
     sol.x = sol.x * (L / T0) ** 2
     sol.u = sol.u * L / as_
     sol.x[0], sol.u[0], sol.x[-1], sol.u[-1] = p.x0, p.u0, p.xN, p.uN
@@ -984,7 +984,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     best = None
     z_prev = None
     # the last round's multipliers of the inequalities (a warm start of a settled round)
-    duals = duals0 if (settled or near) and duals0 is not None else np.zeros(0)
+    duals = duals0 if duals0 is not None else np.zeros(0)
     t_init = math.nan
     if init is not None:
         x_bar, u_bar = np.maximum(init[0], 0.0), init[1]

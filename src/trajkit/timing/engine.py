@@ -1317,6 +1317,17 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     def cap_fn(ss):
         return _speed_cap(speed, ss)
 
+    def on_grid(ss: np.ndarray, dd1: np.ndarray):
+        """The speed cap, the joints' velocity cap and the tool path's curvature at
+        the grid ``ss`` (with ``q'`` = ``dd1`` there)."""
+        cc = cap_fn(ss)
+        kk = None
+        if curvature is not None:
+            kk = np.abs(np.asarray(curvature(ss), dtype=float))
+            if kk.shape != ss.shape or not np.isfinite(kk).all():
+                raise InvalidInputError("curvature(s) must return finite values of the shape of s")
+        return cc, _speed_caps(dd1, vlim, cc), kk
+
     breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
     breaks = np.unique(breaks[(breaks > 0.0) & (breaks < L)])
     s = _initial_grid(L, breaks)
@@ -1340,13 +1351,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                            max(grid_rtol, FIRST_GRID_RTOL))
     _finite_derivatives(der)
     q, d1, d2, d3 = der
-    cap = cap_fn(s)
-    kappa = None
-    if curvature is not None:
-        kappa = np.abs(np.asarray(curvature(s), dtype=float))
-        if kappa.shape != s.shape or not np.isfinite(kappa).all():
-            raise InvalidInputError("curvature(s) must return finite values of the shape of s")
-    vcap = _speed_caps(d1, vlim, cap)
+    cap, vcap, kappa = on_grid(s, d1)
     n = s.size
     rest0 = start_speed == 0.0 and start_accel == 0.0
     restN = end_speed == 0.0 and end_accel == 0.0
@@ -1397,10 +1402,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
             s, der = s_new, der_new
             q, d1, d2, d3 = der
-            cap = cap_fn(s)
-            vcap = _speed_caps(d1, vlim, cap)
-            if curvature is not None:
-                kappa = np.abs(np.asarray(curvature(s), dtype=float))
+            cap, vcap, kappa = on_grid(s, d1)
             n = s.size
             x_cap = cap ** 2
             scale_v = np.ones((n, m))
@@ -1469,11 +1471,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 xmid_scale = np.ones(s_new.size - 1)
                 s, der = s_new, cached.derivatives(s_new)
                 q, d1, d2, d3 = der
-                cap = cap_fn(s)
+                cap, vcap, kappa = on_grid(s, d1)
                 x_cap = np.minimum(x_cap, cap ** 2)
-                vcap = _speed_caps(d1, vlim, cap)
-                if curvature is not None:
-                    kappa = np.abs(np.asarray(curvature(s), dtype=float))
                 splits += 1
                 continue
             tightened += 1
