@@ -123,6 +123,12 @@ FIRST_ROUNDS = 3
 #: than this fraction of the acceleration's range is split (in 2 to 4).
 SWING_SPLIT = 0.02
 
+#: After the first solve, a rest interval (the constant-jerk phase from or to
+#: rest) whose jerk stays below this fraction of its limit ends too far from
+#: the rest: the ramp at the jerk limit to the same acceleration ends sooner,
+#: and a node is put there (see ``_rest_splits``).
+REST_SPLIT_BELOW = 0.9
+
 #: The grid problem plans with this fraction of every jerk limit: its pieces'
 #: jerks differ from the model's by a fraction of a per cent (two pieces per
 #: interval), which this absorbs instead of a slow-down of the whole motion.
@@ -697,6 +703,63 @@ def _solution_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray) -> np.ndarray:
     pts = np.concatenate(out) if out else np.zeros(0)
     room = GRID_MAX - s.size
     return pts[:max(room, 0)]
+
+
+def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, jacc: np.ndarray,
+                 jdec: np.ndarray, j_path: float, rest0: bool, restN: bool) -> np.ndarray:
+    """Nodes inside the rest intervals whose jerk is below REST_SPLIT_BELOW of its limit.
+
+    A rest interval's motion is one jerk phase from rest (``s = J t^3 / 6``), so it
+    reaches the acceleration ``u`` of its inner node at the end of the interval,
+    whatever that interval's length ``D``: ``J = sqrt(u^3 / (6 D))``. When the
+    grid's first node lies beyond the end of the fastest ramp to that
+    acceleration (long motions with short jerk phases), ``J`` stays well below
+    the limit ``J_max`` (the joints' jerk of the leg over ``|q'|``, the path's
+    jerk) and the ramp takes longer than it needs to. The ramp at ``J_max`` to
+    the same ``u`` ends at ``D (J / J_max)^2`` from the rest: a node there (and
+    the middle of the rest of the interval) lets the next solve ramp at the
+    limit.
+
+    Parameters
+    ----------
+    s : ndarray, shape (N + 1,)
+        The grid [path unit].
+    x, u : ndarray, shape (N + 1,)
+        The solution's ``sdot^2`` and ``sddot`` at the nodes.
+    d1 : ndarray, shape (N + 1, m)
+        ``dq/ds`` at the nodes.
+    jacc, jdec : ndarray, shape (m,)
+        The joints' jerk limits of both legs (speeding up from rest, slowing
+        down to rest).
+    j_path : float
+        The path's jerk limit (inf: none).
+    rest0, restN : bool
+        The motion starts, ends at rest.
+
+    Returns
+    -------
+    ndarray
+        The new nodes (none where the ramps already use their limit).
+    """
+    out = []
+    N = s.size - 1
+    for flag, rest, node, jl in ((rest0, 0, 1, jacc), (restN, N, N - 1, jdec)):
+        if not flag or N < 2:
+            continue
+        D = abs(float(s[node] - s[rest]))
+        a = abs(float(u[node]))
+        qa = np.maximum(np.abs(d1[node]), np.abs(d1[rest]))
+        with np.errstate(divide="ignore"):
+            jmax = min(float(np.min(np.where(qa > 0, jl / qa, np.inf))), j_path)
+        if not (D > 0.0 and a > 0.0 and math.isfinite(jmax)):
+            continue
+        ratio = math.sqrt(a**3 / (6.0 * D)) / jmax
+        if ratio >= REST_SPLIT_BELOW:
+            continue
+        d = D * ratio * ratio
+        for off in (d, 0.5 * (d + D)):
+            out.append(s[rest] + off if rest == 0 else s[rest] - off)
+    return np.asarray(out, dtype=float)
 
 
 def _cell_interp(s0, s1, S, a0, a1, b0, b1, c0, c1):
@@ -1390,7 +1453,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         jerk_free_time = first.jerk_free_time
         init = (first.x, first.u)
         # the second grid: the nodes of the jerk phases, refined to the full tolerance
-        s_new = np.unique(np.concatenate([s, _solution_splits(s, first.x, first.u)]))
+        s_new = np.unique(np.concatenate([
+            s, _solution_splits(s, first.x, first.u),
+            _rest_splits(s, first.x, first.u, d1, jacc * JERK_MARGIN, jdec * JERK_MARGIN,
+                         j_path * JERK_MARGIN, rest0, restN)]))
         der_new = cached.derivatives(s_new)
         if grid_rtol < FIRST_GRID_RTOL:  # (the cells within it already: not again)
             parent = np.searchsorted(s, s_new[:-1], side="right") - 1
