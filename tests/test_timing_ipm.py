@@ -302,7 +302,8 @@ def test_compiled_jerk_rows_equal_the_numpy_ones(path_jerk):
     """The rounds' jerk rows (``_jerk_jit.jerk_rows``, compiled where numba is)
     equal the numpy formulation to a few ulps: random node states (some at
     rest), derivatives with zeros (a joint at rest picks the smaller leg),
-    separate legs, with and without the path's jerk row."""
+    separate legs, intervals held to the smaller leg, with and without the
+    path's jerk row."""
     from trajkit.timing import _jerk_jit
 
     rng = np.random.default_rng(31 + path_jerk)
@@ -318,12 +319,13 @@ def test_compiled_jerk_rows_equal_the_numpy_ones(path_jerk):
         j_acc = rng.uniform(0.5, 5.0, (n, m))
         j_dec = rng.uniform(0.5, 5.0, (n, m))
         j_both = np.minimum(j_acc, j_dec)
+        mixed = rng.random((n - 1, m)) < 0.2
         D = rng.uniform(0.01, 0.1, n - 1)
         j_path = float(rng.uniform(1.0, 10.0)) if path_jerk else math.inf
-        C, b = _jerk_jit.jerk_rows(x, u, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, j_path,
-                                   _socp.TINY_X)
+        C, b = _jerk_jit.jerk_rows(x, u, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, mixed, D,
+                                   j_path, _socp.TINY_X)
         C2, b2 = _socp._jerk_coefs_numpy(j_path, x, u, ecorr, g, (g, g + 1), sig, d1, d2, d3, j_acc,
-                                         j_dec, j_both, D)
+                                         j_dec, j_both, mixed, D)
         assert C.shape == C2.shape == (4 * g.size * m + (2 * g.size if path_jerk else 0), 4)
         np.testing.assert_allclose(C, C2, rtol=4e-16 * 8, atol=1e-300)
         np.testing.assert_allclose(b, b2, rtol=4e-16 * 8, atol=1e-300)

@@ -22,7 +22,8 @@ the samples does all of it, sample by sample, without temporaries over
   ``q'' sdot^2 + q' sddot``, ``q''' sdot^3 + 3 q'' sdot sddot + q' sdddot``
   and the leg from the sign of ``qdot * qddot``; a joint at rest (``|qdot|``
   at most ``rest_rtol`` of its limit) takes the product at its piece's middle
-  (where that joint is at rest too: speeding up);
+  (where that joint is at rest too: speeding up where the path speeds up,
+  slowing down where it slows down, as from and to a stop);
 * the largest ratios per joint and of the path.
 
 The formulas and their order of operations are the engine's numpy ones
@@ -125,7 +126,8 @@ def _lagrange(w, xs, basis):
 @_jit
 def _mid_row(t, st, jerk, s, p, d1, d2, d3, r1, r2, r3, done, err, xs, tol, mid, basis):
     """``mid[p]``: ``qdot * qddot`` at the middle of piece ``p`` from the interpolated
-    derivatives, 1 where the joint is at rest there."""
+    derivatives; where the joint is at rest there, 1 where the path speeds up
+    (``sddot >= 0``), else -1."""
     _, x, V, A, _, c = _state(t, st, jerk, s, p, 0.5 * (t[p + 1] - t[p]), -1)
     w, h00, k10, h01, k11 = _weights(s, c, x)
     corr = done.size > 0 and done[c]
@@ -144,7 +146,7 @@ def _mid_row(t, st, jerk, s, p, d1, d2, d3, r1, r2, r3, done, err, xs, tol, mid,
             g2 += e2
         qd = g1 * V
         qdd = g2 * (V * V) + g1 * A
-        mid[p, j] = 1.0 if abs(qd) <= tol[j] else qd * qdd
+        mid[p, j] = (1.0 if A >= 0.0 else -1.0) if abs(qd) <= tol[j] else qd * qdd
 
 
 @_inline
@@ -245,15 +247,16 @@ def rest_pieces(f1, t, st, jerk, s, piece, dt, tol, k):
 @_jit
 def mid_products(f1, f2, V, A, tol):
     """``qdot * qddot`` (n, m) from ``dq/ds``, ``d2q/ds2`` (n, m), ``sdot``, ``sddot``
-    (n,); 1 where the joint is at rest (``|qdot| <= tol`` (m,)): the leg of a
-    piece whose middle is at rest is speeding up."""
+    (n,); where the joint is at rest (``|qdot| <= tol`` (m,)), 1 where the path
+    speeds up (``sddot >= 0``), else -1: the leg of a piece whose middle is at
+    rest is the path's (speeding up from a stop, slowing down to one)."""
     n, m = f1.shape
     out = np.empty((n, m))
     for i in range(n):
         for j in range(m):
             qd = f1[i, j] * V[i]
             qdd = f2[i, j] * (V[i] * V[i]) + f1[i, j] * A[i]
-            out[i, j] = 1.0 if abs(qd) <= tol[j] else qd * qdd
+            out[i, j] = (1.0 if A[i] >= 0.0 else -1.0) if abs(qd) <= tol[j] else qd * qdd
     return out
 
 

@@ -3,7 +3,7 @@
 Every round of the grid problem (:mod:`._socp`) linearises the joints' jerk
 at both ends of every free interval around the previous round's node states
 (both signs; the leg where ``qdot * qddot`` has one sign at both ends of the
-interval, else the tighter of both; the node terms at the speed factor
+interval, else, or where asked, the tighter of both; the node terms at the speed factor
 ``rho``, the node's speed over the interval's mean speed, or ``(1 + rho) / 2``
 at the interval's slower end where the node terms add to the row's value at
 the previous round's states), and the path's jerk; :func:`jerk_rows` writes those rows,
@@ -30,7 +30,7 @@ AVAILABLE = ENABLED and numba is not None
 
 
 @_jit
-def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, j_path, tiny):
+def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, mixed, D, j_path, tiny):
     """The jerk rows at ``(x_bar, u_bar)``.
 
     Parameters
@@ -45,6 +45,8 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
         Sign of ``q'`` and the path derivatives at the nodes.
     j_acc, j_dec, j_both : ndarray, shape (n, m)
         The joints' jerk limits (speeding up, slowing down, the smaller).
+    mixed : ndarray of bool, shape (n - 1, m)
+        Intervals whose joint takes the smaller limit whatever its leg.
     D : ndarray, shape (n - 1,)
         Interval lengths.
     j_path : float
@@ -89,7 +91,9 @@ def jerk_rows(x_bar, u_bar, ecorr, g, sig, d1, d2, d3, j_acc, j_dec, j_both, D, 
                 # at both of its ends, else (a leg change inside) the tighter of both
                 sp0 = sig[i, k] * (d2[i, k] * x_bar[i] + d1[i, k] * u_bar[i])
                 sp1 = sig[i + 1, k] * (d2[i + 1, k] * x_bar[i + 1] + d1[i + 1, k] * u_bar[i + 1])
-                if sp0 > 0.0 and sp1 > 0.0:
+                if mixed[i, k]:
+                    jl = j_both[nd, k]
+                elif sp0 > 0.0 and sp1 > 0.0:
                     jl = j_acc[nd, k]
                 elif sp0 < 0.0 and sp1 < 0.0:
                     jl = j_dec[nd, k]

@@ -126,6 +126,11 @@ BIND_RTOL = 0.999
 #: tangent planes (guards a division near a stop in the path's interior).
 TINY_X = 1e-12
 
+#: A new solution's jerk row (linearised at it, with its own legs) exceeded by
+#: more than this (the rows are normalised) where the row that bounded it took
+#: the looser leg: that interval takes the tighter leg from then on.
+LEG_RTOL = 1e-6
+
 
 @dataclass
 class GridProblem:
@@ -366,6 +371,13 @@ def _legs(sig: np.ndarray, acc: np.ndarray, dec: np.ndarray) -> tuple[np.ndarray
     return hi, lo
 
 
+def _speed_correction(x: np.ndarray, u: np.ndarray, D: np.ndarray,
+                      tau: np.ndarray | None = None) -> np.ndarray:
+    """The intervals' correction of the mean speed, ``(u_i - u_{i+1}) tau_i / 12``
+    (``tau``: :func:`_interval_tau`, computed when not given)."""
+    return (u[:-1] - u[1:]) * (_interval_tau(x, u, D) if tau is None else tau) / 12.0
+
+
 def _interval_tau(x: np.ndarray, u: np.ndarray, D: np.ndarray) -> np.ndarray:
     """Durations of the constant-jerk intervals between node states (Hermite relation)."""
     v = np.sqrt(np.maximum(x, 0.0))
@@ -421,6 +433,49 @@ def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: 
     return out
 
 
+def _leg_flips(p: GridProblem, used: tuple[np.ndarray, np.ndarray],
+               new: tuple[np.ndarray, np.ndarray], g: np.ndarray,
+               ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray, d1: np.ndarray,
+               d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray, j_dec: np.ndarray,
+               j_both: np.ndarray, mixed: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """The free intervals whose jerk rows took a looser leg than the new solution
+    runs on, where that solution's jerk exceeds the leg's limit.
+
+    A round's jerk rows take an interval's leg from the states they are
+    linearised at (``used``: ``x``, ``u`` of the nodes; the sign of
+    ``qdot * qddot`` at both ends of the interval). Where the new solution
+    (``new``: ``x``, ``u``) moves a leg
+    change into or across the interval, its pieces there run on the other leg;
+    if that leg's limit is the smaller (separate jerk limits while speeding up
+    and slowing down), the rows did not bound them, and the next round, with
+    the other leg, would move the change back. Returns a bool array (n - 1, m):
+    the intervals ``g`` and joints where the new solution's jerk, as its own
+    rows (linearised at it, with its legs) measure it, exceeds that limit, less
+    those already ``mixed`` (which take the smaller limit whatever their leg).
+    """
+    def limits(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, ...]:
+        sp = sig * (d2 * x[:, None] + d1 * u[:, None])
+        up = (sp[:-1] > 0) & (sp[1:] > 0) & ~mixed
+        down = (sp[:-1] < 0) & (sp[1:] < 0) & ~mixed
+        return tuple(np.where(up, j_acc[e], np.where(down, j_dec[e], j_both[e]))
+                     for e in (slice(None, -1), slice(1, None)))
+
+    x, u = new
+    before, after = limits(*used), limits(x, u)
+    out = np.zeros(mixed.shape, dtype=bool)
+    out[g] = ((before[0] > after[0]) | (before[1] > after[1]))[g]
+    if not out.any():
+        return out
+    n, m = x.size, d1.shape[1]
+    rows = _jerk_rows(p, x, u, _speed_correction(x, u, D), g, ends, sig, d1, d2, d3, j_acc, j_dec,
+                      j_both, mixed, D, n, [])
+    z = np.concatenate([x, u])
+    over = (rows.times(z) - rows.b)[:4 * g.size * m] > LEG_RTOL
+    hit = np.zeros(mixed.shape, dtype=bool)
+    hit[g] = over.reshape(4, g.size, m).any(axis=0)
+    return out & hit
+
+
 def _jerk_cells(g: np.ndarray, m: int, path_jerk: bool) -> np.ndarray:
     """The interval of every jerk row of :func:`_jerk_rows` (in its order)."""
     cells = [np.repeat(g, m)] * 4 + ([g, g] if path_jerk else [])
@@ -465,24 +520,28 @@ class _JerkRows:
 def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.ndarray,
                g: np.ndarray, ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray,
                d1: np.ndarray, d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray,
-               j_dec: np.ndarray, j_both: np.ndarray, D: np.ndarray, n: int,
+               j_dec: np.ndarray, j_both: np.ndarray, mixed: np.ndarray, D: np.ndarray, n: int,
                rest_rows: list[tuple[int, float, float]]) -> _JerkRows:
     """The jerk rows linearised at ``(x_bar, u_bar)`` (see the module notes), normalised.
 
     Every row of a free interval ``i`` has its coefficients on ``x_i, x_{i+1}, u_i,
     u_{i+1}`` (columns ``i, i + 1, n + i, n + i + 1``): the joints' jerk at both ends
     of the interval, both signs, then the path's jerk, then the rest intervals' bounds.
+    ``mixed`` (n - 1, m): the intervals whose joint takes the tighter leg (see
+    :func:`_leg_flips`).
     Compiled (:mod:`._jerk_jit`) where numba is available, else in numpy.
     """
     m = d1.shape[1]
     if _jerk_jit.AVAILABLE:
         C, b = _jerk_jit.jerk_rows(x_bar, u_bar, ecorr, np.ascontiguousarray(g, dtype=np.int64),
                                    *(np.ascontiguousarray(a, dtype=float) for a in
-                                     (sig, d1, d2, d3, j_acc, j_dec, j_both, D)),
+                                     (sig, d1, d2, d3, j_acc, j_dec, j_both)),
+                                   np.ascontiguousarray(mixed, dtype=np.bool_),
+                                   np.ascontiguousarray(D, dtype=float),
                                    float(p.j_path), TINY_X)
     else:
         C, b = _jerk_coefs_numpy(p.j_path, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
-                                 j_acc, j_dec, j_both, D)
+                                 j_acc, j_dec, j_both, mixed, D)
     rest = np.array([sgn / max(1.0, ub) for _node, sgn, ub in rest_rows], dtype=float)
     extra = np.array([ub / max(1.0, ub) for _node, _sgn, ub in rest_rows], dtype=float)
     node = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=int)
@@ -493,7 +552,7 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
 def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.ndarray,
                       g: np.ndarray, ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray,
                       d1: np.ndarray, d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray,
-                      j_dec: np.ndarray, j_both: np.ndarray,
+                      j_dec: np.ndarray, j_both: np.ndarray, mixed: np.ndarray,
                       D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The coefficients and right-hand sides of the joints' and the path's jerk rows
     (normalised) of :func:`_jerk_rows`, in numpy (:func:`._jerk_jit.jerk_rows` is
@@ -509,11 +568,11 @@ def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr
     coef: list[np.ndarray] = []  # (r, 4) each
     rhs: list[np.ndarray] = []
     # the leg of each interval: where the joint speeds up (slows down) at both of
-    # its ends, else (a leg change inside) the tighter of both
+    # its ends, else (a leg change inside, or where asked) the tighter of both
     sp0 = sig[ends[0]] * qdd_bar[ends[0]]
     sp1 = sig[ends[1]] * qdd_bar[ends[1]]
-    up = (sp0 > 0) & (sp1 > 0)
-    down = (sp0 < 0) & (sp1 < 0)
+    up = (sp0 > 0) & (sp1 > 0) & ~mixed[g]
+    down = (sp0 < 0) & (sp1 < 0) & ~mixed[g]
     for e, nd in enumerate(ends):
         jl = np.where(up, j_acc[nd], np.where(down, j_dec[nd], j_both[nd]))
         f = 2.0 * jl / S[:, None]
@@ -877,7 +936,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         sg = np.maximum(xx, floor)
         rh = 1.0 / (np.sqrt(sg[:-1]) + np.sqrt(sg[1:]))
         ta = _interval_tau(xx, uu, D)
-        return sg, rh, ta * ta, (uu[:-1] - uu[1:]) * ta / 12.0
+        return sg, rh, ta * ta, _speed_correction(xx, uu, D, ta)
 
     # the rows that do not change between rounds: the nodes' and the intervals'
     # velocity, the path's speed cap, the joint accelerations of both legs, the
@@ -929,6 +988,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     # the jerk rows' limit (leg) at both ends of every free interval, both signs
     ends = (g, g + 1)
     rest_rows = _rest_jerk_bounds(p, d1, j_acc, j_dec, D, rest0, restN)
+    # the intervals held to the tighter leg (see _leg_flips; only with separate legs)
+    mixed = np.zeros((N, m), dtype=bool)
+    asym = bool(np.any(j_acc != j_dec))
 
     # the equalities: the boundary states, the rest intervals' relation and the node relations
     eq_cols = [ix[0:1], iu[0:1], ix[N:], iu[N:], ic[0:1], ic[N:]]
@@ -1001,7 +1063,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
 
         if x_bar is not None:
             jerk = _jerk_rows(p, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
-                              j_acc, j_dec, j_both, D, n, rest_rows)
+                              j_acc, j_dec, j_both, mixed, D, n, rest_rows)
             b_in_all = np.concatenate([b_static, jerk.b])
         else:  # the jerk-free round: no jerk rows
             jerk = None
@@ -1102,6 +1164,12 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         times.append(t)
         if x_bar is None:
             jerk_free = t
+        elif asym and (flips := _leg_flips(p, (x_bar, u_bar), (x, u), g, ends, sig, d1, d2, d3,
+                                           j_acc, j_dec, j_both, mixed, D)).any():
+            # the rows missed a leg change: this solution may exceed the tighter leg's
+            # limit there; again with that leg in those intervals
+            jerk_rounds += 1
+            mixed |= flips
         else:
             jerk_rounds += 1
             if best is None or t < best[0]:

@@ -124,10 +124,14 @@ FIRST_ROUNDS = 3
 SWING_SPLIT = 0.02
 
 #: After the first solve, a rest interval (the constant-jerk phase from or to
-#: rest) whose jerk stays below this fraction of its limit ends too far from
-#: the rest: the ramp at the jerk limit to the same acceleration ends sooner,
-#: and a node is put there (see ``_rest_splits``).
+#: rest) whose jerk stays below REST_SPLIT_BELOW of its limit while its inner
+#: node's acceleration is at REST_SPLIT_ACCEL of its limit or more ends too
+#: far from the rest: the ramp at the jerk limit to that acceleration ends
+#: sooner, and a node is put there, REST_SPLIT_MIN of the interval from the
+#: rest or more (see ``_rest_splits``).
 REST_SPLIT_BELOW = 0.9
+REST_SPLIT_ACCEL = 0.9
+REST_SPLIT_MIN = 1e-3
 
 #: The grid problem plans with this fraction of every jerk limit: its pieces'
 #: jerks differ from the model's by a fraction of a per cent (two pieces per
@@ -705,9 +709,11 @@ def _solution_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray) -> np.ndarray:
     return pts[:max(room, 0)]
 
 
-def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, jacc: np.ndarray,
-                 jdec: np.ndarray, j_path: float, rest0: bool, restN: bool) -> np.ndarray:
-    """Nodes inside the rest intervals whose jerk is below REST_SPLIT_BELOW of its limit.
+def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, d2: np.ndarray,
+                 legs: tuple, a_path: float, j_path: float, rest0: bool,
+                 restN: bool) -> np.ndarray:
+    """Nodes inside the rest intervals whose jerk is below REST_SPLIT_BELOW of its
+    limit while they end at an acceleration limit (REST_SPLIT_ACCEL of it).
 
     A rest interval's motion is one jerk phase from rest (``s = J t^3 / 6``), so it
     reaches the acceleration ``u`` of its inner node at the end of the interval,
@@ -715,10 +721,13 @@ def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, ja
     grid's first node lies beyond the end of the fastest ramp to that
     acceleration (long motions with short jerk phases), ``J`` stays well below
     the limit ``J_max`` (the joints' jerk of the leg over ``|q'|``, the path's
-    jerk) and the ramp takes longer than it needs to. The ramp at ``J_max`` to
-    the same ``u`` ends at ``D (J / J_max)^2`` from the rest: a node there (and
-    the middle of the rest of the interval) lets the next solve ramp at the
-    limit.
+    jerk) and the ramp takes longer than it needs to. Where ``u`` is at an
+    acceleration limit (a joint's, of the leg, or the path's), the ramp at
+    ``J_max`` to it ends at ``D (J / J_max)^2`` from the rest: a node there
+    (REST_SPLIT_MIN of ``D`` at least) and at the middle of the rest of the
+    interval let the next solve ramp at the limit. (Where the inner node's
+    acceleration is below its limits, as after a ramp to a low velocity limit,
+    the fastest ramp does not end there.)
 
     Parameters
     ----------
@@ -726,13 +735,13 @@ def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, ja
         The grid [path unit].
     x, u : ndarray, shape (N + 1,)
         The solution's ``sdot^2`` and ``sddot`` at the nodes.
-    d1 : ndarray, shape (N + 1, m)
-        ``dq/ds`` at the nodes.
-    jacc, jdec : ndarray, shape (m,)
-        The joints' jerk limits of both legs (speeding up from rest, slowing
-        down to rest).
-    j_path : float
-        The path's jerk limit (inf: none).
+    d1, d2 : ndarray, shape (N + 1, m)
+        ``dq/ds``, ``d2q/ds2`` at the nodes.
+    legs : tuple of 2 (a, j)
+        The joints' acceleration and jerk limits, (m,) each, speeding up (from
+        rest) and slowing down (to rest).
+    a_path, j_path : float
+        The path's acceleration and jerk limits (inf: none).
     rest0, restN : bool
         The motion starts, ends at rest.
 
@@ -743,7 +752,7 @@ def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, ja
     """
     out = []
     N = s.size - 1
-    for flag, rest, node, jl in ((rest0, 0, 1, jacc), (restN, N, N - 1, jdec)):
+    for flag, rest, node, (al, jl) in ((rest0, 0, 1, legs[0]), (restN, N, N - 1, legs[1])):
         if not flag or N < 2:
             continue
         D = abs(float(s[node] - s[rest]))
@@ -754,9 +763,10 @@ def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, ja
         if not (D > 0.0 and a > 0.0 and math.isfinite(jmax)):
             continue
         ratio = math.sqrt(a**3 / (6.0 * D)) / jmax
-        if ratio >= REST_SPLIT_BELOW:
+        use = max(float(np.max(np.abs(d2[node] * x[node] + d1[node] * u[node]) / al)), a / a_path)
+        if ratio >= REST_SPLIT_BELOW or use < REST_SPLIT_ACCEL:
             continue
-        d = D * ratio * ratio
+        d = D * max(ratio * ratio, REST_SPLIT_MIN)
         for off in (d, 0.5 * (d + D)):
             out.append(s[rest] + off if rest == 0 else s[rest] - off)
     return np.asarray(out, dtype=float)
@@ -1048,8 +1058,9 @@ def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None)
     qdd = f2 * (V * V)[:, None] + f1 * A[:, None]
     qddd = f3 * (V**3)[:, None] + 3.0 * f2 * (V * A)[:, None] + f1 * jk[:, None]
     # the leg: speeding up (accel limits) or slowing down (decel limits); at rest,
-    # where the product vanishes, the leg of the piece's middle (a jerk phase that
-    # ends at rest is the end of a braking, one that starts there speeds up)
+    # where the product vanishes, the leg of the piece's middle (at rest there too:
+    # the path's, a jerk phase that ends at rest is the end of a braking, one that
+    # starts there speeds up)
     prod = qd * qdd
     aqd = np.abs(qd)
     at_rest = aqd <= REST_RTOL * (lim.vlim if lim.vrest is None else lim.vrest)
@@ -1058,8 +1069,10 @@ def _evaluate(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt, mid=None)
         if mid is None:  # (only the pieces with a joint at rest)
             uniq = np.unique(piece[rest_row])
             mid = np.zeros((jerk.size, qd.shape[1]))
-            mid[uniq] = _evaluate(s_grid, der, t, st, jerk, lim, path, uniq,
-                                  0.5 * np.diff(t)[uniq], mid=np.ones((jerk.size, qd.shape[1])))[-1]
+            a_mid = st[:jerk.size, 2] + 0.5 * np.diff(t) * jerk  # (the path's leg at the middles)
+            mid[uniq] = _evaluate(s_grid, der, t, st, jerk, lim, path, uniq, 0.5 * np.diff(t)[uniq],
+                                  mid=np.repeat(np.where(a_mid >= 0.0, 1.0, -1.0)[:, None],
+                                                qd.shape[1], axis=1))[-1]
         prod[rest_row] = np.where(at_rest[rest_row], mid[piece[rest_row]], prod[rest_row])
     speeding = prod > 0
     slowing = prod < 0
@@ -1455,8 +1468,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         # the second grid: the nodes of the jerk phases, refined to the full tolerance
         s_new = np.unique(np.concatenate([
             s, _solution_splits(s, first.x, first.u),
-            _rest_splits(s, first.x, first.u, d1, jacc * JERK_MARGIN, jdec * JERK_MARGIN,
-                         j_path * JERK_MARGIN, rest0, restN)]))
+            _rest_splits(s, first.x, first.u, d1, d2, ((aacc, jacc * JERK_MARGIN),
+                                                       (adec, jdec * JERK_MARGIN)),
+                         a_path, j_path * JERK_MARGIN, rest0, restN)]))
         der_new = cached.derivatives(s_new)
         if grid_rtol < FIRST_GRID_RTOL:  # (the cells within it already: not again)
             parent = np.searchsorted(s, s_new[:-1], side="right") - 1
