@@ -255,6 +255,11 @@ MAX_SPLITS = 3
 #: problem solved again (below it the uniform slow-down is cheaper).
 TIGHTEN_ABOVE = 1e-6
 
+#: With a moving boundary state no uniform slow-down is possible (it would
+#: change that state): every excess above CHECK_RTOL is lowered locally, in up
+#: to this many rounds, and the rounds' check is as dense as the final one.
+MAX_TIGHTEN_MOVING = 4
+
 #: A timing that had to be slowed down uniformly counts this fraction longer
 #: when the attempts are compared.
 SCALED_PENALTY = 2e-3
@@ -1431,6 +1436,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     n = s.size
     rest0 = start_speed == 0.0 and start_accel == 0.0
     restN = end_speed == 0.0 and end_accel == 0.0
+    moving = not (rest0 and restN)
     # the work has to be worth it: a motion that cannot be shorter than MAX_DURATION
     with np.errstate(divide="ignore", over="ignore"):
         floor = float(np.sum(np.diff(s) / np.maximum(vcap[:-1], vcap[1:])))
@@ -1496,7 +1502,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         init_settled = False  # init is a solution of the same grid
         init_near = False  # ... or of the grid before a split (interpolated)
         init_duals = None  # ... and its multipliers (on the same grid)
-        while attempt <= MAX_TIGHTEN:
+        while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
             prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                                j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
@@ -1520,7 +1526,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                           cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
             use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
-                                                     exact if cheap else _Interp(s, der, breaks, left))
+                                                     exact if cheap else _Interp(s, der, breaks, left),
+                                                     FINAL_CHECK_PER_PIECE if moving else None)
             k = _uniform_scale(use)
             # a timing that needs no uniform slow-down keeps its exact cruise speeds:
             # preferred unless a slowed one is clearly faster
@@ -1528,7 +1535,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             if best is None or score < best[0]:
                 # (the cells close to a limit: the final check corrects them first)
                 best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), (cell, near))
-            if use.worst <= 1.0 + TIGHTEN_ABOVE:
+            if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
                 break  # a small excess costs less as a uniform slow-down than as another round
             if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
                 # a large excess: the grid is too coarse for the motion there (the
@@ -1586,8 +1593,14 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             s, der, cap, kappa, vcap = s_b, der_b, cap_b, kappa_b, vcap_b
             best = None
     if best is None:
-        if not (rest0 and restN):
-            raise InfeasibleError("no timing found for a path with a moving boundary state")
+        if moving:
+            raise InfeasibleError(
+                f"no timing found from the start state (speed {start_speed:.6g}, acceleration "
+                f"{start_accel:.6g}) to the end state (speed {end_speed:.6g}, acceleration "
+                f"{end_accel:.6g}) along this path of length {L:.6g}: its grid problem has no "
+                "solution within the limits (the always-feasible fallback starts and ends at "
+                "rest); a start that has to brake hard, or a path too short to reach the end "
+                "state, makes it so")
         dur0, jk0 = fallback if fallback is not None else _fallback(
             s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
         sol, piv, k_scale, tightened = None, None, 1.0, 0
@@ -1599,7 +1612,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     # cap's sampling for its steps has over the whole path)
     per_piece = FINAL_CHECK_PER_PIECE if sol is not None else max(FINAL_CHECK_PER_PIECE, CAP_GRID)
     for _final in range(4):
-        if k_scale > 1.0 and not (rest0 and restN):
+        if k_scale > 1.0 and moving:
             raise InfeasibleError(
                 f"the timing exceeds a limit by {100 * (use.worst - 1):.3g} % and cannot be slowed "
                 "down uniformly with a moving boundary state")
