@@ -109,6 +109,31 @@ def _random_limit(rng, L):
     return fn, [f"dip {k}" for k in range(centres.size)]
 
 
+@pytest.mark.parametrize("i", [35, 71, 83, 121, 159, 183])
+def test_plateau_planner_ends_exactly_where_the_engine_split_a_rest_interval(i):
+    """Cases of the long sweep below where the engine put a node where the
+    ramp from rest ends, 3.5e-7 m from the start, and a short interval next to
+    it: the short interval's settling changed that node's speed without its
+    acceleration, the rest interval's jerk phase then missed it by 3.5e-6 of
+    its speed, and the feed's pieces, chained from rest, ended 4e-9 of the
+    length short of it. The rest interval's inner node keeps its relation."""
+    rng = np.random.default_rng(70 + i)
+    L = rng.uniform(0.01, 2.0)
+    feed = rng.uniform(0.02, 0.3)
+    A, J = (rng.uniform(0.002, 0.05), rng.uniform(0.02, 0.5)) if i % 2 else \
+        (rng.uniform(0.05, 5.0), rng.uniform(0.5, 50.0))
+    fn, names = _random_limit(rng, L)
+    plan = plan_feed(Line([0, 0, 0], [L, 0, 0]), feed, A, J, speed_limit=fn, reasons=names)
+    assert plan.motion.state[-1, 0] == pytest.approx(L, rel=1e-12, abs=1e-15)
+    for prof in plan.profiles:  # each engine stretch: its pieces chained from its start
+        if isinstance(prof, PathTiming):
+            s = v = a = 0.0
+            for d, jk in zip(np.diff(prof.t), prof.jerk):
+                s, v, a = s + d * (v + d * (0.5 * a + d * jk / 6.0)), v + d * (a + 0.5 * d * jk), a + d * jk
+            assert s == pytest.approx(prof.path.length, rel=1e-12)
+            assert abs(v) <= 1e-12 * feed and abs(a) <= 1e-9 * A
+
+
 @pytest.mark.parametrize("i", range(200 if SWEEP else 25))
 def test_plateau_planner_stays_below_the_speed_limit(i):
     rng = np.random.default_rng(70 + i)

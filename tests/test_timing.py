@@ -160,6 +160,13 @@ def test_joint_space_line_with_far_apart_limits_is_near_the_phase_synchronised_p
         assert tm.info["status"] != "fallback"
         assert ref * (1 - 1e-9) <= tm.duration <= ref * 1.01, (tm.duration, ref, lims)
         assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+        # the pieces chained from rest (as a consumer of durations and jerks alone
+        # integrates them) reach the end of the path
+        sc = vc = ac = 0.0
+        for d, jk in zip(np.diff(tm.t), tm.jerk):
+            sc, vc, ac = (sc + d * (vc + d * (0.5 * ac + d * jk / 6.0)), vc + d * (ac + 0.5 * d * jk),
+                          ac + d * jk)
+        assert sc == pytest.approx(tm.path.length, rel=1e-9)
 
 
 @pytest.mark.parametrize("lim, dist", [

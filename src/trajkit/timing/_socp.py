@@ -724,7 +724,8 @@ SNAP_U_RTOL = 1e-4
 
 def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
     """Put nodes at the path's own speed cap exactly on it; a run of such nodes with one
-    cap is a cruise (no path acceleration)."""
+    cap is a cruise (no path acceleration). A rest interval's inner node keeps the
+    relation of its jerk phase (``x = 1.5 D |u|``)."""
     x, u = sol.x, sol.u
     cap = p.x_cap
     on = np.isfinite(cap) & (x >= cap * (1.0 - 2.0 * SNAP_RTOL))
@@ -735,6 +736,11 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
     flat[:-1] |= same
     flat[1:] |= same
     u[flat & (np.abs(u) * (p.s[-1] - p.s[0]) <= SNAP_U_RTOL * np.maximum(cap, 1e-300))] = 0.0
+    N = x.size - 1
+    if N >= 2 and p.x0 == 0.0 and p.u0 == 0.0 and (on[1] or flat[1]):
+        u[1] = x[1] / (1.5 * (p.s[1] - p.s[0]))
+    if N >= 2 and p.xN == 0.0 and p.uN == 0.0 and (on[N - 1] or flat[N - 1]):
+        u[N - 1] = -x[N - 1] / (1.5 * (p.s[N] - p.s[N - 1]))
 
 
 #: A grid interval shorter than this fraction of its longer neighbour is short
@@ -756,7 +762,8 @@ def _settle_short(sol: GridSolution, p: GridProblem) -> None:
     speed is set from the second's; where that would pass the first node's
     speed cap, the second's from the first (within its cap), else nothing is
     changed. The change moves into the long neighbour interval, divided by its
-    duration squared.
+    duration squared. The inner node of a rest interval keeps its speed (its
+    jerk phase from or to rest ties it to the node's acceleration).
     """
     D = np.diff(p.s)
     N = D.size
@@ -765,13 +772,15 @@ def _settle_short(sol: GridSolution, p: GridProblem) -> None:
     longer = np.maximum(np.concatenate([[0.0], D[:-1]]), np.concatenate([D[1:], [0.0]]))
     x, u = sol.x, sol.u
     cap = p.x_cap
+    rest0 = p.x0 == 0.0 and p.u0 == 0.0
+    restN = p.xN == 0.0 and p.uN == 0.0
     for i in np.nonzero(D < SHORT_INTERVAL * longer)[0]:
         if i == 0 or i == N - 1:  # a given end state (or a rest interval)
             continue
         a0, a1, d = float(u[i]), float(u[i + 1]), float(D[i])
         v1 = math.sqrt(max(x[i + 1], 0.0))
         disc = v1 * v1 - 2.0 * (a0 + 2.0 * a1) * d / 3.0
-        if v1 > 0.0 and disc >= 0.0:
+        if v1 > 0.0 and disc >= 0.0 and not (i == 1 and rest0):
             tau = 2.0 * d / (v1 + math.sqrt(disc))
             v0 = v1 - 0.5 * (a0 + a1) * tau
             if v0 > 0.0 and v0 * v0 <= cap[i]:
@@ -779,7 +788,7 @@ def _settle_short(sol: GridSolution, p: GridProblem) -> None:
                 continue
         v0 = math.sqrt(max(x[i], 0.0))
         disc = v0 * v0 + 2.0 * (2.0 * a0 + a1) * d / 3.0
-        if v0 > 0.0 and disc >= 0.0:
+        if v0 > 0.0 and disc >= 0.0 and not (i == N - 2 and restN):
             tau = 2.0 * d / (v0 + math.sqrt(disc))
             v1 = v0 + 0.5 * (a0 + a1) * tau
             if v1 > 0.0 and v1 * v1 <= cap[i + 1]:
