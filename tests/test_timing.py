@@ -56,6 +56,19 @@ def _wide_limits(rng, m):
     return lims
 
 
+def _line_and_ptp(rng, draw_limits, spread):
+    """A random joint-space line of 1-6 joints under ``draw_limits(rng, m)``,
+    each joint moving up to 2 times ``10^e`` (``e`` drawn from ``spread``), its
+    limits and its phase-synchronised PTP time [s]."""
+    m = int(rng.integers(1, 7))
+    lims = draw_limits(rng, m)
+    start = rng.uniform(-1.0, 1.0, m)
+    goal = start + rng.uniform(-2.0, 2.0, m) * 10.0 ** rng.uniform(*spread)
+    finite = [AxisLimits(min(lm.v_max, 1e30), lm.a_max, lm.j_max, lm.a_max_decel, lm.j_max_decel)
+              for lm in lims]
+    return LinearJointPath(start, goal), lims, plan_ptp(start, goal, finite, sync="phase").duration
+
+
 def _dense_use(timing, n_per_piece=200):
     """Largest |joint v|, |a|, |j| over limit, from the exact path derivatives on dense
     points of every piece (both ends of each piece with its own jerk)."""
@@ -107,14 +120,8 @@ def test_joint_space_line_with_wide_limits_equals_phase_synchronised_ptp():
     took every joint for one at rest and judged it by the tighter leg.)"""
     rng = np.random.default_rng(808)
     for _ in range(sweep_size(30)):
-        m = int(rng.integers(1, 7))
-        lims = _wide_limits(rng, m)
-        start = rng.uniform(-1.0, 1.0, m)
-        goal = start + rng.uniform(-2.0, 2.0, m) * 10.0 ** rng.uniform(-1.5, 0.5)
-        finite = [AxisLimits(min(lm.v_max, 1e30), lm.a_max, lm.j_max, lm.a_max_decel,
-                             lm.j_max_decel) for lm in lims]
-        ref = plan_ptp(start, goal, finite, sync="phase").duration
-        tm = plan_path_timing(LinearJointPath(start, goal), lims)
+        path, lims, ref = _line_and_ptp(rng, _wide_limits, (-1.5, 0.5))
+        tm = plan_path_timing(path, lims)
         assert ref * (1 - 1e-9) <= tm.duration <= ref * 1.005, (tm.duration, ref, lims)
         assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
 
@@ -149,14 +156,8 @@ def test_joint_space_line_with_far_apart_limits_is_near_the_phase_synchronised_p
     600 lines), no fallback, every limit kept."""
     rng = np.random.default_rng(5)
     for _ in range(sweep_size(40)):
-        m = int(rng.integers(1, 7))
-        lims = _far_limits(rng, m)
-        start = rng.uniform(-1.0, 1.0, m)
-        goal = start + rng.uniform(-2.0, 2.0, m) * 10.0 ** rng.uniform(-3, 2)
-        finite = [AxisLimits(min(lm.v_max, 1e30), lm.a_max, lm.j_max, lm.a_max_decel,
-                             lm.j_max_decel) for lm in lims]
-        ref = plan_ptp(start, goal, finite, sync="phase").duration
-        tm = plan_path_timing(LinearJointPath(start, goal), lims)
+        path, lims, ref = _line_and_ptp(rng, _far_limits, (-3, 2))
+        tm = plan_path_timing(path, lims)
         assert tm.info["status"] != "fallback"
         assert ref * (1 - 1e-9) <= tm.duration <= ref * 1.01, (tm.duration, ref, lims)
         assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
