@@ -433,6 +433,21 @@ def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: 
     return out
 
 
+def _leg_limits(sig: np.ndarray, d1: np.ndarray, d2: np.ndarray, x: np.ndarray, u: np.ndarray,
+                j_acc: np.ndarray, j_dec: np.ndarray, j_both: np.ndarray,
+                mixed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The joints' jerk limit of every interval at its left and right end, each
+    (n - 1, m), with the legs at the node states ``x``, ``u``: where the joint
+    speeds up (slows down) at both ends of the interval, else (a leg change
+    inside, or ``mixed``) the tighter of both."""
+    sp = sig * (d2 * x[:, None] + d1 * u[:, None])
+    up = (sp[:-1] > 0) & (sp[1:] > 0) & ~mixed
+    down = (sp[:-1] < 0) & (sp[1:] < 0) & ~mixed
+    left, right = (np.where(up, j_acc[e], np.where(down, j_dec[e], j_both[e]))
+                   for e in (slice(None, -1), slice(1, None)))
+    return left, right
+
+
 def _leg_flips(p: GridProblem, used: tuple[np.ndarray, np.ndarray],
                new: tuple[np.ndarray, np.ndarray], g: np.ndarray,
                ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray, d1: np.ndarray,
@@ -453,15 +468,9 @@ def _leg_flips(p: GridProblem, used: tuple[np.ndarray, np.ndarray],
     rows (linearised at it, with its legs) measure it, exceeds that limit, less
     those already ``mixed`` (which take the smaller limit whatever their leg).
     """
-    def limits(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, ...]:
-        sp = sig * (d2 * x[:, None] + d1 * u[:, None])
-        up = (sp[:-1] > 0) & (sp[1:] > 0) & ~mixed
-        down = (sp[:-1] < 0) & (sp[1:] < 0) & ~mixed
-        return tuple(np.where(up, j_acc[e], np.where(down, j_dec[e], j_both[e]))
-                     for e in (slice(None, -1), slice(1, None)))
-
     x, u = new
-    before, after = limits(*used), limits(x, u)
+    before = _leg_limits(sig, d1, d2, *used, j_acc, j_dec, j_both, mixed)
+    after = _leg_limits(sig, d1, d2, x, u, j_acc, j_dec, j_both, mixed)
     out = np.zeros(mixed.shape, dtype=bool)
     out[g] = ((before[0] > after[0]) | (before[1] > after[1]))[g]
     if not out.any():
@@ -560,21 +569,16 @@ def _jerk_coefs_numpy(j_path: float, x_bar: np.ndarray, u_bar: np.ndarray, ecorr
     sq = np.sqrt(np.maximum(x_bar, TINY_X * max(float(x_bar.max()), TINY_X)))
     S = sq[g] + sq[g + 1] + 2.0 * ecorr[g]
     S = np.maximum(S, 0.5 * (sq[g] + sq[g + 1]))
-    qdd_bar = d2 * x_bar[:, None] + d1 * u_bar[:, None]  # the leg from the previous round
     S2 = (S * S)[:, None]
     Dg = D[g][:, None]
     xi, xj = x_bar[g][:, None], x_bar[g + 1][:, None]
     si, sj = sq[g][:, None], sq[g + 1][:, None]
     coef: list[np.ndarray] = []  # (r, 4) each
     rhs: list[np.ndarray] = []
-    # the leg of each interval: where the joint speeds up (slows down) at both of
-    # its ends, else (a leg change inside, or where asked) the tighter of both
-    sp0 = sig[ends[0]] * qdd_bar[ends[0]]
-    sp1 = sig[ends[1]] * qdd_bar[ends[1]]
-    up = (sp0 > 0) & (sp1 > 0) & ~mixed[g]
-    down = (sp0 < 0) & (sp1 < 0) & ~mixed[g]
+    # the leg of each interval from the previous round's states
+    legs = _leg_limits(sig, d1, d2, x_bar, u_bar, j_acc, j_dec, j_both, mixed)
     for e, nd in enumerate(ends):
-        jl = np.where(up, j_acc[nd], np.where(down, j_dec[nd], j_both[nd]))
+        jl = legs[e][g]
         f = 2.0 * jl / S[:, None]
         gi = -jl / (S2 * si)
         gj = -jl / (S2 * sj)

@@ -1437,6 +1437,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     rest0 = start_speed == 0.0 and start_accel == 0.0
     restN = end_speed == 0.0 and end_accel == 0.0
     moving = not (rest0 and restN)
+    states = (f"from the start state (speed {start_speed:.6g}, acceleration {start_accel:.6g}) to "
+              f"the end state (speed {end_speed:.6g}, acceleration {end_accel:.6g}) along this "
+              f"path of length {L:.6g}")
     # the work has to be worth it: a motion that cannot be shorter than MAX_DURATION
     with np.errstate(divide="ignore", over="ignore"):
         floor = float(np.sum(np.diff(s) / np.maximum(vcap[:-1], vcap[1:])))
@@ -1595,12 +1598,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     if best is None:
         if moving:
             raise InfeasibleError(
-                f"no timing found from the start state (speed {start_speed:.6g}, acceleration "
-                f"{start_accel:.6g}) to the end state (speed {end_speed:.6g}, acceleration "
-                f"{end_accel:.6g}) along this path of length {L:.6g}: its grid problem has no "
-                "solution within the limits (the always-feasible fallback starts and ends at "
-                "rest); a start that has to brake hard, or a path too short to reach the end "
-                "state, makes it so")
+                f"no timing found {states}: its grid problem has no solution within the limits "
+                "(the always-feasible fallback starts and ends at rest); a start that has to "
+                "brake hard, or a path too short to reach the end state, makes it so")
         dur0, jk0 = fallback if fallback is not None else _fallback(
             s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
         sol, piv, k_scale, tightened = None, None, 1.0, 0
@@ -1614,8 +1614,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     for _final in range(4):
         if k_scale > 1.0 and moving:
             raise InfeasibleError(
-                f"the timing exceeds a limit by {100 * (use.worst - 1):.3g} % and cannot be slowed "
-                "down uniformly with a moving boundary state")
+                f"the timing {states} exceeds a limit by {100 * (use.worst - 1):.3g} % after the "
+                "local lowering of the limits, and with a moving boundary state it cannot be "
+                "slowed down uniformly")
         dur = dur0 * k_scale
         jk = jk0 / k_scale**3
         if sol is None or piv is None:  # the fallback
