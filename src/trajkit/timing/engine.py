@@ -1183,6 +1183,86 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
     return use, cell, rv, ra, rj, rs, worst
 
 
+#: Bisection steps that locate a joint's reversal on the grid's interpolation
+#: of ``dq/ds`` and its time inside a piece, and Newton steps that then put it
+#: on the checked derivatives (see ``_reversals``).
+REVERSAL_STEPS = 60
+REVERSAL_NEWTON = 3
+
+
+def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
+               compiled: bool = _checks.AVAILABLE) -> LimitUse:
+    """The limit ratios on both sides of every joint reversal inside the motion.
+
+    Where a joint reverses (``dq/ds`` changes sign between two grid nodes, the
+    path moving), its leg changes: its acceleration and jerk ratios jump from
+    those of one leg to the other's, and the largest can be at the reversal
+    itself, between the samples of :func:`_check` (a waypoint path's joint at
+    its braking acceleration limit up to the moment it reversed: 1.4e-4 over
+    it, the nearest sample 0.1 % below, too far for :func:`_zoom`). The
+    reversal's ``s`` is found by bisection on the cubic Hermite interpolation
+    of ``dq/ds`` between the nodes, then by Newton steps on the derivatives
+    the check uses (``path``: its ``derivatives``; None: the interpolation);
+    its time inside its piece by bisection on the piece's ``s(t)``. The
+    ratios are evaluated just before and just after it, where the joint's
+    speed is ten times the rest test's, so that each side takes its own leg.
+    Only the joints with separate legs (their limits differ) are looked at.
+    ``compiled`` as for :func:`_check`.
+    """
+    m = lim.vlim.size
+    d1, d2 = der[1], der[2]
+    # (only the joints whose legs differ: elsewhere the ratios do not jump)
+    legs = (lim.alim_acc != lim.alim_dec) | (lim.jacc != lim.jdec)
+    cell, joint = np.nonzero((d1[:-1] * d1[1:] < 0.0) & legs[None, :])
+    if not cell.size:
+        z = np.zeros((0, m))
+        return _use_of(lim, z, z, z, np.zeros(0), np.zeros(0), np.zeros(0))
+    rows = np.arange(cell.size)
+
+    def slope(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        f = path.derivatives(S)[1:3] if path is not None else _interp_derivatives(s_grid, der, S)[:2]
+        return f[0][rows, joint], f[1][rows, joint]
+
+    s0, s1 = s_grid[cell], s_grid[cell + 1]
+    f0 = d1[cell, joint]
+    lo, hi = s0.copy(), s1.copy()
+    for _ in range(REVERSAL_STEPS):
+        mid = 0.5 * (lo + hi)
+        fm = _hermite_interp(s0, s1, f0[:, None], d1[cell + 1, joint][:, None],
+                             d2[cell, joint][:, None], d2[cell + 1, joint][:, None], mid)[:, 0]
+        same = np.sign(fm) == np.sign(f0)
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    S = 0.5 * (lo + hi)
+    for _ in range(REVERSAL_NEWTON):
+        f1, f2 = slope(S)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(f2 != 0.0, f1 / f2, 0.0)
+        S = np.clip(S - step, s0, s1)
+    # the piece and the time there
+    k = jerk.size
+    pc = np.clip(np.searchsorted(st[:k, 0], S, side="right") - 1, 0, k - 1)
+    dur = np.diff(t)[pc]
+    a, b = np.zeros(pc.size), dur.copy()
+    for _ in range(REVERSAL_STEPS):
+        h = 0.5 * (a + b)
+        sh = st[pc, 0] + h * (st[pc, 1] + h * (0.5 * st[pc, 2] + h * jerk[pc] / 6.0))
+        before = sh < S
+        a, b = np.where(before, h, a), np.where(before, b, h)
+    tc = 0.5 * (a + b)
+    V = st[pc, 1] + tc * (st[pc, 2] + 0.5 * tc * jerk[pc])
+    # (q' = 0 there: the joint's acceleration is q'' sdot^2)
+    qdd = np.abs(slope(S)[1]) * V * V
+    vrest = lim.vlim if lim.vrest is None else lim.vrest
+    with np.errstate(divide="ignore"):
+        eps = np.minimum(np.maximum(10.0 * REST_RTOL * vrest[joint] / qdd, 1e-9 * dur), 1e-3 * dur)
+    pieces = np.concatenate([pc, pc])
+    dt = np.concatenate([np.maximum(tc - eps, 0.0), np.minimum(tc + eps, dur)])
+    if compiled:
+        return _evaluate_compiled(s_grid, der, t, st, jerk, lim, path, pieces, dt)[0]
+    out = _evaluate(s_grid, der, t, st, jerk, lim, path, pieces, dt)
+    return _use_of(lim, out[0], out[1], out[2], out[3], out[4], out[5])
+
+
 def _max_use(a: LimitUse, b: LimitUse) -> LimitUse:
     """The larger of two limit uses, ratio by ratio."""
     return LimitUse(np.maximum(a.velocity, b.velocity), np.maximum(a.acceleration, b.acceleration),
@@ -1646,7 +1726,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
         zu = _zoom(s, der, t, st, jk, lim, src, worst, per_piece + 2)
-        use = _max_use(use, zu)
+        # ... and both sides of every joint reversal (where the leg changes)
+        use = _max_use(_max_use(use, zu), _reversals(s, der, t, st, jk, lim, src))
         extra = _uniform_scale(use)
         if extra <= 1.0:
             break
