@@ -199,7 +199,8 @@ def test_moving_boundary_states_are_kept_and_near_the_state_to_state_optimum():
     so every excess is lowered locally, checked as densely as the final check
     (a residual excess of 5e-8 to 5e-7 of a limit made 3 of 300 such lines
     infeasible). A start that has to brake hard can still make the linearised
-    jerk rows infeasible: then an InfeasibleError names both states."""
+    jerk rows infeasible (1 of these 60, 29 of 1200 in the long sweep): then
+    an InfeasibleError names both states."""
     rng = np.random.default_rng(11)
     found = tried = 0
     while tried < sweep_size(60):
@@ -252,6 +253,25 @@ def test_waypoints_with_far_apart_limits_keep_every_limit_where_a_joint_reverses
         for sg in tm.segments:
             assert sg.info["status"] != "fallback" and sg.time_scale <= 1.01
             assert max(_dense_use(sg)) <= 1 + LIMIT_RTOL
+
+
+def test_a_braking_start_is_planned_from_the_speeds_of_its_recovery():
+    """A start that slows down hard (0.298 rad/s at -0.586 rad/s^2, jerk 0.9
+    rad/s^3: its speed falls to 0.108 rad/s before the acceleration is back at
+    zero). The first jerk round took its tangent planes at the jerk-free
+    round's speeds, which turn the acceleration around at once: at the speeds
+    the start has to pass they allowed far less than the jerk limit and the
+    round was infeasible (InfeasibleError). Linearised at the recovery's
+    speeds, the line is planned within 1 % of the state-to-state optimum."""
+    lim = AxisLimits(0.43804985152412373, 1.0089257529666005, 0.9030966003023871)
+    tm = plan_path_timing(LinearJointPath([0.0], [5.9]), [lim], start_speed=0.298,
+                          start_accel=-0.586)
+    ref = plan_state_to_state([0.0, 0.298, -0.586], [5.9, 0.0, 0.0], lim).duration
+    assert ref * (1 - 1e-6) <= tm.duration <= ref * 1.01, (tm.duration, ref)
+    assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+    q, qd, qdd, _ = tm.joint_states([0.0, tm.duration])
+    np.testing.assert_allclose([qd[0, 0], qdd[0, 0], q[1, 0], qd[1, 0]], [0.298, -0.586, 5.9, 0.0],
+                               rtol=0, atol=1e-9)
 
 
 def test_waypoints_with_separate_legs_need_no_uniform_slow_down():

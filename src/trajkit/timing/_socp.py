@@ -131,6 +131,10 @@ TINY_X = 1e-12
 #: the looser leg: that interval takes the tighter leg from then on.
 LEG_RTOL = 1e-6
 
+#: Bisection steps of the node times inside a braking start's recovery (see
+#: ``_braking_start``).
+BRAKE_STEPS = 60
+
 
 @dataclass
 class GridProblem:
@@ -431,6 +435,57 @@ def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: 
         if math.isfinite(ub):
             out.append((node, sgn, ub))
     return out
+
+
+def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
+                   j_dec: np.ndarray) -> np.ndarray:
+    """The jerk-free round's ``x`` lowered near a braking start to the speeds of its
+    fastest recovery: the first jerk round's linearisation point.
+
+    A start that slows down (``u0 < 0``) keeps slowing down until its
+    acceleration is back at zero, at best at the jerk limit ``J`` of the leg
+    (the joints' braking jerk over ``|q'|`` at the start, the path's jerk):
+    its speed falls to ``v0 - u0^2 / (2 J)``. The jerk-free round turns the
+    acceleration around at once and runs much faster there; the jerk rows'
+    tangent planes (of ``j / v``, convex in the speed) taken at its speeds
+    are then far below the limit at the speeds the braking start has to
+    pass, and made the round infeasible (11 of 300 random moving starts).
+    Below the end of that recovery, ``x`` is at most its speeds; after it,
+    at most the speed regained at the start's deceleration.
+
+    Parameters
+    ----------
+    p : GridProblem
+        The (scaled) grid problem; ``x0 > 0``, ``u0 < 0``.
+    x : ndarray, shape (n,)
+        The jerk-free round's ``sdot^2`` at the nodes.
+    d1 : ndarray, shape (n, m)
+        ``dq/ds`` at the nodes.
+    j_dec : ndarray, shape (n, m)
+        The joints' jerk limits while slowing down.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    v0, u0 = math.sqrt(p.x0), p.u0
+    qa = np.abs(d1[0])
+    with np.errstate(divide="ignore"):
+        J = min(float(np.min(np.where(qa > 0, j_dec[0] / qa, np.inf))), p.j_path)
+    if not (math.isfinite(J) and J > 0.0):
+        return x
+    t1 = -u0 / J  # the recovery's duration, its length and the lowest speed
+    s1 = t1 * (v0 + t1 * (0.5 * u0 + t1 * J / 6.0))
+    v_low = v0 + t1 * (u0 + 0.5 * t1 * J)
+    ds = p.s - p.s[0]
+    lo, hi = np.zeros(ds.size), np.full(ds.size, t1)
+    for _ in range(BRAKE_STEPS):  # the time of every node inside the recovery
+        h = 0.5 * (lo + hi)
+        before = h * (v0 + h * (0.5 * u0 + h * J / 6.0)) < ds
+        lo, hi = np.where(before, h, lo), np.where(before, hi, h)
+    tt = 0.5 * (lo + hi)
+    v = v0 + tt * (u0 + 0.5 * tt * J)
+    return np.minimum(x, np.where(ds <= s1, v * v, v_low * v_low - 2.0 * u0 * (ds - s1)))
 
 
 def _leg_limits(sig: np.ndarray, d1: np.ndarray, d2: np.ndarray, x: np.ndarray, u: np.ndarray,
@@ -1196,7 +1251,10 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             if jerk_rounds >= 2 and t > times[-2] * (1.0 + ROUND_RTOL):
                 break  # the rounds got slower (the linearised terms moved): keep the best
         x_bar, u_bar = x, u
-        sigma, rho, tau2, ecorr = linearise_at(x, u)
+        if jerk_rounds == 0 and p.u0 < 0.0 and p.x0 > 0.0:
+            # (after the jerk-free round: see _braking_start)
+            x_bar = _braking_start(p, x, d1, j_dec)
+        sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
     if best is not None:  # every round's solution keeps the constraints: the fastest
         t, x, u = best
     return GridSolution(x=x, u=u, time=t if times else math.nan,
