@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-__all__ = ["hermite_pieces"]
+__all__ = ["hermite_pieces", "time_to_reach"]
 
 
 def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
@@ -84,3 +84,37 @@ def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
         keep[2 * i + 1] = False
     interval = np.repeat(np.arange(N), 2)
     return dur[keep], jerk[keep], interval[keep]
+
+
+#: Bisection steps of :func:`time_to_reach` (each halves the bracket).
+REACH_STEPS = 60
+
+
+def time_to_reach(s0: np.ndarray | float, v0: np.ndarray | float, a0: np.ndarray | float,
+                  jerk: np.ndarray | float, target: np.ndarray,
+                  t_max: np.ndarray | float) -> np.ndarray:
+    """The time at which pieces of constant jerk reach the positions ``target``.
+
+    Parameters
+    ----------
+    s0, v0, a0, jerk : ndarray or float, broadcast to (n,)
+        Every piece's start state and jerk [path unit, /s, /s^2, /s^3]; its
+        speed must not fall below zero before ``t_max`` (``s`` increases).
+    target : ndarray, shape (n,)
+        The positions to reach [path unit].
+    t_max : ndarray or float, broadcast to (n,)
+        The end of every piece [s] (the bracket's upper end).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The time inside ``[0, t_max]`` [s], by bisection (REACH_STEPS):
+        ``t_max`` where the piece does not reach the target before its end.
+    """
+    lo = np.zeros(np.shape(target))
+    hi = np.broadcast_to(np.asarray(t_max, dtype=float), lo.shape).copy()
+    for _ in range(REACH_STEPS):
+        h = 0.5 * (lo + hi)
+        before = s0 + h * (v0 + h * (0.5 * a0 + h * jerk / 6.0)) < target
+        lo, hi = np.where(before, h, lo), np.where(before, hi, h)
+    return 0.5 * (lo + hi)

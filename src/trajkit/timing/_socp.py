@@ -64,6 +64,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _ipm, _jerk_jit
+from ._hermite import time_to_reach
 
 __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 
@@ -130,10 +131,6 @@ TINY_X = 1e-12
 #: more than this (the rows are normalised) where the row that bounded it took
 #: the looser leg: that interval takes the tighter leg from then on.
 LEG_RTOL = 1e-6
-
-#: Bisection steps of the node times inside a braking start's recovery (see
-#: ``_braking_start``).
-BRAKE_STEPS = 60
 
 
 @dataclass
@@ -478,12 +475,7 @@ def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
     s1 = t1 * (v0 + t1 * (0.5 * u0 + t1 * J / 6.0))
     v_low = v0 + t1 * (u0 + 0.5 * t1 * J)
     ds = p.s - p.s[0]
-    lo, hi = np.zeros(ds.size), np.full(ds.size, t1)
-    for _ in range(BRAKE_STEPS):  # the time of every node inside the recovery
-        h = 0.5 * (lo + hi)
-        before = h * (v0 + h * (0.5 * u0 + h * J / 6.0)) < ds
-        lo, hi = np.where(before, h, lo), np.where(before, hi, h)
-    tt = 0.5 * (lo + hi)
+    tt = time_to_reach(0.0, v0, u0, J, ds, t1)  # (every node inside the recovery)
     v = v0 + tt * (u0 + 0.5 * tt * J)
     return np.minimum(x, np.where(ds <= s1, v * v, v_low * v_low - 2.0 * u0 * (ds - s1)))
 

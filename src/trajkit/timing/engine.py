@@ -57,7 +57,7 @@ from ..profiles import plan_move
 from ..profiles._pieces import eval_pieces
 from ..profiles._range import check_limits_range
 from . import _checks
-from ._hermite import hermite_pieces
+from ._hermite import hermite_pieces, time_to_reach
 from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, solve_grid
 from .paths import JointPath
 
@@ -1184,8 +1184,8 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
 
 
 #: Bisection steps that locate a joint's reversal on the grid's interpolation
-#: of ``dq/ds`` and its time inside a piece, and Newton steps that then put it
-#: on the checked derivatives (see ``_reversals``).
+#: of ``dq/ds``, and Newton steps that then put it on the checked derivatives
+#: (see ``_reversals``).
 REVERSAL_STEPS = 60
 REVERSAL_NEWTON = 3
 
@@ -1242,13 +1242,7 @@ def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
     k = jerk.size
     pc = np.clip(np.searchsorted(st[:k, 0], S, side="right") - 1, 0, k - 1)
     dur = np.diff(t)[pc]
-    a, b = np.zeros(pc.size), dur.copy()
-    for _ in range(REVERSAL_STEPS):
-        h = 0.5 * (a + b)
-        sh = st[pc, 0] + h * (st[pc, 1] + h * (0.5 * st[pc, 2] + h * jerk[pc] / 6.0))
-        before = sh < S
-        a, b = np.where(before, h, a), np.where(before, b, h)
-    tc = 0.5 * (a + b)
+    tc = time_to_reach(st[pc, 0], st[pc, 1], st[pc, 2], jerk[pc], S, dur)
     V = st[pc, 1] + tc * (st[pc, 2] + 0.5 * tc * jerk[pc])
     # (q' = 0 there: the joint's acceleration is q'' sdot^2)
     qdd = np.abs(slope(S)[1]) * V * V
