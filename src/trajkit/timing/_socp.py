@@ -413,6 +413,14 @@ def _time_scale(p: GridProblem) -> float:
     return T if T > 0 and math.isfinite(T) else 1.0
 
 
+def _rest_jerk(qa: np.ndarray, jl: np.ndarray, j_path: float) -> float:
+    """The largest path jerk of a jerk phase from or to rest: every joint's jerk
+    limit ``jl`` over its ``|q'|`` ``qa`` (m,) (none where ``q'`` is 0), and the
+    path's own limit ``j_path`` (inf: none)."""
+    with np.errstate(divide="ignore"):
+        return min(float(np.min(np.where(qa > 0, jl / qa, np.inf))), j_path)
+
+
 def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: np.ndarray,
                       D: np.ndarray, rest0: bool, restN: bool) -> list[tuple[int, float, float]]:
     """The rest intervals: one jerk phase, ``|q'| J <= j`` with ``J = sqrt(u^3 / (6 D))``,
@@ -424,11 +432,8 @@ def _rest_jerk_bounds(p: GridProblem, d1: np.ndarray, j_acc: np.ndarray, j_dec: 
             continue
         qa = np.maximum(np.abs(d1[node]), np.abs(d1[0 if node == 1 else N]))
         # from rest the joints speed up (accel leg), to rest they slow down
-        jl = np.where(qa > 0, (j_acc if node == 1 else j_dec)[node], np.inf)
-        with np.errstate(divide="ignore"):
-            ub = float(np.min((6.0 * dd) ** (1.0 / 3.0) * (jl / qa) ** (2.0 / 3.0)))
-        if math.isfinite(p.j_path):
-            ub = min(ub, (6.0 * dd) ** (1.0 / 3.0) * p.j_path ** (2.0 / 3.0))
+        J = _rest_jerk(qa, (j_acc if node == 1 else j_dec)[node], p.j_path)
+        ub = (6.0 * dd) ** (1.0 / 3.0) * J ** (2.0 / 3.0)
         if math.isfinite(ub):
             out.append((node, sgn, ub))
     return out
@@ -466,9 +471,7 @@ def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
     ndarray, shape (n,)
     """
     v0, u0 = math.sqrt(p.x0), p.u0
-    qa = np.abs(d1[0])
-    with np.errstate(divide="ignore"):
-        J = min(float(np.min(np.where(qa > 0, j_dec[0] / qa, np.inf))), p.j_path)
+    J = _rest_jerk(np.abs(d1[0]), j_dec[0], p.j_path)
     if not (math.isfinite(J) and J > 0.0):
         return x
     t1 = -u0 / J  # the recovery's duration, its length and the lowest speed

@@ -58,7 +58,7 @@ from ..profiles._pieces import eval_pieces
 from ..profiles._range import check_limits_range
 from . import _checks
 from ._hermite import hermite_pieces, time_to_reach
-from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, solve_grid
+from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, _rest_jerk, solve_grid
 from .paths import JointPath
 
 __all__ = ["PathTiming", "plan_path_timing", "CHECK_PER_PIECE", "MAX_TIGHTEN", "LimitUse"]
@@ -762,9 +762,7 @@ def _rest_splits(s: np.ndarray, x: np.ndarray, u: np.ndarray, d1: np.ndarray, d2
             continue
         D = abs(float(s[node] - s[rest]))
         a = abs(float(u[node]))
-        qa = np.maximum(np.abs(d1[node]), np.abs(d1[rest]))
-        with np.errstate(divide="ignore"):
-            jmax = min(float(np.min(np.where(qa > 0, jl / qa, np.inf))), j_path)
+        jmax = _rest_jerk(np.maximum(np.abs(d1[node]), np.abs(d1[rest])), jl, j_path)
         if not (D > 0.0 and a > 0.0 and math.isfinite(jmax)):
             continue
         ratio = math.sqrt(a**3 / (6.0 * D)) / jmax
