@@ -209,6 +209,24 @@ def test_brake_from_excess_acceleration_and_carry_over():
     assert p.boundary_states()[:, 1].max() == pytest.approx(0.9 + 1.5 ** 2 / 20.0, rel=1e-12)
 
 
+
+def test_brake_through_a_reversal_from_a_tiny_velocity():
+    # slowing down from a velocity tiny against a^2 / j (it reverses within
+    # 2e-11 s) with an acceleration above a_max: the brake's first phase must
+    # end exactly at the reversal (a phase end computed with cancellation ran
+    # past it, into the other leg, and every brake was then rejected)
+    lim = AxisLimits(v_max=math.inf, a_max=1.7403704598486787e18, j_max=1.99813845878492e21,
+                     a_max_decel=5.619767827928509e18, j_max_decel=5.294870042984362e17)
+    s = (-593725282907.4779, -59946820.41835076, 2.609957055048959e18)
+    p = plan_state_to_state(s, (-593725282920.8503, -986357433.897477, 1.5809719727e18), lim)
+    assert p.brake_duration > 0.0
+    _assert_valid(p, lim)
+    # the acceleration is back within a_max after the reversal at the speeding-up
+    # leg's jerk: the brake takes (a0 - a_max) / j_max and the reversal's instant
+    t_rev = 59946820.41835076 / 2.609957055048959e18
+    assert p.brake_duration == pytest.approx(
+        t_rev + (2.609957055048959e18 - lim.a_max) / lim.j_max, rel=1e-6)
+
 # ----------------------------------------------------- velocity interface
 def _stop_time(v, a_dec, j_dec):
     v = abs(v)

@@ -66,6 +66,25 @@ INSIDE_RTOL = 1e-12
 
 
 @jit_raw
+def _speed_zero(v, a, j, tmax):
+    """The first instant in ``(0, tmax)`` where a phase of jerk ``j`` from ``(v, a)``
+    reaches zero velocity: ``(t, True)``, or ``(tmax, False)`` where it does not.
+    The roots of ``v + a t + j t^2 / 2`` in the cancellation-free form (a start
+    velocity tiny against ``a^2 / j`` keeps its full relative accuracy)."""
+    disc = a * a - 2.0 * j * v
+    if not (disc >= 0.0 and v != 0.0):
+        return tmax, False
+    sq = math.sqrt(disc)
+    q = -(a + math.copysign(sq, a)) if a != 0.0 else sq
+    found = False
+    for t in (q / j, 2.0 * v / q):
+        if 0.0 < t < tmax:
+            tmax = t
+            found = True
+    return tmax, found
+
+
+@jit_raw
 def inside(v, a, V, A1, K1, A2, K2):
     """True when ``(v, a)`` lies inside the limits (see the module text)."""
     if v < 0.0 or (v == 0.0 and a < 0.0):
@@ -205,13 +224,7 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
                 continue
             j = (-1.0 if a > 0.0 else 1.0) / K
             tmax = (tgt - a) / j
-            disc = a * a - 2.0 * j * v
-            if disc >= 0.0 and v != 0.0:
-                sq = math.sqrt(disc)
-                for t in ((-a - sq) / j, (-a + sq) / j):
-                    if 0.0 < t < tmax:
-                        tmax = t
-                        v_zero = True
+            tmax, v_zero = _speed_zero(v, a, j, tmax)
         elif holding:
             j = 0.0
             tmax = math.inf
@@ -232,14 +245,8 @@ def brake_path(s, v, a, V, A1, K1, A2, K2, out, buf):
             if a * s > 0.0 and -a / j < tmax:
                 tmax = -a / j
                 a_zero = True
-            disc = a * a - 2.0 * j * v
-            if disc >= 0.0 and v != 0.0:
-                sq = math.sqrt(disc)
-                for t in ((-a - sq) / j, (-a + sq) / j):
-                    if 0.0 < t < tmax:
-                        tmax = t
-                        v_zero = True
-                        a_zero = False
+            tmax, v_zero = _speed_zero(v, a, j, tmax)
+            a_zero = a_zero and not v_zero
         t = _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, buf)
         if t < math.inf:
             if t > 0.0:
@@ -410,14 +417,7 @@ def brake_natural(v, a, V, A1, K1, A2, K2, out, buf):
             break
         j = (-1.0 if a > 0.0 else 1.0) / K
         tmax = -a / j
-        crossing = False
-        disc = a * a - 2.0 * j * v
-        if disc >= 0.0 and v != 0.0:
-            sq = math.sqrt(disc)
-            for t in ((-a - sq) / j, (-a + sq) / j):
-                if 0.0 < t < tmax:
-                    tmax = t
-                    crossing = True
+        tmax, crossing = _speed_zero(v, a, j, tmax)
         t = _first_inside(v, a, j, tmax, V, A1, K1, A2, K2, fb)
         if t < math.inf:
             if t > 0.0:
