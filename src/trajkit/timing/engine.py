@@ -56,6 +56,7 @@ from ..limits import AxisLimits
 from ..profiles import plan_move
 from ..profiles._pieces import eval_pieces
 from ..profiles._range import check_limits_range
+from ..profiles.state import plan_state_to_state
 from . import _checks
 from ._hermite import hermite_pieces, time_to_reach
 from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, _rest_jerk, solve_grid
@@ -942,13 +943,29 @@ def _sample_pieces(t: np.ndarray, st: np.ndarray, jerk: np.ndarray, tt: np.ndarr
     return np.vstack([p, v])
 
 
+#: A moving state's fallback may not reverse along the path: its speed stays above
+#: -FALLBACK_REVERSE_RTOL of its largest (the round-off of a stop at the end).
+FALLBACK_REVERSE_RTOL = 1e-12
+
+
 def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec, cap,
-              a_path: float, j_path: float, kappa):
-    """An always-feasible timing: one rest-to-rest S-curve of the path parameter whose
-    speed, acceleration and jerk are small enough for every joint everywhere on the
-    grid (the largest path derivatives with the smallest limits); what the final
-    check still finds is removed by a uniform slow-down. Far from optimal; used only
-    when the optimisation fails."""
+              a_path: float, j_path: float, kappa,
+              states: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)):
+    """An always-feasible timing: one S-curve of the path parameter whose speed,
+    acceleration and jerk are small enough for every joint everywhere on the grid
+    (the largest path derivatives with the smallest limits); what the final check
+    still finds is removed by a uniform slow-down. Far from optimal on a curved
+    path (on a joint-space line: the optimum of the tighter legs); used only when
+    the optimisation fails.
+
+    ``states``: the path's ``(start_speed, start_accel, end_speed, end_accel)``;
+    rest to rest by default. With a moving state it is the minimum-time
+    state-to-state profile under those limits, or None where there is none that
+    moves forward only and keeps them from the start (a start or an end state
+    outside them, or one that would have to reverse along the path).
+
+    Returns ``(durations, jerks)`` of the pieces, or None.
+    """
     _, d1, d2, d3 = der
     a1 = np.abs(d1).max(axis=0)
     a2 = np.abs(d2).max(axis=0)
@@ -969,9 +986,22 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
         v = 1.0
     a = a if (math.isfinite(a) and a > 0) else v
     j = j if (math.isfinite(j) and j > 0) else a
-    prof = plan_move(0.0, L, AxisLimits(v, a, j, name="path"))
-    keep = np.asarray(prof.phase_durations) > 0.0
-    return np.asarray(prof.phase_durations)[keep], np.asarray(prof.jerks)[keep]
+    lim = AxisLimits(v, a, j, name="path")
+    v0, a0, v1, a1_ = states
+    if not any(states):
+        prof = plan_move(0.0, L, lim)
+        durations, jerks = prof.phase_durations, prof.jerks
+    else:
+        try:
+            moving = plan_state_to_state((0.0, v0, a0), (L, v1, a1_), lim)
+        except (InfeasibleError, InvalidInputError):
+            return None
+        vmin, vmax = moving.extrema().velocity
+        if moving.brake_duration > 0.0 or vmin < -FALLBACK_REVERSE_RTOL * vmax:
+            return None
+        durations, jerks = moving.phase_durations, moving.jerks
+    keep = np.asarray(durations) > 0.0
+    return np.asarray(durations)[keep], np.asarray(jerks)[keep]
 
 
 def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -1658,23 +1688,29 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
         best = None
     fallback = None  # (durations, jerks) of the fallback once made
-    if best is not None and rest0 and restN and best[5] > FALLBACK_ABOVE:
-        # the best attempt needs a large uniform slow-down (its rounds went wrong):
-        # the always-feasible fallback instead where that is shorter
+    boundary = (start_speed, start_accel, end_speed, end_accel)
+    if best is not None and best[5] > (1.0 if moving else FALLBACK_ABOVE):
+        # the best attempt needs a large uniform slow-down (its rounds went wrong),
+        # or any with a moving state (which cannot be slowed down uniformly): the
+        # always-feasible fallback instead where that is shorter (or exists)
         s_b, der_b, cap_b, kappa_b, vcap_b = best[7]
         fallback = _fallback(s_b, der_b, L, vlim, aacc, adec, jacc, jdec, cap_b, a_path, j_path,
-                             kappa_b)
-        if float(np.sum(fallback[0])) < float(np.sum(best[2])) * best[5]:
+                             kappa_b, boundary)
+        if fallback is not None and (moving or float(np.sum(fallback[0]))
+                                     < float(np.sum(best[2])) * best[5]):
             s, der, cap, kappa, vcap = s_b, der_b, cap_b, kappa_b, vcap_b
             best = None
     if best is None:
-        if moving:
+        if fallback is None:
+            fallback = _fallback(s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path,
+                                 kappa, boundary)
+        if fallback is None:  # (a moving state only)
             raise InfeasibleError(
-                f"no timing found {states}: its grid problem has no solution within the limits "
-                "(the always-feasible fallback starts and ends at rest); a start that has to "
-                "brake hard, or a path too short to reach the end state, makes it so")
-        dur0, jk0 = fallback if fallback is not None else _fallback(
-            s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path, kappa)
+                f"no timing found {states}: its grid problem has no solution within the limits, "
+                "and the fallback (an S-curve of the path parameter within the limits everywhere "
+                "on the path) cannot start or end in these states; a start that has to brake "
+                "hard, or a path too short to reach the end state, makes it so")
+        dur0, jk0 = fallback
         sol, piv, k_scale, tightened = None, None, 1.0, 0
         jerk_free_time = math.nan
     else:
@@ -1683,17 +1719,24 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     # (the fallback's few long pieces: at least as many points each as the speed
     # cap's sampling for its steps has over the whole path)
     per_piece = FINAL_CHECK_PER_PIECE if sol is not None else max(FINAL_CHECK_PER_PIECE, CAP_GRID)
-    for _final in range(4):
+    for _final in range(5):
         if k_scale > 1.0 and moving:
-            raise InfeasibleError(
-                f"the timing {states} exceeds a limit by {100 * (use.worst - 1):.3g} % after the "
-                "local lowering of the limits, and with a moving boundary state it cannot be "
-                "slowed down uniformly")
+            # no uniform slow-down with a moving state: the fallback, where it exists
+            fallback = None if sol is None else _fallback(s, der, L, vlim, aacc, adec, jacc, jdec,
+                                                          cap, a_path, j_path, kappa, boundary)
+            if fallback is None:
+                raise InfeasibleError(
+                    f"the timing {states} exceeds a limit by {100 * (use.worst - 1):.3g} % after "
+                    "the local lowering of the limits, and with a moving boundary state it cannot "
+                    "be slowed down uniformly (nor start or end the fallback in these states)")
+            (dur0, jk0), sol, piv, k_scale, tightened = fallback, None, None, 1.0, 0
+            jerk_free_time = math.nan
+            per_piece = max(FINAL_CHECK_PER_PIECE, CAP_GRID)
         dur = dur0 * k_scale
         jk = jk0 / k_scale**3
         if sol is None or piv is None:  # the fallback
-            t, st = _pieces_state(dur, jk, 0.0, 0.0, 0.0)
-            st[-1] = (L, 0.0, 0.0)
+            t, st = _pieces_state(dur, jk, 0.0, start_speed, start_accel)
+            st[-1] = (L, end_speed, end_accel)
         else:
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
         # the final check, denser than the rounds' (any excess left: a uniform slow-down)
