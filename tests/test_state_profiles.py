@@ -26,6 +26,7 @@ from trajkit.profiles.state import (
     plan_state_to_state,
     plan_velocity,
 )
+from trajkit.verify import verify_state_profile
 
 LIM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0)
 ASYM = AxisLimits(v_max=1.0, a_max=2.0, j_max=10.0, a_max_decel=1.0, j_max_decel=3.0)
@@ -242,6 +243,23 @@ def test_controlled_stop_is_minimum_time(v0):
     assert p.goal_state[1:] == (0.0, 0.0)
     _assert_valid(p, ASYM)
 
+
+
+def test_a_reversal_inside_a_jerk_phase_takes_the_speeding_up_leg():
+    # at rest with a tiny acceleration backwards, to a forward velocity, under a
+    # braking jerk 3600 times the speeding-up one: the phase that raises the
+    # acceleration passes the reversal 1.35e-5 s in, at |v| < 3e-10 (below the
+    # sliver tolerance of the velocity's scale); the kernel's check gave that
+    # part of the phase the looser leg, the verifier the leg of its neighbour
+    # (speeding up), which the braking jerk exceeded 3600 times. Both now take
+    # the neighbour's leg.
+    lim = AxisLimits(v_max=1.4185555384310544, a_max=6.30385356707215e-05,
+                     j_max=0.0008014203268284044, a_max_decel=0.16116005296974517,
+                     j_max_decel=2.9130090499527097)
+    p = plan_velocity((513.2397788797516, 0.0, -6.515005347482839e-07), 0.4095842612530327,
+                      7.288731853440163e-06, limits=lim)
+    _assert_valid(p, lim)
+    assert verify_state_profile(p).ok
 
 def test_velocity_interface_with_duration():
     p = plan_velocity((0.0, 0.2, 0.5), -0.6, 0.3, limits=ASYM)

@@ -34,9 +34,10 @@ LIMIT_RTOL = 1e-10
 #: acceleration relative to its scale).
 GOAL_RTOL = 1e-10
 
-#: Pieces whose |v| and |a| stay below this fraction of their scales have
-#: no meaningful leg (v a is round-off): they take the larger of both legs'
-#: bounds (as the public verifier does).
+#: Pieces whose |v| or |a| stays below this fraction of its scale have no
+#: meaningful leg (v a is round-off): they take the leg of their neighbour in
+#: the phase, or where the whole phase is such a sliver, the larger of both
+#: legs' bounds (as the public verifier does).
 SLIVER_RTOL = 1e-9
 
 #: Negative phase durations above ``-ZERO_T * duration`` are round-off of a
@@ -153,6 +154,20 @@ def _at_goal(p, v, a, p0, pf, vf, af, vsc, asc, dv_path, dp_path):
 
 
 @jit_raw
+def _piece_leg(p, v, a, j, t0, t1, vsc, asc):
+    """The leg of the piece ``[t0, t1]`` of a phase (no leg change inside): 1
+    speeding up, 2 slowing down (from its midpoint), 0 for a sliver (``|v|`` or
+    ``|a|`` within :data:`SLIVER_RTOL` of its scale at both ends: ``v a`` is
+    round-off there; both are monotone on a piece, so their ends bound them)."""
+    _, va, aa = phase_end(p, v, a, j, t0)
+    _, vb, ab = phase_end(p, v, a, j, t1)
+    if max(abs(va), abs(vb)) <= SLIVER_RTOL * vsc or max(abs(aa), abs(ab)) <= SLIVER_RTOL * asc:
+        return 0
+    _, vm, am = phase_end(p, v, a, j, 0.5 * (t0 + t1))
+    return 2 if vm * am < 0.0 else 1
+
+
+@jit_raw
 def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
     """True when the candidate keeps every limit and ends at the goal state."""
     T, vsc, asc, dv_path, dp_path = _scales(ph, n, p0, v0, a0, vf, af)
@@ -176,26 +191,36 @@ def check(ph, n, p0, v0, a0, pf, vf, af, V, A1, K1, A2, K2):
                     return False
         if dt > 0.0:
             c0, c1, c2 = leg_cuts(v, a, j, dt)
+            # a sliver takes the leg of the piece before it, the first ones that of
+            # the first piece with a leg (as the public verifier does)
+            last = 0
+            t_prev = 0.0
+            for cut in (c0, c1, c2, dt):
+                if cut > t_prev:
+                    last = _piece_leg(p, v, a, j, t_prev, cut, vsc, asc)
+                    if last != 0:
+                        break
+                    t_prev = cut
             t_prev = 0.0
             for cut in (c0, c1, c2, dt):
                 if cut <= t_prev:
                     continue
-                # the piece (t_prev, cut): its leg from its midpoint
-                tm = 0.5 * (t_prev + cut)
-                _, vm, am = phase_end(p, v, a, j, tm)
                 _, vb, ab = phase_end(p, v, a, j, cut)
                 _, va, aa = phase_end(p, v, a, j, t_prev)
                 if abs(vb) > V * (1.0 + LIMIT_RTOL):
                     return False
-                if abs(vm) <= SLIVER_RTOL * vsc or abs(am) <= SLIVER_RTOL * asc:
-                    Am = max(A1, A2)
-                    Km = min(K1, K2)
-                elif vm * am < 0.0:
+                leg = _piece_leg(p, v, a, j, t_prev, cut, vsc, asc)
+                if leg != 0:
+                    last = leg
+                if last == 2:
                     Am = A2
                     Km = K2
-                else:
+                elif last == 1:
                     Am = A1
                     Km = K1
+                else:  # (the whole phase within round-off of v = 0 or a = 0)
+                    Am = max(A1, A2)
+                    Km = min(K1, K2)
                 if abs(ab) > Am * (1.0 + LIMIT_RTOL) or abs(aa) > Am * (1.0 + LIMIT_RTOL):
                     return False
                 if j != 0.0 and abs(j) * Km > 1.0 + LIMIT_RTOL:
