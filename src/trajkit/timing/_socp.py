@@ -849,6 +849,14 @@ def _settle_short(sol: GridSolution, p: GridProblem) -> None:
                 x[i + 1] = v1 * v1
 
 
+#: Where the first jerk round has no solution (its rows linearised at the
+#: jerk-free round's speeds, which can be twice those of any jerk-limited
+#: timing), it is solved again from that round's timing slowed down uniformly,
+#: its ``x`` times SLOWER_X (the time doubled), at most SLOWER_RETRIES times.
+SLOWER_RETRIES = 2
+SLOWER_X = 0.25
+
+
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
                init: tuple[np.ndarray, np.ndarray] | None = None,
                settled: bool = False, near: bool = False,
@@ -1106,6 +1114,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     no_jerk = np.zeros(4 * jcell.size + jnode.size)  # (the jerk rows' entries)
 
     jerk_rounds = 0
+    retries = 0  # (see SLOWER_RETRIES)
     best = None
     z_prev = None
     # the last round's multipliers of the inequalities (a warm start of a settled round)
@@ -1211,6 +1220,13 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         if not usable:
             if x_bar is None:
                 raise RuntimeError(f"path timing: the jerk-free grid problem failed ({status})")
+            if jerk_rounds == 0 and retries < SLOWER_RETRIES:
+                # the first jerk round, linearised too far from any jerk-feasible timing
+                # (the jerk-free round's speeds): again from a uniformly slower one
+                retries += 1
+                x_bar, u_bar = x_bar * SLOWER_X, u_bar * SLOWER_X
+                sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
+                continue
             break  # keep the previous round's solution
         z = z_new
         z_prev = z

@@ -565,6 +565,92 @@ class _Cached:
         at = np.searchsorted(self.s, S)
         return tuple(v[at] for v in self.values)
 
+    def zero_slope(self, S: np.ndarray, joint: np.ndarray) -> None:
+        """``dq/ds`` of ``joint`` (k,) set to exactly zero at ``S`` (k,), where that
+        joint reverses: every later lookup of these grid nodes gets a node at rest
+        for that joint (both legs' tighter limits there, see ``_socp._legs``)."""
+        self.derivatives(S)
+        self.values[1][np.searchsorted(self.s, S), joint] = 0.0
+
+
+#: A joint reversal is found by REVERSAL_STEPS bisections on the interpolated
+#: ``dq/ds``, then REVERSAL_NEWTON Newton steps on the true one.
+REVERSAL_STEPS = 60
+REVERSAL_NEWTON = 3
+
+#: A joint reversal within this fraction of the path's length of a grid node is
+#: put on that node (no interval of round-off length, see ``_add_nodes``).
+REVERSAL_GAP = 1e-9
+
+
+def _reversal_points(s_grid: np.ndarray, d1: np.ndarray, d2: np.ndarray, legs: np.ndarray,
+                     slope: Callable[[np.ndarray], tuple]) -> tuple:
+    """Where the joints ``legs`` (m,) reverse between the grid's nodes: ``dq/ds``
+    changes sign in a cell. Found by bisection on the cubic Hermite interpolation
+    of ``dq/ds`` (``d1``, ``d2`` (n, m) at the nodes), then by Newton steps on
+    ``slope(S)``: ``(dq/ds, d2q/ds2)`` (n', m) at ``S`` (n',).
+
+    A node where ``dq/ds`` is exactly zero between nodes of opposite signs is
+    a reversal too.
+
+    Returns the cells (k,) (the node for those), the joints (k,) and the
+    reversals' ``s`` (k,).
+    """
+    cell, joint = np.nonzero((d1[:-1] * d1[1:] < 0.0) & legs[None, :])
+    # (a node at a reversal, dq/ds exactly zero there: that node)
+    node, on = np.nonzero((d1[1:-1] == 0.0) & (d1[:-2] * d1[2:] < 0.0) & legs[None, :])
+    if not cell.size:
+        return node + 1, on, s_grid[node + 1]
+    rows = np.arange(cell.size)
+    s0, s1 = s_grid[cell], s_grid[cell + 1]
+    f0 = d1[cell, joint]
+    lo, hi = s0.copy(), s1.copy()
+    for _ in range(REVERSAL_STEPS):
+        mid = 0.5 * (lo + hi)
+        fm = _hermite_interp(s0, s1, f0[:, None], d1[cell + 1, joint][:, None],
+                             d2[cell, joint][:, None], d2[cell + 1, joint][:, None], mid)[:, 0]
+        same = np.sign(fm) == np.sign(f0)
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    S = 0.5 * (lo + hi)
+    for _ in range(REVERSAL_NEWTON):
+        f1, f2 = (f[rows, joint] for f in slope(S))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(f2 != 0.0, f1 / f2, 0.0)
+        S = np.clip(S - step, s0, s1)
+    return (np.concatenate([cell, node + 1]), np.concatenate([joint, on]),
+            np.concatenate([S, s_grid[node + 1]]))
+
+
+def _reversal_nodes(cached: _Cached, s: np.ndarray, der: tuple, cell_err: np.ndarray,
+                    legs: np.ndarray) -> tuple:
+    """The grid with a node where a joint with separate acceleration legs
+    (``legs`` (m,)) reverses, its ``dq/ds`` exactly zero there
+    (:meth:`_Cached.zero_slope`).
+
+    Its leg changes there: between two nodes on either side the rows, which
+    take every node's leg, do not see the change, and the timing ran the
+    braking leg's acceleration up to the other's before the reversal (up to
+    2.8 times its limit over whole cells, which no split of the cells
+    resolved: a uniform slow-down of 3 % was left). At the node both legs'
+    tighter limits hold, and on each side one leg. A reversal within
+    REVERSAL_GAP of the path's length of a node is put on that node. The end
+    cells are left alone (the rest intervals' one jerk phase; a joint that
+    barely moves there "reverses" within 1e-7 of the path's length of its
+    end, and a node there made that phase round-off). Returns the grid, its
+    derivatives and every cell's error of the refinement (a new cell's: its
+    parent's)."""
+    cell, joint, S = _reversal_points(s, der[1], der[2], legs, lambda S: cached.derivatives(S)[1:3])
+    inner = (cell > 0) & (cell < s.size - 2)
+    joint, S = joint[inner], S[inner]
+    if not S.size:
+        return s, der, cell_err
+    s_new = _add_nodes(s, S, REVERSAL_GAP * float(s[-1] - s[0]))
+    near = np.clip(np.searchsorted(s_new, S), 1, s_new.size - 1)
+    near = np.where(np.abs(s_new[near - 1] - S) < np.abs(s_new[near] - S), near - 1, near)
+    cached.zero_slope(s_new[near], joint)
+    parent = np.searchsorted(s, s_new[:-1], side="right") - 1
+    return s_new, cached.derivatives(s_new), cell_err[parent]
+
 
 def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
             breaks: np.ndarray | None = None, rtol: float = GRID_RTOL,
@@ -1214,8 +1300,6 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
 #: Bisection steps that locate a joint's reversal on the grid's interpolation
 #: of ``dq/ds``, and Newton steps that then put it on the checked derivatives
 #: (see ``_reversals``).
-REVERSAL_STEPS = 60
-REVERSAL_NEWTON = 3
 
 
 def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
@@ -1238,34 +1322,16 @@ def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
     ``compiled`` as for :func:`_check`.
     """
     m = lim.vlim.size
-    d1, d2 = der[1], der[2]
     # (only the joints whose legs differ: elsewhere the ratios do not jump)
     legs = (lim.alim_acc != lim.alim_dec) | (lim.jacc != lim.jdec)
-    cell, joint = np.nonzero((d1[:-1] * d1[1:] < 0.0) & legs[None, :])
-    if not cell.size:
+
+    def slope(S: np.ndarray) -> tuple:
+        return path.derivatives(S)[1:3] if path is not None else _interp_derivatives(s_grid, der, S)[:2]
+
+    _cell, joint, S = _reversal_points(s_grid, der[1], der[2], legs, slope)
+    if not S.size:
         z = np.zeros((0, m))
         return _use_of(lim, z, z, z, np.zeros(0), np.zeros(0), np.zeros(0))
-    rows = np.arange(cell.size)
-
-    def slope(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        f = path.derivatives(S)[1:3] if path is not None else _interp_derivatives(s_grid, der, S)[:2]
-        return f[0][rows, joint], f[1][rows, joint]
-
-    s0, s1 = s_grid[cell], s_grid[cell + 1]
-    f0 = d1[cell, joint]
-    lo, hi = s0.copy(), s1.copy()
-    for _ in range(REVERSAL_STEPS):
-        mid = 0.5 * (lo + hi)
-        fm = _hermite_interp(s0, s1, f0[:, None], d1[cell + 1, joint][:, None],
-                             d2[cell, joint][:, None], d2[cell + 1, joint][:, None], mid)[:, 0]
-        same = np.sign(fm) == np.sign(f0)
-        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
-    S = 0.5 * (lo + hi)
-    for _ in range(REVERSAL_NEWTON):
-        f1, f2 = slope(S)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.where(f2 != 0.0, f1 / f2, 0.0)
-        S = np.clip(S - step, s0, s1)
     # the piece and the time there
     k = jerk.size
     pc = np.clip(np.searchsorted(st[:k, 0], S, side="right") - 1, 0, k - 1)
@@ -1273,7 +1339,7 @@ def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
     tc = time_to_reach(st[pc, 0], st[pc, 1], st[pc, 2], jerk[pc], S, dur)
     V = st[pc, 1] + tc * (st[pc, 2] + 0.5 * tc * jerk[pc])
     # (q' = 0 there: the joint's acceleration is q'' sdot^2)
-    qdd = np.abs(slope(S)[1]) * V * V
+    qdd = np.abs(slope(S)[1][np.arange(S.size), joint]) * V * V
     vrest = lim.vlim if lim.vrest is None else lim.vrest
     with np.errstate(divide="ignore"):
         eps = np.minimum(np.maximum(10.0 * REST_RTOL * vrest[joint] / qdd, 1e-9 * dur), 1e-3 * dur)
@@ -1533,6 +1599,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn, breaks,
                                            max(grid_rtol, FIRST_GRID_RTOL))
     _finite_derivatives(der)
+    s, der, cell_err = _reversal_nodes(cached, s, der, cell_err, aacc != adec)
     q, d1, d2, d3 = der
     cap, vcap, kappa = on_grid(s, d1)
     n = s.size
