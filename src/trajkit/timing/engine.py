@@ -1297,11 +1297,6 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
     return use, cell, rv, ra, rj, rs, worst
 
 
-#: Bisection steps that locate a joint's reversal on the grid's interpolation
-#: of ``dq/ds``, and Newton steps that then put it on the checked derivatives
-#: (see ``_reversals``).
-
-
 def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
                compiled: bool = _checks.AVAILABLE) -> LimitUse:
     """The limit ratios on both sides of every joint reversal inside the motion.
