@@ -776,6 +776,18 @@ SNAP_RTOL = 1e-6
 SNAP_U_RTOL = 1e-4
 
 
+def _rest_relation(x: np.ndarray, u: np.ndarray, s: np.ndarray, start: bool, end: bool) -> None:
+    """The rest intervals' relation, exactly, on their inner nodes (``start``: the
+    first interval's, ``end``: the last's): one jerk phase from or to rest over
+    the interval ``D`` reaches ``x = 1.5 D |u|`` (``u`` > 0 from rest, < 0 to
+    rest); ``u`` (n,) set from ``x`` (n,) on the grid ``s`` (n,)."""
+    N = x.size - 1
+    if start:
+        u[1] = x[1] / (1.5 * (s[1] - s[0]))
+    if end:
+        u[N - 1] = -x[N - 1] / (1.5 * (s[N] - s[N - 1]))
+
+
 def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
     """Put nodes at the path's own speed cap exactly on it; a run of such nodes with one
     cap is a cruise (no path acceleration). A rest interval's inner node keeps the
@@ -791,10 +803,9 @@ def _snap_to_caps(sol: GridSolution, p: GridProblem) -> None:
     flat[1:] |= same
     u[flat & (np.abs(u) * (p.s[-1] - p.s[0]) <= SNAP_U_RTOL * np.maximum(cap, 1e-300))] = 0.0
     N = x.size - 1
-    if N >= 2 and p.x0 == 0.0 and p.u0 == 0.0 and (on[1] or flat[1]):
-        u[1] = x[1] / (1.5 * (p.s[1] - p.s[0]))
-    if N >= 2 and p.xN == 0.0 and p.uN == 0.0 and (on[N - 1] or flat[N - 1]):
-        u[N - 1] = -x[N - 1] / (1.5 * (p.s[N] - p.s[N - 1]))
+    if N >= 2:
+        _rest_relation(x, u, p.s, p.x0 == 0.0 and p.u0 == 0.0 and bool(on[1] or flat[1]),
+                       p.xN == 0.0 and p.uN == 0.0 and bool(on[N - 1] or flat[N - 1]))
 
 
 #: A grid interval shorter than this fraction of its longer neighbour is short
@@ -1235,10 +1246,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         x[0], u[0], x[N], u[N] = p.x0, p.u0, p.xN, p.uN
         # the rest intervals' relation exactly (the solver meets it only to its tolerance,
         # which is large relative to the tiny states next to a stop)
-        if rest0:
-            u[1] = x[1] / (1.5 * D[0])
-        if restN:
-            u[N - 1] = -x[N - 1] / (1.5 * D[N - 1])
+        _rest_relation(x, u, s, rest0, restN)
         t = t_new if ipm_round else float(q @ z)
         times.append(t)
         if x_bar is None:

@@ -1036,7 +1036,7 @@ FALLBACK_REVERSE_RTOL = 1e-12
 
 def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec, cap,
               a_path: float, j_path: float, kappa,
-              states: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)):
+              boundary: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)):
     """An always-feasible timing: one S-curve of the path parameter whose speed,
     acceleration and jerk are small enough for every joint everywhere on the grid
     (the largest path derivatives with the smallest limits); what the final check
@@ -1044,7 +1044,7 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
     path (on a joint-space line: the optimum of the tighter legs); used only when
     the optimisation fails.
 
-    ``states``: the path's ``(start_speed, start_accel, end_speed, end_accel)``;
+    ``boundary``: the path's ``(start_speed, start_accel, end_speed, end_accel)``;
     rest to rest by default. With a moving state it is the minimum-time
     state-to-state profile under those limits, or None where there is none that
     moves forward only and keeps them from the start (a start or an end state
@@ -1073,8 +1073,8 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
     a = a if (math.isfinite(a) and a > 0) else v
     j = j if (math.isfinite(j) and j > 0) else a
     lim = AxisLimits(v, a, j, name="path")
-    v0, a0, v1, a1_ = states
-    if not any(states):
+    v0, a0, v1, a1_ = boundary
+    if not any(boundary):
         prof = plan_move(0.0, L, lim)
         durations, jerks = prof.phase_durations, prof.jerks
     else:
@@ -1750,22 +1750,26 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
         best = None
     fallback = None  # (durations, jerks) of the fallback once made
-    boundary = (start_speed, start_accel, end_speed, end_accel)
+
+    def fallback_on(ss, dd, cc, kk):
+        """The fallback (see _fallback) on the grid ``ss``, its derivatives ``dd``, speed
+        cap ``cc`` and curvature ``kk``, from and to the boundary states; or None."""
+        return _fallback(ss, dd, L, vlim, aacc, adec, jacc, jdec, cc, a_path, j_path, kk,
+                         (start_speed, start_accel, end_speed, end_accel))
+
     if best is not None and best[5] > (1.0 if moving else FALLBACK_ABOVE):
         # the best attempt needs a large uniform slow-down (its rounds went wrong),
         # or any with a moving state (which cannot be slowed down uniformly): the
         # always-feasible fallback instead where that is shorter (or exists)
         s_b, der_b, cap_b, kappa_b, vcap_b = best[7]
-        fallback = _fallback(s_b, der_b, L, vlim, aacc, adec, jacc, jdec, cap_b, a_path, j_path,
-                             kappa_b, boundary)
+        fallback = fallback_on(s_b, der_b, cap_b, kappa_b)
         if fallback is not None and (moving or float(np.sum(fallback[0]))
                                      < float(np.sum(best[2])) * best[5]):
             s, der, cap, kappa, vcap = s_b, der_b, cap_b, kappa_b, vcap_b
             best = None
     if best is None:
         if fallback is None:
-            fallback = _fallback(s, der, L, vlim, aacc, adec, jacc, jdec, cap, a_path, j_path,
-                                 kappa, boundary)
+            fallback = fallback_on(s, der, cap, kappa)
         if fallback is None:  # (a moving state only)
             raise InfeasibleError(
                 f"no timing found {states}: its grid problem has no solution within the limits, "
@@ -1784,8 +1788,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     for _final in range(5):
         if k_scale > 1.0 and moving:
             # no uniform slow-down with a moving state: the fallback, where it exists
-            fallback = None if sol is None else _fallback(s, der, L, vlim, aacc, adec, jacc, jdec,
-                                                          cap, a_path, j_path, kappa, boundary)
+            fallback = None if sol is None else fallback_on(s, der, cap, kappa)
             if fallback is None:
                 raise InfeasibleError(
                     f"the timing {states} exceeds a limit by {100 * (use.worst - 1):.3g} % after "
