@@ -270,3 +270,68 @@ def test_the_final_grid_interpolates_the_derivatives_within_the_tolerance(name):
                                            engine.GRID_RTOL)
     np.testing.assert_array_equal(grid, tm.grid)
     assert pending.size == 0 and err.max() <= engine.GRID_RTOL
+
+
+class _Rest:
+    """The rest of a joint path from ``s0`` on (a JointPath of its own)."""
+
+    def __init__(self, path, s0):
+        self.path, self.s0 = path, s0
+        self.length = path.length - s0
+        self.n_joints = path.n_joints
+        b = np.asarray(path.breakpoints, dtype=float) - s0
+        self.breakpoints = b[(b > 0.0) & (b < self.length)]
+
+    def derivatives(self, s):
+        return self.path.derivatives(np.minimum(np.asarray(s, dtype=float) + self.s0, self.path.length))
+
+
+@pytest.mark.parametrize(("motion", "fractions"), [("lin", (0.5, 0.7)), ("circ", (0.3, 0.7))])
+def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(motion, fractions):
+    """Online re-planning: the rest of a UR5 LIN (CIRC) planned again from the
+    path state of its own timing at the given fractions of its duration (a
+    state of a time-optimal timing, on its way to a limit at the full jerk
+    limit). These raised InfeasibleError before (of the states 5 % apart, 14 of
+    19 on the LIN and 9 of 19 on the CIRC; now 7 and 2, all but one where the
+    path's own jerk limit binds at the state): the first jerk round,
+    linearised at the jerk-free round's speeds, had no solution, and the
+    slower retry cannot keep a moving start. Each re-plan starts in the state,
+    ends at the goal, keeps every limit, and takes the time the first timing
+    had left to within 0.1 % (never less than the grid's jerk-free bound)."""
+    from test_timing import LIMIT_RTOL, _dense_use
+
+    from trajkit.robot._cartesian import _tool_curvature
+    from trajkit.timing import plan_path_timing
+
+    robot = load_arm("ur5")
+    q0 = np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])
+    p0 = robot.fk(q0)
+
+    def at(d):
+        return CartesianTarget(Pose(p0.position + np.asarray(d), p0.rotation))
+
+    mot = (Lin(at([0.0, 0.15, 0.05]), 3.0) if motion == "lin"
+           else Circ(at([0.15, 0.15, 0.0]), at([0.0, 0.3, 0.0]), 3.0))
+    path = run_motions(robot, [mot], q0).segments[-1].chain.path
+
+    def plan(jp, s0=0.0, **state):
+        return plan_path_timing(jp, robot.limits, speed=3.0, accel=robot.cartesian_accel,
+                                jerk=robot.cartesian_jerk,
+                                curvature=lambda s: _tool_curvature(path, np.asarray(s) + s0), **state)
+
+    tm = plan(path)
+    for frac in fractions:
+        t0 = frac * tm.duration
+        s0, v0, a0, _ = tm.sample(t0)[:, 0]
+        rest = plan(_Rest(path, s0), s0, start_speed=v0, start_accel=a0)
+        assert rest.info["status"] != "fallback" and rest.time_scale == 1.0
+        assert rest.jerk_free_time <= rest.duration
+        assert rest.duration == pytest.approx(tm.duration - t0, rel=1e-3), frac
+        assert max(_dense_use(rest)) <= 1 + LIMIT_RTOL
+        q, qd, qdd, _ = rest.joint_states([0.0, rest.duration])
+        q_, qd_, qdd_, _ = tm.joint_states([t0, tm.duration])
+        scale = np.array([lm.v_max for lm in robot.limits])
+        np.testing.assert_allclose(q, q_, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(qd / scale, qd_ / scale, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(qdd[0], qdd_[0], rtol=0, atol=1e-8)
+        assert np.abs(qd[1]).max() == 0.0 and np.abs(qdd[1]).max() == 0.0

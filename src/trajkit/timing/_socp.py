@@ -42,7 +42,11 @@ mean-speed correction and the jerk rows' speed factor are taken from the
 previous round (linearised; with them the decrease is only nearly
 monotone: a round slower than the one before ends the rounds, the fastest
 kept); the first round drops the jerk constraints (the jerk-free optimum on the
-grid: a lower bound).
+grid: a lower bound). Where the first round with them has no solution (its
+tangent planes taken at speeds far above any jerk-limited timing's), it is
+solved again from a uniformly slower timing, or, with a moving boundary state
+that such a slow-down cannot keep, approached through relaxed rounds whose
+jerk limits are a multiple of the true ones (see :data:`RELAX_START`).
 
 A start or end at rest is exact: the first (last) interval is one jerk
 phase from rest, ``x_1 = 1.5 D_0 u_1`` and path jerk ``sqrt(u_1^3 / (6 D_0))``.
@@ -158,6 +162,8 @@ class GridProblem:
         Largest ``sdot^2`` at the middle of every interval (the path's speed cap there).
     x0, u0, xN, uN : float
         Boundary states (``sdot^2`` and ``sddot``).
+    j_path_scale : ndarray, shape (n - 1,), optional
+        Factor (>= 1) on ``j_path`` in every interval (none: 1 everywhere).
     """
 
     s: np.ndarray
@@ -178,6 +184,7 @@ class GridProblem:
     uN: float = 0.0
     kappa: np.ndarray | None = None
     x_cap_mid: np.ndarray | None = None
+    j_path_scale: np.ndarray | None = None
 
 
 @dataclass
@@ -580,7 +587,7 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
                g: np.ndarray, ends: tuple[np.ndarray, np.ndarray], sig: np.ndarray,
                d1: np.ndarray, d2: np.ndarray, d3: np.ndarray, j_acc: np.ndarray,
                j_dec: np.ndarray, j_both: np.ndarray, mixed: np.ndarray, D: np.ndarray, n: int,
-               rest_rows: list[tuple[int, float, float]]) -> _JerkRows:
+               rest_rows: list[tuple[int, float, float]], relax: float = 1.0) -> _JerkRows:
     """The jerk rows linearised at ``(x_bar, u_bar)`` (see the module notes), normalised.
 
     Every row of a free interval ``i`` has its coefficients on ``x_i, x_{i+1}, u_i,
@@ -588,19 +595,35 @@ def _jerk_rows(p: GridProblem, x_bar: np.ndarray, u_bar: np.ndarray, ecorr: np.n
     of the interval, both signs, then the path's jerk, then the rest intervals' bounds.
     ``mixed`` (n - 1, m): the intervals whose joint takes the tighter leg (see
     :func:`_leg_flips`).
+    ``relax``: a factor on every jerk limit (a relaxed round, see RELAX_START).
     Compiled (:mod:`._jerk_jit`) where numba is available, else in numpy.
     """
     m = d1.shape[1]
+    j_path = p.j_path
+    if relax != 1.0:
+        j_acc, j_dec, j_both, j_path = j_acc * relax, j_dec * relax, j_both * relax, j_path * relax
+        rest_rows = [(nd, sgn, ub * relax) for nd, sgn, ub in rest_rows]
     if _jerk_jit.AVAILABLE:
         C, b = _jerk_jit.jerk_rows(x_bar, u_bar, ecorr, np.ascontiguousarray(g, dtype=np.int64),
                                    *(np.ascontiguousarray(a, dtype=float) for a in
                                      (sig, d1, d2, d3, j_acc, j_dec, j_both)),
                                    np.ascontiguousarray(mixed, dtype=np.bool_),
                                    np.ascontiguousarray(D, dtype=float),
-                                   float(p.j_path), TINY_X)
+                                   float(j_path), TINY_X)
     else:
-        C, b = _jerk_coefs_numpy(p.j_path, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
+        C, b = _jerk_coefs_numpy(j_path, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
                                  j_acc, j_dec, j_both, mixed, D)
+    if p.j_path_scale is not None and math.isfinite(p.j_path):
+        # the path's jerk limit times its factor in each interval: the rows' terms
+        # in x and their bound scale with it (then normalised again)
+        G = g.size
+        rows = 4 * G * m + np.arange(2 * G)
+        f = np.tile(np.asarray(p.j_path_scale, dtype=float)[g], 2)
+        C[rows, :2] *= f[:, None]
+        b[rows] *= f
+        big = np.maximum(np.max(np.abs(C[rows]), axis=1), np.abs(b[rows]))
+        C[rows] /= big[:, None]
+        b[rows] /= big
     rest = np.array([sgn / max(1.0, ub) for _node, sgn, ub in rest_rows], dtype=float)
     extra = np.array([ub / max(1.0, ub) for _node, _sgn, ub in rest_rows], dtype=float)
     node = np.array([nd for nd, _sgn, _ub in rest_rows], dtype=int)
@@ -867,6 +890,27 @@ def _settle_short(sol: GridSolution, p: GridProblem) -> None:
 SLOWER_RETRIES = 2
 SLOWER_X = 0.25
 
+#: With a moving boundary state a uniform slow-down cannot keep that state: where
+#: the first jerk round has no solution, it is approached in relaxed rounds
+#: instead (a continuation), their jerk limits times a factor, each round
+#: linearised at the one before: from RELAX_START, divided by RELAX_STEP after
+#: every relaxed round that solves; a round that does not solve is tried again
+#: with the factor between its own and that of its linearisation point (the
+#: geometric mean; from the jerk-free round's point, or the caller's starting
+#: point, a factor RELAX_STEP^2 larger), at most RELAX_FAILS times. A relaxed
+#: round's solution is only the next round's linearisation point, never a result.
+RELAX_START = 8.0
+RELAX_STEP = 2.0
+RELAX_FAILS = 6
+
+#: ... the factors closer to 1 than this are 1 (the true limits), and a step
+#: closer to its linearisation point's factor than this ends the continuation.
+RELAX_RTOL = 0.05
+
+#: :attr:`GridSolution.status` of a solve whose rounds ended in a relaxed round
+#: (its ``x`` and ``u`` a relaxed solution: a starting point, not a timing).
+RELAXED = "Relaxed"
+
 
 def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
                init: tuple[np.ndarray, np.ndarray] | None = None,
@@ -897,7 +941,8 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         a_path=p.a_path * as_ / L, j_path=p.j_path * js / L,
         x0=p.x0 * (T0 / L) ** 2, u0=p.u0 * as_ / L, xN=p.xN * (T0 / L) ** 2, uN=p.uN * as_ / L,
         kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
-        x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2)
+        x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2,
+        j_path_scale=p.j_path_scale)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
     sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None,
                         near and init is not None, duals if settled and init is not None else None)
@@ -1126,6 +1171,12 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
 
     jerk_rounds = 0
     retries = 0  # (see SLOWER_RETRIES)
+    moving = not (rest0 and restN)
+    relax = 1.0  # the jerk limits' factor of the round (> 1: a relaxed round, see RELAX_START)
+    relax_from = math.inf  # ... that of the linearisation point (inf: not a relaxed round's)
+    relax_fails = 0
+    rounds_left = max_rounds  # (relaxed rounds, and those that fail in between, do not count)
+    relaxed_xu = False  # x, u are a relaxed round's solution
     best = None
     z_prev = None
     # the last round's multipliers of the inequalities (a warm start of a settled round)
@@ -1139,14 +1190,15 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         sqi = np.sqrt(x_bar)
         with np.errstate(divide="ignore"):
             t_init = float(np.sum(wts / (sqi[:-1] + sqi[1:])))
-    for _ in range(max_rounds):
+    while rounds_left > 0:
+        rounds_left -= 1
         eq_values = eq_fixed + [ones_g, -ones_g, -(D[g] - u_bar[g] * tau2[g] / 6.0),
                                 -(D[g] + u_bar[g + 1] * tau2[g] / 6.0)]
         b_eq = np.concatenate(b_eq_fixed + [-(u_bar[g + 1] ** 2 - u_bar[g] ** 2) * tau2[g] / 12.0])
 
         if x_bar is not None:
             jerk = _jerk_rows(p, x_bar, u_bar, ecorr, g, ends, sig, d1, d2, d3,
-                              j_acc, j_dec, j_both, mixed, D, n, rest_rows)
+                              j_acc, j_dec, j_both, mixed, D, n, rest_rows, relax)
             b_in_all = np.concatenate([b_static, jerk.b])
         else:  # the jerk-free round: no jerk rows
             jerk = None
@@ -1231,7 +1283,19 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         if not usable:
             if x_bar is None:
                 raise RuntimeError(f"path timing: the jerk-free grid problem failed ({status})")
-            if jerk_rounds == 0 and retries < SLOWER_RETRIES:
+            if jerk_rounds == 0 and moving and relax_fails < RELAX_FAILS:
+                # the first jerk round, linearised too far from any jerk-feasible
+                # timing, with a moving boundary state: approached in relaxed rounds
+                relax_fails += 1
+                if math.isinf(relax_from):
+                    relax = RELAX_START if relax == 1.0 else relax * RELAX_STEP**2
+                else:
+                    relax = math.sqrt(relax_from * relax)
+                    if relax_from < relax * (1.0 + RELAX_RTOL):
+                        break
+                rounds_left += 1
+                continue
+            if jerk_rounds == 0 and not moving and retries < SLOWER_RETRIES:
                 # the first jerk round, linearised too far from any jerk-feasible timing
                 # (the jerk-free round's speeds): again from a uniformly slower one
                 retries += 1
@@ -1247,6 +1311,16 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         # the rest intervals' relation exactly (the solver meets it only to its tolerance,
         # which is large relative to the tiny states next to a stop)
         _rest_relation(x, u, s, rest0, restN)
+        relaxed_xu = relax > 1.0
+        if relaxed_xu:  # (a relaxed round: the next one's linearisation point only)
+            relax_from = relax
+            relax = relax / RELAX_STEP
+            if relax < 1.0 + RELAX_RTOL:
+                relax = 1.0
+            rounds_left += 1
+            x_bar, u_bar = x, u
+            sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
+            continue
         t = t_new if ipm_round else float(q @ z)
         times.append(t)
         if x_bar is None:
@@ -1276,6 +1350,8 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
         sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
     if best is not None:  # every round's solution keeps the constraints: the fastest
         t, x, u = best
+    elif relaxed_xu:
+        status = RELAXED  # (no round after the relaxed ones solved)
     return GridSolution(x=x, u=u, time=t if times else math.nan,
                         jerk_free_time=jerk_free, rounds=len(times), converged=converged,
                         status=status, history=times, duals=duals)

@@ -59,7 +59,7 @@ from ..profiles._range import check_limits_range
 from ..profiles.state import plan_state_to_state
 from . import _checks
 from ._hermite import hermite_pieces, time_to_reach
-from ._socp import MAX_ROUNDS, ROUND_RTOL, GridProblem, GridSolution, _rest_jerk, solve_grid
+from ._socp import MAX_ROUNDS, RELAXED, ROUND_RTOL, GridProblem, GridSolution, _rest_jerk, solve_grid
 from .paths import JointPath
 
 __all__ = ["PathTiming", "plan_path_timing", "CHECK_PER_PIECE", "MAX_TIGHTEN", "LimitUse"]
@@ -138,6 +138,12 @@ REST_SPLIT_MIN = 1e-3
 #: jerks differ from the model's by a fraction of a per cent (two pieces per
 #: interval), which this absorbs instead of a slow-down of the whole motion.
 JERK_MARGIN = 0.998
+
+#: ... except next to a moving boundary state, over this fraction of the path's
+#: length: a state taken from a time-optimal timing (an online re-plan) can be
+#: on its way to a limit at the full jerk limit, where a lower one would carry
+#: it past that limit (no timing).
+MOVING_FULL_JERK = 0.1
 
 #: Points checked inside every piece (besides its ends) by the rounds' checks,
 #: which lower the limits locally where they find an excess (the final check is
@@ -1561,6 +1567,25 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     def cap_fn(ss):
         return _speed_cap(speed, ss)
 
+    def jerk_margin(ss: np.ndarray) -> np.ndarray:
+        """The fraction of the jerk limits the grid problem plans with at the nodes
+        ``ss`` (n, 1): JERK_MARGIN, the full limits next to a moving boundary state."""
+        out = np.full((ss.size, 1), JERK_MARGIN)
+        if not (start_speed == 0.0 and start_accel == 0.0):
+            out[ss <= MOVING_FULL_JERK * L] = 1.0
+        if not (end_speed == 0.0 and end_accel == 0.0):
+            out[ss >= (1.0 - MOVING_FULL_JERK) * L] = 1.0
+        return out
+
+    def path_jerk_scale(ss: np.ndarray) -> np.ndarray | None:
+        """The factor on the path's jerk limit (with JERK_MARGIN) in every interval of
+        ``ss`` that lifts it to the full limit next to a moving boundary state; None
+        where there is none."""
+        jm = jerk_margin(ss)[:, 0]
+        if (jm == JERK_MARGIN).all():
+            return None
+        return np.maximum(jm[:-1], jm[1:]) / JERK_MARGIN
+
     def on_grid(ss: np.ndarray, dd1: np.ndarray):
         """The speed cap, the joints' velocity cap and the tool path's curvature at
         the grid ``ss`` (with ``q'`` = ``dd1`` there)."""
@@ -1631,11 +1656,12 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         # a first solve on the derivative-refined grid, then the grid refined where the
         # path acceleration swings (the jerk phases) and solved again from there
         first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
-                                       j_acc=jacc * JERK_MARGIN, j_dec=jdec * JERK_MARGIN,
+                                       j_acc=jacc * jerk_margin(s), j_dec=jdec * jerk_margin(s),
                                        x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
                                        kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
                                        x0=start_speed**2, u0=start_accel,
-                                       xN=end_speed**2, uN=end_accel), max_rounds=FIRST_ROUNDS)
+                                       xN=end_speed**2, uN=end_accel,
+                                       j_path_scale=path_jerk_scale(s)), max_rounds=FIRST_ROUNDS)
         jerk_free_time = first.jerk_free_time
         init = (first.x, first.u)
         # the second grid: the nodes of the jerk phases, refined to the full tolerance
@@ -1672,14 +1698,20 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
             prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
-                               j_acc=jacc[None, :] * scale_j * JERK_MARGIN,
-                               j_dec=jdec[None, :] * scale_j * JERK_MARGIN,
+                               j_acc=jacc[None, :] * scale_j * jerk_margin(s),
+                               j_dec=jdec[None, :] * scale_j * jerk_margin(s),
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
-                               x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel)
-            sol = first if (attempt == 0 and not regrid and not splits) else solve_grid(
+                               x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
+                               j_path_scale=path_jerk_scale(s))
+            reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
+            sol = first if reuse else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
                 settled=init_settled, near=init_near, duals=init_duals)
+            if sol.status == RELAXED:  # (no timing: its rounds ended relaxed)
+                if best is None:
+                    raise RuntimeError("path timing: the grid problem ended in a relaxed round")
+                break
             init = (sol.x, sol.u)  # a tightened attempt starts from this one
             init_settled = True  # (on the same grid)
             init_duals = sol.duals
