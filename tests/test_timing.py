@@ -18,7 +18,7 @@ import pytest
 from conftest import sweep_size
 
 from trajkit import AxisLimits, InfeasibleError, InvalidInputError, plan_move, plan_ptp, plan_state_to_state
-from trajkit.timing import LinearJointPath, _socp, engine, plan_path_timing, plan_waypoints
+from trajkit.timing import LinearJointPath, PathRest, _socp, engine, plan_path_timing, plan_waypoints
 from trajkit.timing._shaped import MAX_SHAPED_WAYPOINTS, ShapedJointPath, shaped_path
 from trajkit.timing.waypoints import STOP_ALL_MARGIN, SplineJointPath
 
@@ -905,3 +905,40 @@ def test_an_attempt_that_needs_a_large_slow_down_gives_way_to_the_fallback(monke
     monkeypatch.setattr(engine, "FALLBACK_ABOVE", math.inf)
     slowed = plan_path_timing(path, lims, speed=cap)
     assert slowed.info["status"] != "fallback" and slowed.duration > 10.0 * optimum
+
+
+def test_the_rest_of_a_path_is_the_path_shifted():
+    """PathRest: the path from ``start`` on, parameterised from 0 (length, breakpoints
+    beyond the start, derivatives of the shifted parameter, cheap derivatives kept);
+    a start outside [0, length) is refused, naming the range."""
+    wp = np.array([[0.0, 0.0], [1.0, 0.5], [1.5, -0.5], [2.0, 0.0]])
+    path = plan_waypoints(wp, [AxisLimits(1.0, 2.0, 10.0)] * 2, blend=0.1).segments[0].path
+    rest = PathRest(path, 0.7)
+    assert rest.length == pytest.approx(path.length - 0.7, rel=1e-15)
+    b = np.asarray(path.breakpoints)
+    np.testing.assert_array_equal(rest.breakpoints, (b - 0.7)[(b > 0.7) & (b < path.length)])
+    s = np.linspace(0.0, rest.length, 7)
+    for got, ref in zip(rest.derivatives(s), path.derivatives(s + 0.7)):
+        np.testing.assert_array_equal(got, ref)
+    line = PathRest(LinearJointPath([0.0], [2.0]), 0.5)
+    assert line.cheap_derivatives and line.length == 1.5 and line.breakpoints.size == 0
+    for bad in (-0.1, 2.0, math.nan):
+        with pytest.raises(InvalidInputError, match=r"start must lie in \[0, 2\.0\)"):
+            PathRest(LinearJointPath([0.0], [2.0]), bad)
+
+
+def test_a_line_is_planned_again_from_a_state_of_its_own_timing():
+    """The rest of a joint-space line, planned again from the state of its own
+    timing at 20 %, 50 % and 80 % of its duration: the one-axis state-to-state
+    optimum from that state (to 0.5 %), starting in the state exactly."""
+    lim = AxisLimits(1.0, 2.0, 8.0)
+    tm = plan_path_timing(LinearJointPath([0.0], [3.0]), [lim])
+    for frac in (0.2, 0.5, 0.8):
+        s0, v0, a0, _ = tm.sample(frac * tm.duration)[:, 0]
+        rest = plan_path_timing(PathRest(tm.path, s0), [lim], start_speed=v0, start_accel=a0)
+        ref = plan_state_to_state([s0, v0, a0], [3.0, 0.0, 0.0], lim).duration
+        assert ref * (1 - 1e-9) <= rest.duration <= ref * 1.005, frac
+        assert max(_dense_use(rest)) <= 1 + LIMIT_RTOL
+        q, qd, qdd, _ = rest.joint_states([0.0, rest.duration])
+        np.testing.assert_allclose([q[0, 0], qd[0, 0], qdd[0, 0], q[1, 0], qd[1, 0]],
+                                   [s0, v0, a0, 3.0, 0.0], rtol=0, atol=1e-9)

@@ -272,20 +272,6 @@ def test_the_final_grid_interpolates_the_derivatives_within_the_tolerance(name):
     assert pending.size == 0 and err.max() <= engine.GRID_RTOL
 
 
-class _Rest:
-    """The rest of a joint path from ``s0`` on (a JointPath of its own)."""
-
-    def __init__(self, path, s0):
-        self.path, self.s0 = path, s0
-        self.length = path.length - s0
-        self.n_joints = path.n_joints
-        b = np.asarray(path.breakpoints, dtype=float) - s0
-        self.breakpoints = b[(b > 0.0) & (b < self.length)]
-
-    def derivatives(self, s):
-        return self.path.derivatives(np.minimum(np.asarray(s, dtype=float) + self.s0, self.path.length))
-
-
 @pytest.mark.parametrize(("motion", "fractions"), [("lin", (0.5, 0.7)), ("circ", (0.3, 0.7))])
 def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(motion, fractions):
     """Online re-planning: the rest of a UR5 LIN (CIRC) planned again from the
@@ -301,7 +287,7 @@ def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(moti
     from test_timing import LIMIT_RTOL, _dense_use
 
     from trajkit.robot._cartesian import _tool_curvature
-    from trajkit.timing import plan_path_timing
+    from trajkit.timing import PathRest, plan_path_timing
 
     robot = load_arm("ur5")
     q0 = np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])
@@ -323,7 +309,7 @@ def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(moti
     for frac in fractions:
         t0 = frac * tm.duration
         s0, v0, a0, _ = tm.sample(t0)[:, 0]
-        rest = plan(_Rest(path, s0), s0, start_speed=v0, start_accel=a0)
+        rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
         assert rest.info["status"] != "fallback" and rest.time_scale == 1.0
         assert rest.jerk_free_time <= rest.duration
         assert rest.duration == pytest.approx(tm.duration - t0, rel=1e-3), frac

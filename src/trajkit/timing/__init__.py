@@ -8,9 +8,9 @@ composite tool paths, joint-space waypoints) is timed by it.
 """
 
 from .engine import LimitUse, PathTiming, plan_path_timing
-from .paths import JointPath, LinearJointPath
+from .paths import JointPath, LinearJointPath, PathRest
 from .waypoints import BlendedJointPath, SplineJointPath, WaypointSample, WaypointTrajectory, plan_waypoints
 
 __all__ = ["plan_path_timing", "PathTiming", "LimitUse", "JointPath", "LinearJointPath",
-           "plan_waypoints", "WaypointTrajectory", "WaypointSample", "BlendedJointPath",
+           "PathRest", "plan_waypoints", "WaypointTrajectory", "WaypointSample", "BlendedJointPath",
            "SplineJointPath"]

@@ -8,6 +8,7 @@ robot paths (Cartesian lines and arcs through inverse kinematics) live in
 
 from __future__ import annotations
 
+import math
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -15,7 +16,7 @@ import numpy as np
 from .._validate import check_array
 from ..errors import InvalidInputError
 
-__all__ = ["JointPath", "LinearJointPath", "derivatives_on", "check_s"]
+__all__ = ["JointPath", "LinearJointPath", "PathRest", "derivatives_on", "check_s"]
 
 
 @runtime_checkable
@@ -97,3 +98,46 @@ class LinearJointPath:
         d1 = np.broadcast_to(self._dir, q.shape).copy()
         z = np.zeros_like(q)
         return q, d1, z, z.copy()
+
+
+class PathRest:
+    """The rest of a joint path from ``start`` on, parameterised from 0: what an
+    online re-plan times from the state of a running timing.
+
+    ``s`` of this path is ``s - start`` of ``path``; its length is ``path.length
+    - start``, its breakpoints those of ``path`` beyond ``start``. A path
+    callable of the original's ``s`` (a speed cap, the tool path's curvature)
+    needs the same shift.
+
+    Parameters
+    ----------
+    path : JointPath
+    start : float
+        Where the rest begins, in ``[0, path.length)`` [path unit].
+
+    Examples
+    --------
+    Re-plan the rest of a timing ``tm`` from its state at ``t``:
+
+    >>> s0, v0, a0, _ = tm.sample(t)[:, 0]                         # doctest: +SKIP
+    >>> rest = plan_path_timing(PathRest(tm.path, s0), tm.limits,  # doctest: +SKIP
+    ...                         start_speed=v0, start_accel=a0)
+    """
+
+    def __init__(self, path: JointPath, start: float) -> None:
+        L = float(path.length)
+        s0 = float(start)
+        if not (math.isfinite(s0) and 0.0 <= s0 < L):
+            raise InvalidInputError(f"start must lie in [0, {L!r}), got {start!r}")
+        self.path = path
+        self.start = s0
+        self.length = L - s0
+        self.n_joints = int(path.n_joints)
+        b = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float) - s0
+        self.breakpoints = b[(b > 0.0) & (b < self.length)]
+        self.cheap_derivatives = bool(getattr(path, "cheap_derivatives", False))
+
+    def derivatives(self, s: np.ndarray):
+        """``q``, ``dq/ds``, ``d2q/ds2``, ``d3q/ds3`` at ``s`` (n,) of this path, each (n, m)."""
+        ss = np.minimum(np.asarray(s, dtype=float) + self.start, float(self.path.length))
+        return self.path.derivatives(ss)
