@@ -1577,14 +1577,15 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             out[ss >= (1.0 - MOVING_FULL_JERK) * L] = 1.0
         return out
 
-    def path_jerk_scale(ss: np.ndarray) -> np.ndarray | None:
+    def path_jerk_scale(ss: np.ndarray, local: np.ndarray | None = None) -> np.ndarray | None:
         """The factor on the path's jerk limit (with JERK_MARGIN) in every interval of
-        ``ss`` that lifts it to the full limit next to a moving boundary state; None
-        where there is none."""
+        ``ss``: the full limit next to a moving boundary state, times ``local`` (the
+        lowering where the check found an excess); None where it is 1 everywhere."""
         jm = jerk_margin(ss)[:, 0]
-        if (jm == JERK_MARGIN).all():
-            return None
-        return np.maximum(jm[:-1], jm[1:]) / JERK_MARGIN
+        out = np.maximum(jm[:-1], jm[1:]) / JERK_MARGIN
+        if local is not None:
+            out = out * local
+        return None if (out == 1.0).all() else out
 
     def on_grid(ss: np.ndarray, dd1: np.ndarray):
         """The speed cap, the joints' velocity cap and the tool path's curvature at
@@ -1691,6 +1692,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         splits = 0
         best = None
         xmid_scale = np.ones(s.size - 1)
+        jpath_scale = np.ones(s.size - 1)  # (lowered only with a moving state, see below)
         attempt = 0
         init_settled = False  # init is a solution of the same grid
         init_near = False  # ... or of the grid before a split (interpolated)
@@ -1703,7 +1705,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
-                               j_path_scale=path_jerk_scale(s))
+                               j_path_scale=path_jerk_scale(s, jpath_scale))
             reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
             sol = first if reuse else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
@@ -1755,6 +1757,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
                                                     (scale_v, scale_a, scale_j, x_cap))
                 xmid_scale = np.ones(s_new.size - 1)
+                jpath_scale = np.ones(s_new.size - 1)
                 s, der = s_new, cached.derivatives(s_new)
                 q, d1, d2, d3 = der
                 cap, vcap, kappa = on_grid(s, d1)
@@ -1779,6 +1782,14 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 for node in (c, c + 1):
                     np.minimum.at(x_cap, node, f * x_cap[node])
                 np.minimum.at(xmid_scale, c, f * xmid_scale[c])
+            if moving and math.isfinite(j_path):
+                # the path's jerk: with a moving state lowered in the intervals of the
+                # pieces above it (from rest, a small excess is a uniform slow-down)
+                over = np.abs(jk) > j_path * (1.0 + CHECK_RTOL)
+                if over.any():
+                    c = piv[over]
+                    f = (1.0 - TIGHTEN_MARGIN) * j_path / np.abs(jk[over])
+                    np.minimum.at(jpath_scale, c, f * jpath_scale[c])
     except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
         best = None
     fallback = None  # (durations, jerks) of the fallback once made
