@@ -1656,8 +1656,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         scale_j = np.ones((n, m))
         # a first solve on the derivative-refined grid, then the grid refined where the
         # path acceleration swings (the jerk phases) and solved again from there
+        margin = jerk_margin(s)
         first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
-                                       j_acc=jacc * jerk_margin(s), j_dec=jdec * jerk_margin(s),
+                                       j_acc=jacc * margin, j_dec=jdec * margin,
                                        x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
                                        kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
                                        x0=start_speed**2, u0=start_accel,
@@ -1698,10 +1699,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         init_near = False  # ... or of the grid before a split (interpolated)
         init_duals = None  # ... and its multipliers (on the same grid)
         while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
+            margin = jerk_margin(s)
             prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
-                               j_acc=jacc[None, :] * scale_j * jerk_margin(s),
-                               j_dec=jdec[None, :] * scale_j * jerk_margin(s),
+                               j_acc=jacc[None, :] * scale_j * margin,
+                               j_dec=jdec[None, :] * scale_j * margin,
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
