@@ -1564,6 +1564,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         if not math.isfinite(val):
             raise InvalidInputError(f"{nm} must be finite, got {val!r}")
 
+    rest0 = start_speed == 0.0 and start_accel == 0.0
+    restN = end_speed == 0.0 and end_accel == 0.0
+    moving = not (rest0 and restN)
+
     def cap_fn(ss):
         return _speed_cap(speed, ss)
 
@@ -1571,17 +1575,18 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         """The fraction of the jerk limits the grid problem plans with at the nodes
         ``ss`` (n, 1): JERK_MARGIN, the full limits next to a moving boundary state."""
         out = np.full((ss.size, 1), JERK_MARGIN)
-        if not (start_speed == 0.0 and start_accel == 0.0):
+        if not rest0:
             out[ss <= MOVING_FULL_JERK * L] = 1.0
-        if not (end_speed == 0.0 and end_accel == 0.0):
+        if not restN:
             out[ss >= (1.0 - MOVING_FULL_JERK) * L] = 1.0
         return out
 
-    def path_jerk_scale(ss: np.ndarray, local: np.ndarray | None = None) -> np.ndarray | None:
+    def path_jerk_scale(margin: np.ndarray, local: np.ndarray | None = None) -> np.ndarray | None:
         """The factor on the path's jerk limit (with JERK_MARGIN) in every interval of
-        ``ss``: the full limit next to a moving boundary state, times ``local`` (the
-        lowering where the check found an excess); None where it is 1 everywhere."""
-        jm = jerk_margin(ss)[:, 0]
+        the grid whose nodes have the jerk ``margin`` (n, 1) (:func:`jerk_margin`):
+        the full limit next to a moving boundary state, times ``local`` (the lowering
+        where the check found an excess); None where it is 1 everywhere."""
+        jm = margin[:, 0]
         out = np.maximum(jm[:-1], jm[1:]) / JERK_MARGIN
         if local is not None:
             out = out * local
@@ -1624,9 +1629,6 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     q, d1, d2, d3 = der
     cap, vcap, kappa = on_grid(s, d1)
     n = s.size
-    rest0 = start_speed == 0.0 and start_accel == 0.0
-    restN = end_speed == 0.0 and end_accel == 0.0
-    moving = not (rest0 and restN)
     states = (f"from the start state (speed {start_speed:.6g}, acceleration {start_accel:.6g}) to "
               f"the end state (speed {end_speed:.6g}, acceleration {end_accel:.6g}) along this "
               f"path of length {L:.6g}")
@@ -1663,7 +1665,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                        kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
                                        x0=start_speed**2, u0=start_accel,
                                        xN=end_speed**2, uN=end_accel,
-                                       j_path_scale=path_jerk_scale(s)), max_rounds=FIRST_ROUNDS)
+                                       j_path_scale=path_jerk_scale(margin)), max_rounds=FIRST_ROUNDS)
         jerk_free_time = first.jerk_free_time
         init = (first.x, first.u)
         # the second grid: the nodes of the jerk phases, refined to the full tolerance
@@ -1707,7 +1709,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
-                               j_path_scale=path_jerk_scale(s, jpath_scale))
+                               j_path_scale=path_jerk_scale(margin, jpath_scale))
             reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
             sol = first if reuse else solve_grid(
                 prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
