@@ -146,7 +146,8 @@ def test_the_jerk_rows_bound_the_jerk_at_the_slower_end_of_an_interval(monkeypat
 
     def spy(*args, **kw):
         out = check(*args, **kw)
-        first.append(out[0])
+        if args[7] is None:  # (the rounds' checks: not the path-limits screen, not the final)
+            first.append(out[0])
         return out
 
     monkeypatch.setattr(engine, "_check", spy)
@@ -273,25 +274,30 @@ def test_the_final_grid_interpolates_the_derivatives_within_the_tolerance(name):
 
 
 @pytest.mark.parametrize(("motion", "fractions"), [("lin", (0.05, 0.5, 0.7)), ("circ", (0.3, 0.7))])
-def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(motion, fractions):
-    """Online re-planning: the rest of a UR5 LIN (CIRC) planned again from the
-    path state of its own timing at the given fractions of its duration (a
-    state of a time-optimal timing, on its way to a limit at the full jerk
-    limit; the path's own jerk limit binds). Of the states 5 % apart, 14 of 19
-    on the LIN and 9 of 19 on the CIRC raised InfeasibleError before (those at
-    50 %, 70 % and 30 %, 70 % here among them; now 2 and 2, in the final
-    stop): the first jerk round, linearised at the jerk-free round's speeds,
-    had no solution, and the slower retry cannot keep a moving start. At 5 %
-    on the LIN the pieces next to the start exceed the path's full jerk limit
-    by a fraction of a per cent: lowered there, not the fallback (22 % slower).
-    Each re-plan starts in the state, ends at the goal, keeps every limit, and
-    takes the time the first timing had left to within 0.1 % (never less than
-    the grid's jerk-free bound)."""
+def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(motion, fractions,
+                                                                            monkeypatch):
+    """Online re-planning on the grid problem: the rest of a UR5 LIN (CIRC)
+    planned again from the path state of its own timing at the given fractions
+    of its duration (a state of a time-optimal timing, on its way to a limit
+    at the full jerk limit; the path's own jerk limit binds). The path-limits
+    S-curve is left out (the LIN is held by its path limits everywhere: that
+    S-curve would be its timing, see the next test), so the grid problem
+    plans both. Of the states 5 % apart, 14 of 19 on the LIN and 9 of 19 on
+    the CIRC raised InfeasibleError before the relaxed rounds (those at 50 %,
+    70 % and 30 %, 70 % here among them): the first jerk round, linearised at
+    the jerk-free round's speeds, had no solution, and the slower retry
+    cannot keep a moving start. At 5 % on the LIN the pieces next to the
+    start exceed the path's full jerk limit by a fraction of a per cent:
+    lowered there, not the fallback (22 % slower). Each re-plan starts in the
+    state, ends at the goal, keeps every limit, and takes the time the first
+    timing had left to within 0.1 % (never less than the grid's jerk-free
+    bound)."""
     from test_timing import LIMIT_RTOL, _dense_use
 
     from trajkit.robot._cartesian import _tool_curvature
     from trajkit.timing import PathRest, plan_path_timing
 
+    monkeypatch.setattr(engine, "_path_limits_profile", lambda *args: None)
     robot = load_arm("ur5")
     q0 = np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])
     p0 = robot.fk(q0)
@@ -324,3 +330,70 @@ def test_the_rest_of_a_path_is_planned_again_from_a_state_of_its_own_timing(moti
         np.testing.assert_allclose(qd / scale, qd_ / scale, rtol=0, atol=1e-9)
         np.testing.assert_allclose(qdd[0], qdd_[0], rtol=0, atol=1e-8)
         assert np.abs(qd[1]).max() == 0.0 and np.abs(qdd[1]).max() == 0.0
+
+
+def test_a_motion_held_by_its_path_limits_is_their_s_curve(monkeypatch):
+    """A UR5 LIN of 0.16 m programmed at 3 m/s never reaches a joint limit: its
+    feed is held by the path's own acceleration and jerk everywhere. The
+    minimum-time S-curve of ``s`` under the path's limits alone is a lower
+    bound of every timing (it drops the joints' limits), and here it keeps
+    them: it is the timing, the optimum itself (the grid problem, planning with
+    JERK_MARGIN of the jerk limits, is slower by up to 0.1 %). Re-planned from
+    its own states, the final stop included (where the grid problem had no
+    solution or a residual excess at 80 % and 90 % of the motion, and the
+    fallback could not start), the rest is the same S-curve. A CIRC, whose
+    joints bind, is planned on the grid and never beats that bound; the IK'd
+    samples keep every limit."""
+    from test_timing import LIMIT_RTOL, _dense_use
+
+    from trajkit.limits import AxisLimits
+    from trajkit.profiles.state import plan_state_to_state
+    from trajkit.robot._cartesian import _tool_curvature
+    from trajkit.timing import PathRest, plan_path_timing
+
+    robot = load_arm("ur5")
+    q0 = np.array([0.0, -1.2, 1.5, -1.87, -1.57, 0.0])
+    p0 = robot.fk(q0)
+
+    def at(d):
+        return CartesianTarget(Pose(p0.position + np.asarray(d), p0.rotation))
+
+    path_limits = AxisLimits(3.0, robot.cartesian_accel, robot.cartesian_jerk)
+    for mot in (Lin(at([0.0, 0.15, 0.05]), 3.0), Circ(at([0.15, 0.15, 0.0]), at([0.0, 0.3, 0.0]), 3.0)):
+        run = run_motions(robot, [mot], q0)
+        path = run.segments[-1].chain.path
+
+        def plan(jp, s0=0.0, path=path, **state):
+            return plan_path_timing(jp, robot.limits, speed=3.0, accel=robot.cartesian_accel,
+                                    jerk=robot.cartesian_jerk,
+                                    curvature=lambda s: _tool_curvature(path, np.asarray(s) + s0), **state)
+
+        tm = plan(path)
+        bound = plan_move(0.0, path.length, path_limits).duration
+        rv, ra, rj, _ = fd_ratios(robot, run)
+        assert (rv <= 1 + FD_RTOL).all() and (ra <= 1 + FD_RTOL).all() and (rj <= 1 + FD_RTOL).all()
+        assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+        if isinstance(mot, Circ):
+            assert tm.info["status"] != "path limits"
+            assert tm.duration > bound
+            continue
+        assert tm.info["status"] == "path limits" and tm.time_scale == 1.0
+        assert tm.duration == pytest.approx(bound, rel=1e-12)
+        assert run.segments[-1].chain.timing.info["status"] == "path limits"
+        with monkeypatch.context() as mp:  # the grid problem's timing: never faster
+            mp.setattr(engine, "_path_limits_profile", lambda *args: None)
+            grid = plan(path)
+        assert grid.info["status"] != "path limits"
+        assert tm.duration <= grid.duration <= tm.duration * 1.001
+        for frac in (0.2, 0.5, 0.8, 0.9, 0.97):
+            t0 = frac * tm.duration
+            s0, v0, a0, _ = tm.sample(t0)[:, 0]
+            rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+            assert rest.info["status"] == "path limits"
+            left = plan_state_to_state((0.0, v0, a0), (path.length - s0, 0.0, 0.0), path_limits)
+            assert rest.duration == pytest.approx(left.duration, rel=1e-12)
+            assert rest.duration == pytest.approx(tm.duration - t0, rel=1e-9), frac
+            assert max(_dense_use(rest)) <= 1 + LIMIT_RTOL
+            np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, v0, a0], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(rest.sample(rest.duration)[:3, 0], [path.length - s0, 0, 0],
+                                       rtol=0, atol=1e-12)

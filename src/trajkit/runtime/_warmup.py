@@ -83,6 +83,12 @@ def _paths() -> None:
     wp = np.array([[0.0, 0.0], [0.3, 0.2], [0.1, 0.5], [0.4, 0.3]])
     for blend in (0.0, 0.05):
         plan_waypoints(wp, list(_LIMITS), blend=blend)
+    from ..timing import _checks
+
+    if _checks.AVAILABLE:  # (a check's samples evaluated again: not every motion above needs it)
+        z = np.zeros((1, 2))
+        _checks.splice_ratios(np.zeros(1, dtype=np.int64), z.copy(), z.copy(), z.copy(), np.zeros(1),
+                              z, z, z, np.zeros(1))
 
 
 _WORK = {"runtime": _runtime, "paths": _paths}

@@ -8,6 +8,10 @@ exact pieces of constant path jerk (:class:`PathTiming`).
 
 Steps:
 
+0. the minimum-time S-curve of ``s`` under the path's own limits alone (a
+   lower bound of every timing): where the check (step 4) finds it within
+   every joint's limits too, it is the timing (``info["status"]`` "path
+   limits") and the steps below are skipped;
 1. a grid of ``s`` (refined at the path's ends, at its breakpoints and
    wherever the joint-path derivatives change faster than their cubic
    interpolation follows, to :data:`FIRST_GRID_RTOL`);
@@ -285,6 +289,11 @@ TIGHTEN_MARGIN = 1e-4
 #: Relative slack of the final check (round-off).
 CHECK_RTOL = 1e-9
 
+#: Final checks at most: each one that finds an excess slows the timing down
+#: uniformly (from and to rest) or, with a moving boundary state, goes on to the
+#: fallback; a timing still above a limit after them is refused.
+FINAL_ATTEMPTS = 5
+
 
 @dataclass
 class LimitUse:
@@ -347,7 +356,10 @@ class PathTiming:
     grid_derivatives : tuple of 4 ndarray, shape (n, m)
         ``q``, ``q'``, ``q''``, ``q'''`` at the grid nodes.
     info : dict
-        Grid size, tightening rounds, solver status.
+        Grid size, tightening rounds and ``"status"``: the grid problem's solver
+        status, ``"path limits"`` (the minimum-time S-curve of ``s`` under the
+        path's own limits, which keeps every joint's too: the optimum) or
+        ``"fallback"`` (the S-curve within every limit on the whole path).
     """
 
     path: Any
@@ -1078,14 +1090,21 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
         v = 1.0
     a = a if (math.isfinite(a) and a > 0) else v
     j = j if (math.isfinite(j) and j > 0) else a
-    lim = AxisLimits(v, a, j, name="path")
-    v0, a0, v1, a1_ = boundary
+    return _path_s_curve(L, AxisLimits(v, a, j, name="path"), boundary)
+
+
+def _path_s_curve(L: float, lim: AxisLimits, boundary: tuple[float, float, float, float]):
+    """The minimum-time S-curve of the path parameter over ``[0, L]`` under ``lim``
+    from and to the ``boundary`` states ``(start_speed, start_accel, end_speed,
+    end_accel)``: ``(durations, jerks)`` of its pieces, or None where there is none
+    that moves forward only and keeps ``lim`` from the start."""
+    v0, a0, v1, a1 = boundary
     if not any(boundary):
-        prof = plan_move(0.0, L, lim)
-        durations, jerks = prof.phase_durations, prof.jerks
+        rest = plan_move(0.0, L, lim)
+        durations, jerks = rest.phase_durations, rest.jerks
     else:
         try:
-            moving = plan_state_to_state((0.0, v0, a0), (L, v1, a1_), lim)
+            moving = plan_state_to_state((0.0, v0, a0), (L, v1, a1), lim)
         except (InfeasibleError, InvalidInputError):
             return None
         vmin, vmax = moving.extrema().velocity
@@ -1094,6 +1113,24 @@ def _fallback(s: np.ndarray, der: tuple, L: float, vlim, aacc, adec, jacc, jdec,
         durations, jerks = moving.phase_durations, moving.jerks
     keep = np.asarray(durations) > 0.0
     return np.asarray(durations)[keep], np.asarray(jerks)[keep]
+
+
+def _path_limits_profile(L: float, cap: np.ndarray, a_path: float, j_path: float,
+                         boundary: tuple[float, float, float, float]):
+    """The minimum-time S-curve of the path parameter under the path's own limits
+    alone (its largest speed cap ``cap`` (n,), the path acceleration ``a_path`` as
+    a tangential limit, the path jerk ``j_path``) between the ``boundary`` states:
+    a relaxation of the path's timing problem (it drops the joints' limits, the
+    cap's variation and the curvature's share of the acceleration), so where it
+    keeps every limit it is the minimum-time timing itself (tried before the
+    grid problem; e.g. a final stop in which the path's jerk binds, where
+    :func:`_fallback`'s limits, the smallest over the whole path, cannot start).
+    ``(durations, jerks)`` or None (a limit not finite, or no such S-curve, see
+    :func:`_path_s_curve`)."""
+    v = float(np.max(cap))
+    if not (math.isfinite(v) and v > 0.0 and math.isfinite(a_path) and math.isfinite(j_path)):
+        return None
+    return _path_s_curve(L, AxisLimits(v, a_path, j_path, name="path"), boundary)
 
 
 def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -1648,162 +1685,232 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             "for its length)")
     x_cap = cap ** 2  # lowered locally where the check finds the cap exceeded
 
-    best: _Best | None = None
-    sol: GridSolution | None  # the solution kept; None for the fallback timing
-    piv: np.ndarray | None  # the grid interval of every piece (with sol)
-    try:
-        # per-node limits, lowered where the check finds an excess
-        scale_v = np.ones((n, m))
-        scale_a = np.ones((n, m))
-        scale_j = np.ones((n, m))
-        # a first solve on the derivative-refined grid, then the grid refined where the
-        # path acceleration swings (the jerk phases) and solved again from there
-        margin = jerk_margin(s)
-        first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
-                                       j_acc=jacc * margin, j_dec=jdec * margin,
-                                       x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
-                                       kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
-                                       x0=start_speed**2, u0=start_accel,
-                                       xN=end_speed**2, uN=end_accel,
-                                       j_path_scale=path_jerk_scale(margin)), max_rounds=FIRST_ROUNDS)
-        jerk_free_time = first.jerk_free_time
-        init = (first.x, first.u)
-        # the second grid: the nodes of the jerk phases, refined to the full tolerance
-        s_new = np.unique(np.concatenate([
-            s, _solution_splits(s, first.x, first.u),
-            _rest_splits(s, first.x, first.u, d1, d2, ((aacc, jacc * JERK_MARGIN),
-                                                       (adec, jdec * JERK_MARGIN)),
-                         a_path, j_path * JERK_MARGIN, rest0, restN)]))
-        der_new = cached.derivatives(s_new)
-        if grid_rtol < FIRST_GRID_RTOL:  # (the cells within it already: not again)
-            parent = np.searchsorted(s, s_new[:-1], side="right") - 1
-            s_new, der_new, unresolved, _ = _refine(cached, s_new, der_new, vlim, alim, jlim, cap_fn,
-                                                    breaks, grid_rtol, ~(cell_err[parent] <= grid_rtol))
-            _finite_derivatives(der_new)
-        regrid = s_new.size > s.size  # (the new grid holds the old one)
-        if regrid:
-            init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
-            s, der = s_new, der_new
-            q, d1, d2, d3 = der
-            cap, vcap, kappa = on_grid(s, d1)
-            n = s.size
-            x_cap = cap ** 2
-            scale_v = np.ones((n, m))
-            scale_a = np.ones((n, m))
-            scale_j = np.ones((n, m))
-        tightened = 0
-        splits = 0
-        best = None
-        xmid_scale = np.ones(s.size - 1)
-        jpath_scale = np.ones(s.size - 1)  # (lowered only with a moving state, see below)
-        attempt = 0
-        init_settled = False  # init is a solution of the same grid
-        init_near = False  # ... or of the grid before a split (interpolated)
-        init_duals = None  # ... and its multipliers (on the same grid)
-        while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
-            margin = jerk_margin(s)
-            prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
-                               a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
-                               j_acc=jacc[None, :] * scale_j * margin,
-                               j_dec=jdec[None, :] * scale_j * margin,
-                               x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
-                               x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
-                               x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
-                               j_path_scale=path_jerk_scale(margin, jpath_scale))
-            reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
-            sol = first if reuse else solve_grid(
-                prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
-                settled=init_settled, near=init_near, duals=init_duals)
-            if sol.status == RELAXED:  # (no timing: its rounds ended relaxed)
-                if best is None:
-                    raise RuntimeError("path timing: the grid problem ended in a relaxed round")
-                break
-            init = (sol.x, sol.u)  # a tightened attempt starts from this one
-            init_settled = True  # (on the same grid)
-            init_duals = sol.duals
-            try:
-                dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
-            except ValueError:
-                if best is None:
-                    raise
-                break
-            t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
-            lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                          cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
-            use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
-                                                     exact if cheap else _Interp(s, der, breaks, left),
-                                                     FINAL_CHECK_PER_PIECE if moving else None)
-            k = _uniform_scale(use)
-            # a timing that needs no uniform slow-down keeps its exact cruise speeds:
-            # preferred unless a slowed one is clearly faster
-            score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
-            if best is None or score < best[0]:
-                # (the cells close to a limit: the final check corrects them first)
-                best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), (cell, near))
-            if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
-                break  # a small excess costs less as a uniform slow-down than as another round
-            if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
-                # a large excess: the grid is too coarse for the motion there (the
-                # pieces' jerks differ from the interval's mean): split the cells
-                # around it and solve again from this solution
-                bad = np.zeros(s.size - 1, dtype=bool)
-                for ratio in (rv, ra, rj):
-                    bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
-                bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
-                bad[:-1] |= bad[1:].copy()
-                bad[1:] |= bad[:-1].copy()
-                cells = np.nonzero(bad)[0][:max(GRID_MAX - s.size, 0)]
-                s_new = np.unique(np.concatenate([s, 0.5 * (s[cells] + s[cells + 1])]))
-                init = (np.interp(s_new, s, sol.x), np.interp(s_new, s, sol.u))
-                init_settled = False
-                init_duals = None
-                init_near = sol.converged
-                scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
-                                                    (scale_v, scale_a, scale_j, x_cap))
-                xmid_scale = np.ones(s_new.size - 1)
-                jpath_scale = np.ones(s_new.size - 1)
-                s, der = s_new, cached.derivatives(s_new)
-                q, d1, d2, d3 = der
-                cap, vcap, kappa = on_grid(s, d1)
-                x_cap = np.minimum(x_cap, cap ** 2)
-                splits += 1
-                continue
-            tightened += 1
-            attempt += 1
-            for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
-                over = ratio > 1.0 + CHECK_RTOL
-                if not over.any():
-                    continue
-                rows, cols = np.nonzero(over)
-                c = cell[rows]
-                f = (1.0 - TIGHTEN_MARGIN) / ratio[rows, cols]
-                for node in (c, c + 1):
-                    np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
-            over = rs > 1.0 + CHECK_RTOL
-            if over.any():
-                c = cell[over]
-                f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
-                for node in (c, c + 1):
-                    np.minimum.at(x_cap, node, f * x_cap[node])
-                np.minimum.at(xmid_scale, c, f * xmid_scale[c])
-            if moving and math.isfinite(j_path):
-                # the path's jerk: with a moving state lowered in the intervals of the
-                # pieces above it (from rest, a small excess is a uniform slow-down)
-                over = np.abs(jk) > j_path * (1.0 + CHECK_RTOL)
-                if over.any():
-                    c = piv[over]
-                    f = (1.0 - TIGHTEN_MARGIN) * j_path / np.abs(jk[over])
-                    np.minimum.at(jpath_scale, c, f * jpath_scale[c])
-    except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
-        best = None
     fallback = None  # (durations, jerks) of the fallback once made
+    boundary = (start_speed, start_accel, end_speed, end_accel)
 
     def fallback_on(ss, dd, cc, kk):
         """The fallback (see _fallback) on the grid ``ss``, its derivatives ``dd``, speed
         cap ``cc`` and curvature ``kk``, from and to the boundary states; or None."""
-        return _fallback(ss, dd, L, vlim, aacc, adec, jacc, jdec, cc, a_path, j_path, kk,
-                         (start_speed, start_accel, end_speed, end_accel))
+        return _fallback(ss, dd, L, vlim, aacc, adec, jacc, jdec, cc, a_path, j_path, kk, boundary)
 
+    corrected: _Corrected | None = None
+
+    def final_use(t, st, jk, close, per_piece: int) -> LimitUse:
+        """The final check of the pieces (times ``t``, states ``st``, jerks ``jk``) on
+        the grid ``s`` (``per_piece`` points in each, then a zoom on those that come
+        close to a limit and both sides of every joint reversal), with the true
+        derivatives where the interpolation's error could matter (first where the
+        rounds' check came ``close``: its cells and ratios, or None)."""
+        nonlocal corrected
+        lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                      cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
+        if exact is None and (corrected is None or corrected.s is not s):
+            corrected = _Corrected(cached, s, der, breaks, left, unresolved)
+            if close is not None:  # the true derivatives where the rounds' check came close
+                cell_b, near_b = close
+                corrected.add_both(cell_b[near_b > 1.0 - VERIFY_ABOVE],
+                                   cell_b[near_b > 1.0 - VERIFY_FULL_ABOVE])
+        src = exact if exact is not None else corrected
+        res = _check(s, der, t, st, jk, lim, src, per_piece)
+        if corrected is not None:
+            # the true derivatives in the cells that come close to a limit, then again
+            res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_ABOVE]),
+                           s, der, t, st, jk, lim, src, per_piece)
+            # ... and at every point of VERIFY_POINTS where that comes very close
+            res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_FULL_ABOVE], full=True),
+                           s, der, t, st, jk, lim, src, per_piece)
+        use, worst = res[0], res[6]
+        # the pieces that come close to a limit, again: the largest value inside a
+        # piece, not only at the sampled points
+        zu = _zoom(s, der, t, st, jk, lim, src, worst, per_piece + 2)
+        # ... and both sides of every joint reversal (where the leg changes)
+        return _max_use(_max_use(use, zu), _reversals(s, der, t, st, jk, lim, src))
+
+    def s_curve_states(dur: np.ndarray, jk: np.ndarray):
+        """Times and states ``(s, sdot, sddot)`` of an S-curve of ``s`` (its piece
+        durations and jerks) from the start state; the end state exactly."""
+        t, st = _pieces_state(dur, jk, 0.0, start_speed, start_accel)
+        st[-1] = (L, end_speed, end_accel)
+        return t, st
+
+    # the path's own limits first: the minimum-time S-curve of s under them alone is a
+    # lower bound of every timing, and where it keeps the joints' limits too it is
+    # the optimum itself (a motion held by its programmed feed, acceleration and
+    # jerk everywhere); the rounds' check on this grid rules it out cheaply
+    direct = _path_limits_profile(L, cap, a_path, j_path, boundary)
+    known = None  # (its final check's use, where it passes)
+    if direct is not None:
+        t, st = s_curve_states(*direct)
+        screen = _check(s, der, t, st, direct[1],
+                        _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                                cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st)),
+                        exact if cheap else _Interp(s, der, breaks, left), CHECK_PER_PIECE)[0]
+        if screen.worst <= 1.0 + CHECK_RTOL:
+            if grid_rtol < FIRST_GRID_RTOL:
+                # the final check's grid: refined to the full tolerance (its true
+                # derivatives are evaluated only where it comes within VERIFY_ABOVE)
+                s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn,
+                                                       breaks, grid_rtol, ~(cell_err <= grid_rtol))
+                _finite_derivatives(der)
+                q, d1, d2, d3 = der
+                cap, vcap, kappa = on_grid(s, d1)
+                n = s.size
+                x_cap = cap ** 2
+            known = final_use(t, st, direct[1], None, max(FINAL_CHECK_PER_PIECE, CAP_GRID))
+        if known is None or known.worst > 1.0 + CHECK_RTOL:
+            direct = known = corrected = None
+    best: _Best | None = None
+    sol: GridSolution | None  # the solution kept; None for the fallback timing
+    piv: np.ndarray | None  # the grid interval of every piece (with sol)
+    if direct is None:
+        try:
+            # per-node limits, lowered where the check finds an excess
+            scale_v = np.ones((n, m))
+            scale_a = np.ones((n, m))
+            scale_j = np.ones((n, m))
+            # a first solve on the derivative-refined grid, then the grid refined where the
+            # path acceleration swings (the jerk phases) and solved again from there
+            margin = jerk_margin(s)
+            first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
+                                           j_acc=jacc * margin, j_dec=jdec * margin,
+                                           x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
+                                           kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
+                                           x0=start_speed**2, u0=start_accel,
+                                           xN=end_speed**2, uN=end_accel,
+                                           j_path_scale=path_jerk_scale(margin)), max_rounds=FIRST_ROUNDS)
+            jerk_free_time = first.jerk_free_time
+            init = (first.x, first.u)
+            # the second grid: the nodes of the jerk phases, refined to the full tolerance
+            s_new = np.unique(np.concatenate([
+                s, _solution_splits(s, first.x, first.u),
+                _rest_splits(s, first.x, first.u, d1, d2, ((aacc, jacc * JERK_MARGIN),
+                                                           (adec, jdec * JERK_MARGIN)),
+                             a_path, j_path * JERK_MARGIN, rest0, restN)]))
+            der_new = cached.derivatives(s_new)
+            if grid_rtol < FIRST_GRID_RTOL:  # (the cells within it already: not again)
+                parent = np.searchsorted(s, s_new[:-1], side="right") - 1
+                s_new, der_new, unresolved, _ = _refine(cached, s_new, der_new, vlim, alim, jlim, cap_fn,
+                                                        breaks, grid_rtol, ~(cell_err[parent] <= grid_rtol))
+                _finite_derivatives(der_new)
+            regrid = s_new.size > s.size  # (the new grid holds the old one)
+            if regrid:
+                init = (np.interp(s_new, s, first.x), np.interp(s_new, s, first.u))
+                s, der = s_new, der_new
+                q, d1, d2, d3 = der
+                cap, vcap, kappa = on_grid(s, d1)
+                n = s.size
+                x_cap = cap ** 2
+                scale_v = np.ones((n, m))
+                scale_a = np.ones((n, m))
+                scale_j = np.ones((n, m))
+            tightened = 0
+            splits = 0
+            best = None
+            xmid_scale = np.ones(s.size - 1)
+            jpath_scale = np.ones(s.size - 1)  # (lowered only with a moving state, see below)
+            attempt = 0
+            init_settled = False  # init is a solution of the same grid
+            init_near = False  # ... or of the grid before a split (interpolated)
+            init_duals = None  # ... and its multipliers (on the same grid)
+            while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
+                margin = jerk_margin(s)
+                prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
+                                   a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
+                                   j_acc=jacc[None, :] * scale_j * margin,
+                                   j_dec=jdec[None, :] * scale_j * margin,
+                                   x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
+                                   x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
+                                   x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
+                                   j_path_scale=path_jerk_scale(margin, jpath_scale))
+                reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
+                sol = first if reuse else solve_grid(
+                    prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
+                    settled=init_settled, near=init_near, duals=init_duals)
+                if sol.status == RELAXED:  # (no timing: its rounds ended relaxed)
+                    if best is None:
+                        raise RuntimeError("path timing: the grid problem ended in a relaxed round")
+                    break
+                init = (sol.x, sol.u)  # a tightened attempt starts from this one
+                init_settled = True  # (on the same grid)
+                init_duals = sol.duals
+                try:
+                    dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
+                except ValueError:
+                    if best is None:
+                        raise
+                    break
+                t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
+                lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                              cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
+                use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
+                                                         exact if cheap else _Interp(s, der, breaks, left),
+                                                         FINAL_CHECK_PER_PIECE if moving else None)
+                k = _uniform_scale(use)
+                # a timing that needs no uniform slow-down keeps its exact cruise speeds:
+                # preferred unless a slowed one is clearly faster
+                score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
+                if best is None or score < best[0]:
+                    # (the cells close to a limit: the final check corrects them first)
+                    best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), (cell, near))
+                if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
+                    break  # a small excess costs less as a uniform slow-down than as another round
+                if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
+                    # a large excess: the grid is too coarse for the motion there (the
+                    # pieces' jerks differ from the interval's mean): split the cells
+                    # around it and solve again from this solution
+                    bad = np.zeros(s.size - 1, dtype=bool)
+                    for ratio in (rv, ra, rj):
+                        bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
+                    bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
+                    bad[:-1] |= bad[1:].copy()
+                    bad[1:] |= bad[:-1].copy()
+                    cells = np.nonzero(bad)[0][:max(GRID_MAX - s.size, 0)]
+                    s_new = np.unique(np.concatenate([s, 0.5 * (s[cells] + s[cells + 1])]))
+                    init = (np.interp(s_new, s, sol.x), np.interp(s_new, s, sol.u))
+                    init_settled = False
+                    init_duals = None
+                    init_near = sol.converged
+                    scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
+                                                        (scale_v, scale_a, scale_j, x_cap))
+                    xmid_scale = np.ones(s_new.size - 1)
+                    jpath_scale = np.ones(s_new.size - 1)
+                    s, der = s_new, cached.derivatives(s_new)
+                    q, d1, d2, d3 = der
+                    cap, vcap, kappa = on_grid(s, d1)
+                    x_cap = np.minimum(x_cap, cap ** 2)
+                    splits += 1
+                    continue
+                tightened += 1
+                attempt += 1
+                for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
+                    over = ratio > 1.0 + CHECK_RTOL
+                    if not over.any():
+                        continue
+                    rows, cols = np.nonzero(over)
+                    c = cell[rows]
+                    f = (1.0 - TIGHTEN_MARGIN) / ratio[rows, cols]
+                    for node in (c, c + 1):
+                        np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
+                over = rs > 1.0 + CHECK_RTOL
+                if over.any():
+                    c = cell[over]
+                    f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
+                    for node in (c, c + 1):
+                        np.minimum.at(x_cap, node, f * x_cap[node])
+                    np.minimum.at(xmid_scale, c, f * xmid_scale[c])
+                if moving and math.isfinite(j_path):
+                    # the path's jerk: with a moving state lowered in the intervals of the
+                    # pieces above it (from rest, a small excess is a uniform slow-down)
+                    over = np.abs(jk) > j_path * (1.0 + CHECK_RTOL)
+                    if over.any():
+                        c = piv[over]
+                        f = (1.0 - TIGHTEN_MARGIN) * j_path / np.abs(jk[over])
+                        np.minimum.at(jpath_scale, c, f * jpath_scale[c])
+        except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
+            best = None
+
+    if direct is not None:
+        fallback = direct
     if best is not None and best[5] > (1.0 if moving else FALLBACK_ABOVE):
         # the best attempt needs a large uniform slow-down (its rounds went wrong),
         # or any with a moving state (which cannot be slowed down uniformly): the
@@ -1828,57 +1935,43 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         jerk_free_time = math.nan
     else:
         _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap), close = best
-    corrected: _Corrected | None = None
+    # the smallest excess of a timing checked (the message where none is left)
+    least = math.inf if sol is None else use.worst
     # (the fallback's few long pieces: at least as many points each as the speed
     # cap's sampling for its steps has over the whole path)
     per_piece = FINAL_CHECK_PER_PIECE if sol is not None else max(FINAL_CHECK_PER_PIECE, CAP_GRID)
-    for _final in range(5):
+    for _final in range(FINAL_ATTEMPTS):
         if k_scale > 1.0 and moving:
             # no uniform slow-down with a moving state: the fallback, where it exists
             fallback = None if sol is None else fallback_on(s, der, cap, kappa)
             if fallback is None:
                 raise InfeasibleError(
-                    f"the timing {states} exceeds a limit by {100 * (use.worst - 1):.3g} % after "
-                    "the local lowering of the limits, and with a moving boundary state it cannot "
-                    "be slowed down uniformly (nor start or end the fallback in these states)")
+                    f"the timing {states} exceeds a limit by {100 * (least - 1):.3g} % after the "
+                    "local lowering of the limits (the closest of the timings found), and with a "
+                    "moving boundary state it cannot be slowed down uniformly (nor start or end the "
+                    "fallback in these states)")
             (dur0, jk0), sol, piv, k_scale, tightened = fallback, None, None, 1.0, 0
             jerk_free_time = math.nan
             per_piece = max(FINAL_CHECK_PER_PIECE, CAP_GRID)
         dur = dur0 * k_scale
         jk = jk0 / k_scale**3
         if sol is None or piv is None:  # the fallback
-            t, st = _pieces_state(dur, jk, 0.0, start_speed, start_accel)
-            st[-1] = (L, end_speed, end_accel)
+            t, st = s_curve_states(dur, jk)
         else:
             t, st = _node_states(s, sol.x, sol.u, dur, jk, piv, k_scale)
-        # the final check, denser than the rounds' (any excess left: a uniform slow-down)
-        lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                      cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
-        if exact is None and (corrected is None or corrected.s is not s):
-            corrected = _Corrected(cached, s, der, breaks, left, unresolved)
-            if sol is not None:  # the true derivatives where the rounds' check came close
-                cell_b, near_b = close
-                corrected.add_both(cell_b[near_b > 1.0 - VERIFY_ABOVE],
-                                   cell_b[near_b > 1.0 - VERIFY_FULL_ABOVE])
-        src = exact if exact is not None else corrected
-        res = _check(s, der, t, st, jk, lim, src, per_piece)
-        if corrected is not None:
-            # the true derivatives in the cells that come close to a limit, then again
-            res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_ABOVE]),
-                           s, der, t, st, jk, lim, src, per_piece)
-            # ... and at every point of VERIFY_POINTS where that comes very close
-            res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_FULL_ABOVE], full=True),
-                           s, der, t, st, jk, lim, src, per_piece)
-        use, worst = res[0], res[6]
-        # the pieces that come close to a limit, again: the largest value inside a
-        # piece, not only at the sampled points
-        zu = _zoom(s, der, t, st, jk, lim, src, worst, per_piece + 2)
-        # ... and both sides of every joint reversal (where the leg changes)
-        use = _max_use(_max_use(use, zu), _reversals(s, der, t, st, jk, lim, src))
+        if known is not None:  # (the path-limits S-curve, checked before the grid problem)
+            use, known = known, None
+        else:  # the final check, denser than the rounds' (any excess left: a uniform slow-down)
+            use = final_use(t, st, jk, None if sol is None else close, per_piece)
+        least = min(least, use.worst)
         extra = _uniform_scale(use)
         if extra <= 1.0:
             break
         k_scale *= extra
+    else:
+        raise InfeasibleError(
+            f"the timing {states} still exceeds a limit by {100 * (use.worst - 1):.3g} % after "
+            f"{FINAL_ATTEMPTS} final checks")
     if sol is None:
         tt = np.linspace(0.0, t[-1], 20 * s.size)
         sv = _sample_pieces(t, st, jk, tt)
@@ -1891,5 +1984,6 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                       grid_derivatives=der,
                       info={"nodes": int(s.size), "tightened": tightened,
                             "verified_points": 0 if corrected is None else corrected.evaluated,
-                            "status": "fallback" if sol is None else sol.status,
+                            "status": (("fallback" if direct is None else "path limits")
+                                       if sol is None else sol.status),
                             "converged": sol is not None and sol.converged, "round_rtol": ROUND_RTOL})
