@@ -1460,7 +1460,7 @@ def _recheck(prev: tuple, cells: np.ndarray, s_grid, der, t, st, jerk, lim: _Lim
 
 
 def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp: int,
-          compiled: bool = _checks.AVAILABLE) -> LimitUse:
+          compiled: bool = _checks.AVAILABLE, samples: list | None = None) -> LimitUse:
     """The largest limit ratios inside the pieces that come close to a limit, found by
     repeated bracketing around their largest sampled values.
 
@@ -1472,7 +1472,8 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
     - 1) / 2``: a smooth maximum inside a piece is found to within the square of a
     tiny fraction of the piece's duration. A bracket whose largest value is at an
     end of its piece stops there (the value at the end is exact). ``compiled`` as
-    for :func:`_check`.
+    for :func:`_check`. ``samples``: a list that gets the grid cell and the
+    ratios ``rv, ra, rj`` (n, m) and ``rs`` (n,) of every level's samples.
     """
     k = jerk.size
     m = lim.vlim.size
@@ -1504,10 +1505,14 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
             ev = _evaluate_compiled(s_grid, der, t, st, jerk, lim, path, pc, dt)
             uses.append(ev[0])
             worst = ev[6]
+            if samples is not None:
+                samples.append(ev[1:6])
         else:
             out = _evaluate(s_grid, der, t, st, jerk, lim, path, pc, dt)
             found.append(out[:6])
             worst = np.max(np.column_stack([out[0], out[1], out[2], out[3][:, None]]), axis=1)
+            if samples is not None:
+                samples.append((out[6], out[0], out[1], out[2], out[3]))
         best = np.argmax(worst.reshape(pieces.size, ZOOM_POINTS), axis=1)
         centre = frac[rows, best]
         half = half * 2.0 / (ZOOM_POINTS - 1)
@@ -1695,15 +1700,12 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
 
     corrected: _Corrected | None = None
 
-    def final_use(t, st, jk, close, per_piece: int) -> LimitUse:
-        """The final check of the pieces (times ``t``, states ``st``, jerks ``jk``) on
-        the grid ``s`` (``per_piece`` points in each, then a zoom on those that come
-        close to a limit and both sides of every joint reversal), with the true
-        derivatives where the interpolation's error could matter (first where the
-        rounds' check came ``close``: its cells and ratios, or None)."""
+    def true_check(t, st, jk, lim: _Limits, close, per_piece: int):
+        """:func:`_check` of the pieces (times ``t``, states ``st``, jerks ``jk``) on the
+        grid ``s`` with ``per_piece`` points in each, with the true derivatives where
+        the interpolation's error could matter (first where an earlier check came
+        ``close``: its cells and ratios, or None); ``(result, derivative source)``."""
         nonlocal corrected
-        lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                      cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
         if exact is None and (corrected is None or corrected.s is not s):
             corrected = _Corrected(cached, s, der, breaks, left, unresolved)
             if close is not None:  # the true derivatives where the rounds' check came close
@@ -1719,6 +1721,14 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             # ... and at every point of VERIFY_POINTS where that comes very close
             res = _recheck(res, corrected.add(res[1][res[6] > 1.0 - VERIFY_FULL_ABOVE], full=True),
                            s, der, t, st, jk, lim, src, per_piece)
+        return res, src
+
+    def final_use(t, st, jk, close, per_piece: int) -> LimitUse:
+        """The final check of the pieces: :func:`true_check`, then a zoom on those that
+        come close to a limit and both sides of every joint reversal."""
+        lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                      cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
+        res, src = true_check(t, st, jk, lim, close, per_piece)
         use, worst = res[0], res[6]
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
@@ -1842,16 +1852,28 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
                 lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
                               cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
-                use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
-                                                         exact if cheap else _Interp(s, der, breaks, left),
-                                                         FINAL_CHECK_PER_PIECE if moving else None)
+                if moving:
+                    # as the final check, which cannot slow it down: its zoom's samples
+                    # too, where it finds an excess between the check points
+                    (use, cell, rv, ra, rj, rs, near), src_t = true_check(t, st, jk, lim, None,
+                                                                          FINAL_CHECK_PER_PIECE)
+                    zoomed: list = []
+                    use = _max_use(use, _zoom(s, der, t, st, jk, lim, src_t, near,
+                                              FINAL_CHECK_PER_PIECE + 2, samples=zoomed))
+                    close = (cell, near)
+                    cell, rv, ra, rj, rs = (np.concatenate([a, *(z[i] for z in zoomed)])
+                                            for i, a in enumerate((cell, rv, ra, rj, rs)))
+                else:
+                    use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
+                                                             exact if cheap else _Interp(s, der, breaks, left))
+                    close = (cell, near)
                 k = _uniform_scale(use)
                 # a timing that needs no uniform slow-down keeps its exact cruise speeds:
                 # preferred unless a slowed one is clearly faster
                 score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
                 if best is None or score < best[0]:
                     # (the cells close to a limit: the final check corrects them first)
-                    best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), (cell, near))
+                    best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), close)
                 if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
                     break  # a small excess costs less as a uniform slow-down than as another round
                 if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
@@ -1936,7 +1958,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     else:
         _, sol, dur0, jk0, use, k_scale, piv, (s, der, cap, kappa, vcap), close = best
     # the smallest excess of a timing checked (the message where none is left)
-    least = math.inf if sol is None else use.worst
+    least = use.worst if sol is not None and k_scale > 1.0 else math.inf
     # (the fallback's few long pieces: at least as many points each as the speed
     # cap's sampling for its steps has over the whole path)
     per_piece = FINAL_CHECK_PER_PIECE if sol is not None else max(FINAL_CHECK_PER_PIECE, CAP_GRID)
