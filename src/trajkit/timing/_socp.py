@@ -46,7 +46,8 @@ grid: a lower bound). Where the first round with them has no solution (its
 tangent planes taken at speeds far above any jerk-limited timing's), it is
 solved again from a uniformly slower timing, or, with a moving boundary state
 that such a slow-down cannot keep, approached through relaxed rounds whose
-jerk limits are a multiple of the true ones (see :data:`RELAX_START`).
+jerk limits are a multiple of the true ones (see :data:`RELAX_START`; so is
+one whose first jerk round stalls, see :data:`STALL_FACTOR`).
 
 A start or end at rest is exact: the first (last) interval is one jerk
 phase from rest, ``x_1 = 1.5 D_0 u_1`` and path jerk ``sqrt(u_1^3 / (6 D_0))``.
@@ -907,6 +908,16 @@ RELAX_FAILS = 6
 #: closer to its linearisation point's factor than this ends the continuation.
 RELAX_RTOL = 0.05
 
+#: With a moving boundary state, a first jerk round after the jerk-free round (not
+#: a relaxed one) whose time is more than this many times the jerk-free time
+#: counts as without a solution (the relaxed rounds take over): its tangent
+#: planes, taken far from any jerk-feasible timing, held the speed near zero at
+#: some node (a near-stop in the middle of the path; 2e8 times the jerk-free time
+#: on one of the benchmark's re-plans), which no later round left. (A solve
+#: started from a given point is not tested: compared with that point's time,
+#: 3 of the benchmark's 98 re-plans failed that the later rounds repair.)
+STALL_FACTOR = 1e3
+
 #: :attr:`GridSolution.status` of a solve whose rounds ended in a relaxed round
 #: (its ``x`` and ``u`` a relaxed solution: a starting point, not a timing).
 RELAXED = "Relaxed"
@@ -1279,6 +1290,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             status = str(sol.status).split(".")[-1]
             usable = status in ("Solved", "AlmostSolved") or (
                 status == "InsufficientProgress" and float(getattr(sol, "r_prim", 1.0)) < PRIMAL_RTOL)
+        if (usable and moving and jerk_rounds == 0 and times and relax == 1.0
+                and (t_new if ipm_round else float(q @ z_new)) > STALL_FACTOR * times[-1]):
+            usable, status = False, "Stalled"
         times_status.append(status)
         if not usable:
             if x_bar is None:
