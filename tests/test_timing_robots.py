@@ -86,9 +86,10 @@ def test_random_paths_on_real_arms_keep_every_limit(name):
             u = np.clip((pts - a) @ (b - a) / np.dot(b - a, b - a), 0, 1)
             off = np.linalg.norm(pts - (a + u[:, None] * (b - a)), axis=1)
             assert off.max() < 1e-9  # 1e-6 mm
-        # TOPP-RA-style bound: the engine's own jerk-free round
+        # TOPP-RA-style bound: the engine's own jerk-free round (none where the path's
+        # own limits hold the motion everywhere: that S-curve is the optimum itself)
         tm = run.segments[-1].chain.timing
-        assert tm.duration >= tm.jerk_free_time * (1 - 1e-6)
+        assert tm.info["status"] == "path limits" or tm.duration >= tm.jerk_free_time * (1 - 1e-6)
     assert done >= sweep_size(2)
 
 
