@@ -15,7 +15,8 @@ import pytest
 from arms import load_arm
 from conftest import sweep_size
 
-from trajkit import plan_move
+from trajkit import AxisLimits, plan_move
+from trajkit.errors import UnreachableError
 from trajkit.kinematics.arm6 import default_arm6
 from trajkit.kinematics.base import Pose, rot_x, rot_z
 from trajkit.robot import CartesianTarget, Circ, Lin, run_motions
@@ -90,6 +91,9 @@ def test_random_paths_on_real_arms_keep_every_limit(name):
         # own limits hold the motion everywhere: that S-curve is the optimum itself)
         tm = run.segments[-1].chain.timing
         assert tm.info["status"] == "path limits" or tm.duration >= tm.jerk_free_time * (1 - 1e-6)
+        # ... and the S-curve under the tool's own limits alone (at the programmed speed)
+        tool = AxisLimits(mot.speed, robot.cartesian_accel, robot.cartesian_jerk)
+        assert tm.duration >= plan_move(0.0, tm.path.length, tool).duration * (1 - 1e-9)
     assert done >= sweep_size(2)
 
 
@@ -170,6 +174,42 @@ def test_raising_the_programmed_speed_never_lengthens_a_lin():
     for lo, hi in zip(durations, durations[1:]):
         assert hi <= lo * (1 + 1e-6), durations
     assert durations[-1] < 0.5 * durations[0]
+
+
+def test_raising_the_programmed_speed_never_lengthens_random_lins():
+    """A sweep of the programmed speed (0.05-3 m/s) on random LINs of the 6-axis
+    arm, under its own tool limits (5 m/s^2, 50 m/s^3) and under four times
+    higher ones. Where the tool's limits hold a LIN everywhere, its timing is
+    their S-curve, the optimum, whose time never grows with the speed (to
+    round-off); where the joints bind (from some speed on, or near a
+    singularity) the grid problem times it: never longer than at a lower speed
+    by more than the rounds' tolerance (ROUND_RTOL; measured up to 2.1e-5).
+    Both kinds occur in the sweep."""
+    arm = default_arm6()
+    rng = np.random.default_rng(11)
+    q0 = np.radians([10.0, 25.0, 5.0, 20.0, 50.0, -30.0])
+    p0 = arm.fk(q0)
+    speeds = np.geomspace(0.05, 3.0, 12)
+    seen = set()
+    for tool_limits in ((5.0, 50.0), (20.0, 200.0)):
+        arm.cartesian_accel, arm.cartesian_jerk = tool_limits
+        done = 0
+        while done < sweep_size(3):
+            d = rng.normal(size=3)
+            d *= rng.uniform(0.05, 0.35) / np.linalg.norm(d)
+            goal = CartesianTarget(Pose(p0.position + d, rot_z(rng.uniform(-0.3, 0.3)) @ p0.rotation))
+            try:
+                runs = [run_motions(arm, [Lin(goal, float(v), label="L")], q0) for v in speeds]
+            except UnreachableError:  # (outside the workspace or through a singularity)
+                continue
+            done += 1
+            held = np.array([r.segments[-1].chain.timing.info["status"] == "path limits" for r in runs])
+            seen |= set(held.tolist())
+            durations = np.array([r.duration for r in runs])
+            tol = np.where(held[:-1] & held[1:], 1e-12, _socp.ROUND_RTOL)
+            assert (durations[1:] <= durations[:-1] * (1 + tol)).all(), (durations, held)
+            assert durations[-1] < durations[0]
+    assert seen == {True, False}
 
 
 def test_an_arc_of_the_base_joint_alone_is_its_seven_phase_optimum():
@@ -347,7 +387,6 @@ def test_a_motion_held_by_its_path_limits_is_their_s_curve(monkeypatch):
     samples keep every limit."""
     from test_timing import LIMIT_RTOL, _dense_use
 
-    from trajkit.limits import AxisLimits
     from trajkit.profiles.state import plan_state_to_state
     from trajkit.robot._cartesian import _tool_curvature
     from trajkit.timing import PathRest, plan_path_timing
