@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -942,3 +943,22 @@ def test_a_line_is_planned_again_from_a_state_of_its_own_timing():
         q, qd, qdd, _ = rest.joint_states([0.0, rest.duration])
         np.testing.assert_allclose([q[0, 0], qd[0, 0], qdd[0, 0], q[1, 0], qd[1, 0]],
                                    [s0, v0, a0, 3.0, 0.0], rtol=0, atol=1e-9)
+
+
+def test_a_motion_the_path_limits_make_too_long_is_refused_before_any_work():
+    """The S-curve under the path's own limits is a lower bound of every timing, so
+    a motion it makes longer than MAX_DURATION is refused up front with the bound
+    (before, the speed caps alone set the bound: a path acceleration or jerk far
+    too low for the length was planned, and returned timings of 6.7e12 s or, on
+    the fallback, 1.5e7 s). Just inside the range the motion is held by its path
+    limits everywhere: their S-curve, the optimum."""
+    jp = LinearJointPath(np.zeros(2), np.array([1.0, 0.5]))
+    lims = [AxisLimits(2.0, 10.0, 100.0)] * 2
+    for accel, jerk, bound in ((1e-25, 1e-25, "6.69e+12"), (1.0, 1e-20, "1.53e+07")):
+        with pytest.raises(InvalidInputError, match=rf"would take at least {re.escape(bound)} s, "
+                                                    rf"more than the 1e\+07 s"):
+            plan_path_timing(jp, lims, speed=0.5, accel=accel, jerk=jerk)
+    tm = plan_path_timing(jp, lims, speed=0.5, accel=1e-9, jerk=1e-9)
+    assert tm.info["status"] == "path limits" and tm.duration < engine.MAX_DURATION
+    assert tm.duration == pytest.approx(plan_move(0.0, jp.length, AxisLimits(0.5, 1e-9, 1e-9)).duration,
+                                        rel=1e-12)

@@ -1130,7 +1130,10 @@ def _path_limits_profile(L: float, cap: np.ndarray, a_path: float, j_path: float
     v = float(np.max(cap))
     if not (math.isfinite(v) and v > 0.0 and math.isfinite(a_path) and math.isfinite(j_path)):
         return None
-    return _path_s_curve(L, AxisLimits(v, a_path, j_path, name="path"), boundary)
+    try:
+        return _path_s_curve(L, AxisLimits(v, a_path, j_path, name="path"), boundary)
+    except InvalidInputError:  # (limits outside the one-axis planners' range)
+        return None
 
 
 def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -1674,6 +1677,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     states = (f"from the start state (speed {start_speed:.6g}, acceleration {start_accel:.6g}) to "
               f"the end state (speed {end_speed:.6g}, acceleration {end_accel:.6g}) along this "
               f"path of length {L:.6g}")
+    # the minimum-time S-curve under the path's own limits alone: a lower bound of every
+    # timing (and the timing itself where it keeps every joint's limits, see below)
+    boundary = (start_speed, start_accel, end_speed, end_accel)
+    direct = _path_limits_profile(L, cap, a_path, j_path, boundary)
     # the work has to be worth it: a motion that cannot be shorter than MAX_DURATION
     with np.errstate(divide="ignore", over="ignore"):
         floor = float(np.sum(np.diff(s) / np.maximum(vcap[:-1], vcap[1:])))
@@ -1683,6 +1690,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             dq = np.abs(q[-1] - q[0])
             floor = max(floor, float(np.max(2.0 * np.sqrt(dq / alim))),
                         float(np.max(np.cbrt(32.0 * dq / jlim))))
+        if direct is not None:
+            floor = max(floor, float(np.sum(direct[0])))
     if not floor <= MAX_DURATION:
         raise InvalidInputError(
             f"the motion along this path would take at least {floor:.3g} s, more than the "
@@ -1691,7 +1700,6 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     x_cap = cap ** 2  # lowered locally where the check finds the cap exceeded
 
     fallback = None  # (durations, jerks) of the fallback once made
-    boundary = (start_speed, start_accel, end_speed, end_accel)
 
     def fallback_on(ss, dd, cc, kk):
         """The fallback (see _fallback) on the grid ``ss``, its derivatives ``dd``, speed
@@ -1743,11 +1751,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         st[-1] = (L, end_speed, end_accel)
         return t, st
 
-    # the path's own limits first: the minimum-time S-curve of s under them alone is a
-    # lower bound of every timing, and where it keeps the joints' limits too it is
-    # the optimum itself (a motion held by its programmed feed, acceleration and
+    # the path's own limits first: where their S-curve keeps the joints' limits too it
+    # is the optimum itself (a motion held by its programmed feed, acceleration and
     # jerk everywhere); the rounds' check on this grid rules it out cheaply
-    direct = _path_limits_profile(L, cap, a_path, j_path, boundary)
     known = None  # (its final check's use, where it passes)
     if direct is not None:
         t, st = s_curve_states(*direct)
