@@ -143,11 +143,11 @@ REST_SPLIT_MIN = 1e-3
 #: interval), which this absorbs instead of a slow-down of the whole motion.
 JERK_MARGIN = 0.998
 
-#: ... except next to a moving boundary state, over this fraction of the path's
-#: length: a state taken from a time-optimal timing (an online re-plan) can be
-#: on its way to a limit at the full jerk limit, where a lower one would carry
-#: it past that limit (no timing).
-MOVING_FULL_JERK = 0.1
+#: (From and to rest only: with a moving boundary state the grid problem plans with
+#: the full jerk limits. A state taken from a time-optimal timing, an online
+#: re-plan, can be on its way to a limit at the full jerk limit, where a lower
+#: one would carry it past that limit: no timing. Its pieces' excesses are
+#: lowered locally, see :data:`MAX_TIGHTEN_MOVING`.)
 
 #: Points checked inside every piece (besides its ends) by the rounds' checks,
 #: which lower the limits locally where they find an excess (the final check is
@@ -269,7 +269,7 @@ TIGHTEN_ABOVE = 1e-6
 #: With a moving boundary state no uniform slow-down is possible (it would
 #: change that state): every excess above CHECK_RTOL is lowered locally, in up
 #: to this many rounds, and the rounds' check is as dense as the final one.
-MAX_TIGHTEN_MOVING = 4
+MAX_TIGHTEN_MOVING = 6
 
 #: A timing that had to be slowed down uniformly counts this fraction longer
 #: when the attempts are compared.
@@ -1616,26 +1616,20 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     def cap_fn(ss):
         return _speed_cap(speed, ss)
 
-    def jerk_margin(ss: np.ndarray) -> np.ndarray:
-        """The fraction of the jerk limits the grid problem plans with at the nodes
-        ``ss`` (n, 1): JERK_MARGIN, the full limits next to a moving boundary state."""
-        out = np.full((ss.size, 1), JERK_MARGIN)
-        if not rest0:
-            out[ss <= MOVING_FULL_JERK * L] = 1.0
-        if not restN:
-            out[ss >= (1.0 - MOVING_FULL_JERK) * L] = 1.0
-        return out
+    # the fraction of the joints' jerk limits the grid problem plans with (see
+    # JERK_MARGIN); the path's jerk limit is JERK_MARGIN of it at a rest end (a jerk
+    # phase from or to rest) and in the intervals times their factor (1 / JERK_MARGIN
+    # with a moving boundary state, lowered where the pieces exceed it)
+    margin = JERK_MARGIN if not moving else 1.0
 
-    def path_jerk_scale(margin: np.ndarray, local: np.ndarray | None = None) -> np.ndarray | None:
-        """The factor on the path's jerk limit (with JERK_MARGIN) in every interval of
-        the grid whose nodes have the jerk ``margin`` (n, 1) (:func:`jerk_margin`):
-        the full limit next to a moving boundary state, times ``local`` (the lowering
-        where the check found an excess); None where it is 1 everywhere."""
-        jm = margin[:, 0]
-        out = np.maximum(jm[:-1], jm[1:]) / JERK_MARGIN
-        if local is not None:
-            out = out * local
-        return None if (out == 1.0).all() else out
+    def path_jerk_scale(local: np.ndarray | None = None) -> np.ndarray | None:
+        """The factor on the path's jerk limit (JERK_MARGIN of it) in every interval of
+        the grid, times ``local`` (n - 1,) (the lowering where the check found an
+        excess); None where it is 1 everywhere."""
+        out = margin / JERK_MARGIN if local is None else (margin / JERK_MARGIN) * local
+        if np.all(out == 1.0):
+            return None
+        return np.broadcast_to(out, (s.size - 1,)).astype(float)
 
     def on_grid(ss: np.ndarray, dd1: np.ndarray):
         """The speed cap, the joints' velocity cap and the tool path's curvature at
@@ -1786,14 +1780,13 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             scale_j = np.ones((n, m))
             # a first solve on the derivative-refined grid, then the grid refined where the
             # path acceleration swings (the jerk phases) and solved again from there
-            margin = jerk_margin(s)
             first = solve_grid(GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim, a_acc=aacc, a_dec=adec,
                                            j_acc=jacc * margin, j_dec=jdec * margin,
                                            x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN,
                                            kappa=kappa, x_cap_mid=_mid_caps(s, cap_fn, speed),
                                            x0=start_speed**2, u0=start_accel,
                                            xN=end_speed**2, uN=end_accel,
-                                           j_path_scale=path_jerk_scale(margin)), max_rounds=FIRST_ROUNDS)
+                                           j_path_scale=path_jerk_scale()), max_rounds=FIRST_ROUNDS)
             jerk_free_time = first.jerk_free_time
             init = (first.x, first.u)
             # the second grid: the nodes of the jerk phases, refined to the full tolerance
@@ -1829,7 +1822,6 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
             while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
-                margin = jerk_margin(s)
                 prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                    a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                                    j_acc=jacc[None, :] * scale_j * margin,
@@ -1837,7 +1829,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                    x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                    x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                    x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
-                                   j_path_scale=path_jerk_scale(margin, jpath_scale))
+                                   j_path_scale=path_jerk_scale(jpath_scale))
                 reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
                 sol = first if reuse else solve_grid(
                     prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
