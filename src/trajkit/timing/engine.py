@@ -1725,11 +1725,16 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                            s, der, t, st, jk, lim, src, per_piece)
         return res, src
 
+    def limits_for(st: np.ndarray) -> _Limits:
+        """What the checks of a timing with the node states ``st`` compare with, on the
+        grid ``s``."""
+        return _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
+                       cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
+
     def final_use(t, st, jk, close, per_piece: int) -> LimitUse:
         """The final check of the pieces: :func:`true_check`, then a zoom on those that
         come close to a limit and both sides of every joint reversal."""
-        lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                      cap_fn if callable(speed) else None, _rest_scale(vlim, der[1], st))
+        lim = limits_for(st)
         res, src = true_check(t, st, jk, lim, close, per_piece)
         use, worst = res[0], res[6]
         # the pieces that come close to a limit, again: the largest value inside a
@@ -1751,9 +1756,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     known = None  # (its final check's use, where it passes)
     if direct is not None:
         t, st = s_curve_states(*direct)
-        screen = _check(s, der, t, st, direct[1],
-                        _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                                cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st)),
+        screen = _check(s, der, t, st, direct[1], limits_for(st),
                         exact if cheap else _Interp(s, der, breaks, left), CHECK_PER_PIECE)[0]
         if screen.worst <= 1.0 + CHECK_RTOL:
             if grid_rtol < FIRST_GRID_RTOL:
@@ -1848,8 +1851,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         raise
                     break
                 t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
-                lim = _Limits(vlim, aacc, adec, jacc, jdec, a_path, j_path, kappa, cap,
-                              cap_fn if callable(speed) else None, _rest_scale(vlim, d1, st))
+                lim = limits_for(st)
                 if moving:
                     # as the final check, which cannot slow it down: its zoom's samples
                     # too, where it finds an excess between the check points
