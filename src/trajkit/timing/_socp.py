@@ -1290,8 +1290,9 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             status = str(sol.status).split(".")[-1]
             usable = status in ("Solved", "AlmostSolved") or (
                 status == "InsufficientProgress" and float(getattr(sol, "r_prim", 1.0)) < PRIMAL_RTOL)
+        t_round = (t_new if ipm_round else float(q @ z_new)) if usable else math.nan
         if (usable and moving and jerk_rounds == 0 and times and relax == 1.0
-                and (t_new if ipm_round else float(q @ z_new)) > STALL_FACTOR * times[-1]):
+                and t_round > STALL_FACTOR * times[-1]):
             usable, status = False, "Stalled"
         times_status.append(status)
         if not usable:
@@ -1335,7 +1336,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
             x_bar, u_bar = x, u
             sigma, rho, tau2, ecorr = linearise_at(x_bar, u_bar)
             continue
-        t = t_new if ipm_round else float(q @ z)
+        t = t_round
         times.append(t)
         if x_bar is None:
             jerk_free = t
