@@ -79,7 +79,9 @@ def hmi_server(tmp_path):
                                            ws="auto", lifespan="on"))
     th = threading.Thread(target=server.run, daemon=True)
     th.start()
-    deadline = time.monotonic() + 60
+    # (the app compiles the runtime's kernels before it serves: minutes on a cold numba
+    # cache with the other workers busy; the deadline only guards against a hang)
+    deadline = time.monotonic() + 600
     while not server.started:
         assert th.is_alive() and time.monotonic() < deadline, "HMI server did not start"
         time.sleep(0.02)
@@ -175,7 +177,7 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     assert page.is_disabled("#btn-start")
 
     page.fill('#pane-saddle input[name="main_radius_mm"]', "160")
-    page.fill('#pane-saddle input[name="feed_mm_s"]', "50")
+    page.fill('#pane-saddle input[name="feed_mm_s"]', "20")
     page.fill('#pane-saddle input[name="period_s"]', "0.002")
     page.click("#plan-saddle")
     until(page, "document.getElementById('msg').textContent.startsWith('planned')")
@@ -234,6 +236,9 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
     shot = tmp_path / "hmi_saddle.png"
     page.click("#btn-start")
     _wait_state(page, "running")
+    # the live tool speed of the seam, read while the run certainly goes on (a seam of
+    # about 33 s: the screenshots below may take seconds on a loaded machine)
+    until(page, "parseFloat(document.getElementById('tool-speed').textContent) > 1")
     page.wait_for_timeout(1500)
     page.screenshot(path=str(shot), full_page=True)
     ARTIFACTS.mkdir(exist_ok=True)
@@ -255,10 +260,9 @@ def test_saddle_run_end_to_end(hmi_server, page, tmp_path):
         assert canvas["width"] > 400
     estop = box("#btn-estop")
     assert estop["y"] >= 0 and estop["y"] + estop["height"] <= 768 and estop["x"] + estop["width"] <= 1024
-    # live tool speed of the seam, summary rows with units
-    until(page, "parseFloat(document.getElementById('tool-speed').textContent) > 1")
+    # summary rows with units
     summary = page.inner_text("#summary")
-    assert "Planned duration" in summary and re.search(r"Programmed feed\s+50 mm/s", summary), summary
+    assert "Planned duration" in summary and re.search(r"Programmed feed\s+20 mm/s", summary), summary
     page.screenshot(path=str(tmp_path / "hmi_1024x768.png"))
     shutil.copy(tmp_path / "hmi_1024x768.png", ARTIFACTS / "hmi_1024x768.png")
     page.click("#btn-stop")
@@ -306,10 +310,12 @@ def test_jog_teach_build_save_load(hmi_server, page):
     page.fill("#jog-speed", "2")
     page.fill("#jog-step", "10")
     page.click("#jog-plus")
-    until(page, "document.getElementById('state').textContent === 'running'")
-    page.click("#jog-plus")
-    page.click("#jog-minus")
-    page.click("#jog-plus")
+    until(page, "document.getElementById('state').textContent === 'running'"
+                " && !document.getElementById('jog-plus').disabled")
+    # the three steps in one go from the page: a click each from here may take longer
+    # than the jog itself on a loaded machine, and a late step would start a new run
+    page.evaluate("() => { for (const id of ['jog-plus', 'jog-minus', 'jog-plus'])"
+                  " document.getElementById(id).click(); }")
     try:
         until(page, "document.getElementById('state').textContent === 'idle'"
                     " && document.querySelector('#joints').textContent.includes('40.000 deg')")
