@@ -672,12 +672,20 @@ def _reversal_nodes(cached: _Cached, s: np.ndarray, der: tuple, cell_err: np.nda
 
 def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
             breaks: np.ndarray | None = None, rtol: float = GRID_RTOL,
-            todo: np.ndarray | None = None) -> tuple:
+            todo: np.ndarray | None = None, left: tuple | None = None) -> tuple:
     """Split the grid's cells until the derivatives interpolated at every cell's
     middle are within ``rtol`` of the limits they feed (see GRID_RTOL).
 
     ``todo`` (cells,): the cells to check (default: all); the others count as
     within the tolerance (the sub-cells of cells checked before).
+
+    ``left``: ``q'``, ``q''``, ``q'''`` (k, m) just before the breakpoints
+    ``breaks`` (k,). A cell ending at a breakpoint interpolates towards them, the
+    values of its own piece, as the checks do (:class:`_Interp`). (Towards the
+    node's values, those after the breakpoint where ``q'''`` may step, the error
+    does not shrink with the cell: such a cell was halved pass after pass down to
+    round-off length, 6e-14 of a path of 0.34 m, over which two node states
+    cannot be joined.)
 
     Returns the grid, its derivatives, the ranges ``(k, 2)`` of ``s`` where the
     passes or the node budget ran out before that (no cell is known to be
@@ -698,9 +706,14 @@ def _refine(path: JointPath, s: np.ndarray, der, vlim, alim, jlim, cap_fn,
         c = np.nonzero(todo)[0]
         sm = 0.5 * (s[c] + s[c + 1])
         qm, m1, m2, m3 = path.derivatives(sm)
-        i1 = _hermite_interp(s[c], s[c + 1], d1[c], d1[c + 1], d2[c], d2[c + 1], sm)
-        i2 = _hermite_interp(s[c], s[c + 1], d2[c], d2[c + 1], d3[c], d3[c + 1], sm)
-        i3 = 0.5 * (d3[c] + d3[c + 1])
+        r1, r2, r3 = d1[c + 1], d2[c + 1], d3[c + 1]
+        if left is not None and breaks.size:
+            at = np.minimum(np.searchsorted(breaks, s[c + 1]), breaks.size - 1)
+            on = (s[c + 1] == breaks[at])[:, None]
+            r1, r2, r3 = (np.where(on, lv[at], r) for lv, r in zip(left, (r1, r2, r3)))
+        i1 = _hermite_interp(s[c], s[c + 1], d1[c], r1, d2[c], r2, sm)
+        i2 = _hermite_interp(s[c], s[c + 1], d2[c], r2, d3[c], r3, sm)
+        i3 = 0.5 * (d3[c] + r3)
         # the speed the cell could run at: the velocity limits, the path's cap, and
         # the speeds at which the curvature of the joint path alone uses the joints'
         # acceleration and jerk limits (a timing can run somewhat faster than
@@ -1657,12 +1670,12 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     exact = path if cheap else None
     # the derivatives just before every breakpoint (the checks interpolate towards
     # them in the cell that ends there)
-    left = None
-    if not cheap and breaks.size:
-        left = path.derivatives(np.nextafter(breaks, -np.inf))[1:]
+    # (the refinement's too, cheap or not)
+    below = path.derivatives(np.nextafter(breaks, -np.inf))[1:] if breaks.size else None
+    left = None if cheap else below
     grid_rtol = GRID_RTOL_CHEAP if cheap else GRID_RTOL
     s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn, breaks,
-                                           max(grid_rtol, FIRST_GRID_RTOL))
+                                           max(grid_rtol, FIRST_GRID_RTOL), left=below)
     _finite_derivatives(der)
     s, der, cell_err = _reversal_nodes(cached, s, der, cell_err, aacc != adec)
     q, d1, d2, d3 = der
@@ -1763,7 +1776,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 # the final check's grid: refined to the full tolerance (its true
                 # derivatives are evaluated only where it comes within VERIFY_ABOVE)
                 s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn,
-                                                       breaks, grid_rtol, ~(cell_err <= grid_rtol))
+                                                       breaks, grid_rtol, ~(cell_err <= grid_rtol),
+                                                       below)
                 _finite_derivatives(der)
                 q, d1, d2, d3 = der
                 cap, vcap, kappa = on_grid(s, d1)
@@ -1802,7 +1816,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             if grid_rtol < FIRST_GRID_RTOL:  # (the cells within it already: not again)
                 parent = np.searchsorted(s, s_new[:-1], side="right") - 1
                 s_new, der_new, unresolved, _ = _refine(cached, s_new, der_new, vlim, alim, jlim, cap_fn,
-                                                        breaks, grid_rtol, ~(cell_err[parent] <= grid_rtol))
+                                                        breaks, grid_rtol, ~(cell_err[parent] <= grid_rtol),
+                                                        below)
                 _finite_derivatives(der_new)
             regrid = s_new.size > s.size  # (the new grid holds the old one)
             if regrid:
