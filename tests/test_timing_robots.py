@@ -500,3 +500,48 @@ def test_re_plans_of_the_benchmark_lins_from_their_own_states(motion, frac):
     q, qd, qdd, _ = rest.joint_states([rest.duration])
     np.testing.assert_allclose(q[0], tm.joint_states([tm.duration])[0][0], rtol=0, atol=1e-9)
     assert np.abs(qd).max() == 0.0 and np.abs(qdd).max() == 0.0
+
+
+@pytest.mark.parametrize(("model", "seed", "index", "frac"), [("scara", 952, 6, 0.5), ("ur5", 901, 6, 0.7)])
+def test_re_plans_where_the_path_acceleration_binds_between_nodes(model, seed, index, frac):
+    """Chains through sharp corners (the random chains of ``test_robot_jerk``, drawn
+    from ``seed``) re-planned from their own state at ``frac`` of the duration, where
+    the tool's acceleration (tangential and normal) binds: between two nodes it
+    went over its limit by 5e-5 of it. With a moving state that cannot be a
+    uniform slow-down, and the path's acceleration was not lowered locally, so
+    every round found the same excess and the re-plan raised InfeasibleError
+    (14 of 275 such re-plans of 60 random chains on five arms). Now the limit is
+    lowered at the nodes of the pieces above it. The re-plan keeps the tool's
+    acceleration limit (its own samples, 200 per piece), every joint limit, and
+    takes the time the first timing had left to within 0.1 %."""
+    from test_robot_jerk import HOME, _random_start, _robot, _sharp_chain
+    from test_timing import LIMIT_RTOL, _dense_use
+
+    from trajkit.robot._cartesian import _tool_curvature
+    from trajkit.timing import PathRest, plan_path_timing
+
+    robot = _robot(model)
+    rng = np.random.default_rng(seed)
+    for _ in range(index + 1):  # the chain drawn index-th (drawing is cheap; planning is not)
+        q0 = HOME["ur5"] + rng.uniform(-0.3, 0.3, 6) if model == "ur5" else _random_start(robot, rng)
+        mots = _sharp_chain(robot, rng, q0)
+    path = run_motions(robot, mots, q0).segments[0].chain.path
+
+    def plan(jp, s0=0.0, **state):
+        return plan_path_timing(jp, robot.limits, speed=mots[0].speed, accel=robot.cartesian_accel,
+                                jerk=robot.cartesian_jerk,
+                                curvature=lambda s: _tool_curvature(path, np.asarray(s) + s0), **state)
+
+    tm = plan(path)
+    t0 = frac * tm.duration
+    s0, v0, a0, _ = tm.sample(t0)[:, 0]
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    assert rest.info["status"] == "Solved" and rest.time_scale == 1.0
+    assert rest.duration == pytest.approx(tm.duration - t0, rel=1e-3)
+    assert max(_dense_use(rest)) <= 1 + LIMIT_RTOL
+    t = (rest.t[:-1, None] + np.diff(rest.t)[:, None] * np.linspace(0.0, 1.0, 200)[None, :]).ravel()
+    ss, sd, sdd, _ = rest.sample(t)
+    tool = np.hypot(sdd, _tool_curvature(path, ss + s0) * sd * sd)
+    assert tool.max() <= robot.cartesian_accel * (1 + LIMIT_RTOL)
+    assert tool.max() >= 0.999 * robot.cartesian_accel  # (it binds)
+    np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, v0, a0], rtol=0, atol=1e-12)

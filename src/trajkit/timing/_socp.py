@@ -165,6 +165,9 @@ class GridProblem:
         Boundary states (``sdot^2`` and ``sddot``).
     j_path_scale : ndarray, shape (n - 1,), optional
         Factor (>= 1) on ``j_path`` in every interval (none: 1 everywhere).
+    a_path_scale : ndarray, shape (n,), optional
+        Factor (<= 1) on ``a_path`` at every node (none: 1 everywhere): the
+        path's acceleration limit lowered locally.
     """
 
     s: np.ndarray
@@ -186,6 +189,7 @@ class GridProblem:
     kappa: np.ndarray | None = None
     x_cap_mid: np.ndarray | None = None
     j_path_scale: np.ndarray | None = None
+    a_path_scale: np.ndarray | None = None
 
 
 @dataclass
@@ -953,7 +957,7 @@ def solve_grid(p: GridProblem, max_rounds: int = MAX_ROUNDS,
         x0=p.x0 * (T0 / L) ** 2, u0=p.u0 * as_ / L, xN=p.xN * (T0 / L) ** 2, uN=p.uN * as_ / L,
         kappa=None if p.kappa is None else np.asarray(p.kappa, dtype=float) * L,
         x_cap_mid=None if p.x_cap_mid is None else p.x_cap_mid * (T0 / L) ** 2,
-        j_path_scale=p.j_path_scale)
+        j_path_scale=p.j_path_scale, a_path_scale=p.a_path_scale)
     init_s = None if init is None else (init[0] * (T0 / L) ** 2, init[1] * as_ / L)
     sol = _solve_scaled(scaled, max_rounds, init_s, settled and init is not None,
                         near and init is not None, duals if settled and init is not None else None)
@@ -1042,12 +1046,14 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     # at every node (|q'| |u| <= a + |q''| x), and where those bounds keep the
     # vector inside its limit, its rows are left out (they could never be active)
     reach = np.zeros(n, dtype=bool)
+    # (the limit at every node: lowered locally where a_path_scale says so)
+    ap = np.full(n, p.a_path) if p.a_path_scale is None else p.a_path * np.asarray(p.a_path_scale)
     if math.isfinite(p.a_path):
         with np.errstate(divide="ignore", invalid="ignore"):
             u_top = np.min(np.where(np.abs(d1) > 0, (np.maximum(a_hi, a_lo) + np.abs(d2) * xv[:, None])
                                     / np.abs(d1), np.inf), axis=1)
             k_top = 0.0 if p.kappa is None else np.asarray(p.kappa) * xv
-            reach = ~(k_top * k_top + u_top * u_top < BIND_RTOL * p.a_path**2)
+            reach = ~(k_top * k_top + u_top * u_top < BIND_RTOL * ap**2)
     if p.kappa is not None and math.isfinite(p.a_path):
         kn = free[(np.asarray(p.kappa)[free] > 0) & reach[free]]
     else:
@@ -1055,7 +1061,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     kr = np.arange(kn.size)
     acc_block = (3 * kn.size, np.concatenate([3 * kr + 1, 3 * kr + 2]), np.concatenate([iu[kn], ix[kn]]))
     acc_values = np.concatenate([-np.ones(kn.size), -np.asarray(p.kappa)[kn]]) if kn.size else np.zeros(0)
-    b_acc = np.tile([p.a_path, 0.0, 0.0], kn.size)
+    b_acc = np.column_stack([ap[kn], np.zeros((kn.size, 2))]).ravel()
 
     x_bar = None
     u_bar = np.zeros(n)
@@ -1101,16 +1107,16 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     static.add(nn, -sg * d2[nn, kk], 0.0, -sg * d1[nn, kk], 0.0, a_lo[nn, kk])
     if math.isfinite(p.a_path):  # (where it can bind and the curvature's rows do not bound it)
         flat = np.setdiff1d(inner[reach[inner]], kn)
-        static.add(flat, 0.0, 0.0, 1.0, 0.0, np.full(flat.size, p.a_path))
-        static.add(flat, 0.0, 0.0, -1.0, 0.0, np.full(flat.size, p.a_path))
+        static.add(flat, 0.0, 0.0, 1.0, 0.0, ap[flat])
+        static.add(flat, 0.0, 0.0, -1.0, 0.0, ap[flat])
     static.finish()
     b_static = static.b
     use_ipm = USE_IPM and _ipm.AVAILABLE
     # the path's acceleration with the curvature, as the method's quadratic rows
     quad = None
     if kn.size:
-        ka = np.asarray(p.kappa)[kn] / p.a_path
-        quad = (kn.astype(np.int64), ka * ka, np.full(kn.size, 1.0 / p.a_path**2))
+        ka = np.asarray(p.kappa)[kn] / ap[kn]
+        quad = (kn.astype(np.int64), ka * ka, 1.0 / ap[kn]**2)
     n_static = b_static.size
     # the node of every inequality (the first node it involves: screening around a node)
     node_static = static.node

@@ -1160,6 +1160,29 @@ def _regrid(s_old: np.ndarray, s_new: np.ndarray, values: np.ndarray) -> np.ndar
     return out
 
 
+#: Points per piece at which the path's acceleration is evaluated where it is
+#: lowered locally (a moving boundary state, see ``plan_path_timing``).
+PATH_ACC_POINTS = 17
+
+
+def _piece_path_accel(t: np.ndarray, st: np.ndarray, jerk: np.ndarray, s_grid: np.ndarray,
+                      kappa: np.ndarray | None) -> np.ndarray:
+    """The largest norm of the path's acceleration vector ``(sddot, kappa sdot^2)``
+    in every piece (times ``t`` (k + 1,), start states ``st`` (k + 1, 3), jerks
+    (k,)), at :data:`PATH_ACC_POINTS` points of each, the curvature ``kappa``
+    (n,) interpolated linearly between the nodes of ``s_grid`` (n,) (None: the
+    tangential acceleration alone). Returns (k,) [path unit / s^2]."""
+    tau = np.diff(t)[:, None] * np.linspace(0.0, 1.0, PATH_ACC_POINTS)[None, :]
+    p0, v0, a0 = (st[:-1, i:i + 1] for i in range(3))
+    j = jerk[:, None]
+    sdd = a0 + tau * j
+    if kappa is None:
+        return np.abs(sdd).max(axis=1)
+    sd = v0 + tau * (a0 + 0.5 * tau * j)
+    pos = p0 + tau * (v0 + tau * (0.5 * a0 + tau * j / 6.0))
+    return np.hypot(sdd, np.interp(pos, s_grid, kappa) * sd * sd).max(axis=1)
+
+
 def _uniform_scale(use: LimitUse) -> float:
     """Time factor k >= 1 that brings every checked ratio to at most 1 (v / k, a / k^2, j / k^3).
 
@@ -1835,6 +1858,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             best = None
             xmid_scale = np.ones(s.size - 1)
             jpath_scale = np.ones(s.size - 1)  # (lowered only with a moving state, see below)
+            apath_scale = np.ones(s.size)  # (the same)
             attempt = 0
             init_settled = False  # init is a solution of the same grid
             init_near = False  # ... or of the grid before a split (interpolated)
@@ -1847,7 +1871,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                    x_cap=x_cap, a_path=a_path, j_path=j_path * JERK_MARGIN, kappa=kappa,
                                    x_cap_mid=_mid_caps(s, cap_fn, speed) * xmid_scale,
                                    x0=start_speed**2, u0=start_accel, xN=end_speed**2, uN=end_accel,
-                                   j_path_scale=path_jerk_scale(jpath_scale))
+                                   j_path_scale=path_jerk_scale(jpath_scale),
+                                   a_path_scale=apath_scale if moving else None)
                 reuse = attempt == 0 and not regrid and not splits and first.status != RELAXED
                 sol = first if reuse else solve_grid(
                     prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
@@ -1907,8 +1932,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     init_settled = False
                     init_duals = None
                     init_near = sol.converged
-                    scale_v, scale_a, scale_j, x_cap = (_regrid(s, s_new, a) for a in
-                                                        (scale_v, scale_a, scale_j, x_cap))
+                    scale_v, scale_a, scale_j, x_cap, apath_scale = (
+                        _regrid(s, s_new, a) for a in (scale_v, scale_a, scale_j, x_cap, apath_scale))
                     xmid_scale = np.ones(s_new.size - 1)
                     jpath_scale = np.ones(s_new.size - 1)
                     s, der = s_new, cached.derivatives(s_new)
@@ -1943,6 +1968,19 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         c = piv[over]
                         f = (1.0 - TIGHTEN_MARGIN) * j_path / np.abs(jk[over])
                         np.minimum.at(jpath_scale, c, f * jpath_scale[c])
+                if moving and math.isfinite(a_path) and use.path_acceleration > 1.0 + CHECK_RTOL:
+                    # ... and its acceleration, lowered at the nodes of the pieces above it
+                    # (where none of their points is, the check's largest excess at the
+                    # piece closest to it)
+                    ratio = _piece_path_accel(t, st, jk, s, kappa) / a_path
+                    over = ratio > 1.0 + CHECK_RTOL
+                    if not over.any():
+                        over = ratio == ratio.max()
+                        ratio[over] = use.path_acceleration
+                    c = piv[over]
+                    f = (1.0 - TIGHTEN_MARGIN) / ratio[over]
+                    for node in (c, c + 1):
+                        np.minimum.at(apath_scale, node, np.minimum(1.0, f * apath_scale[node]))
         except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
             best = None
 
