@@ -502,18 +502,29 @@ def test_re_plans_of_the_benchmark_lins_from_their_own_states(motion, frac):
     assert np.abs(qd).max() == 0.0 and np.abs(qdd).max() == 0.0
 
 
-@pytest.mark.parametrize(("model", "seed", "index", "frac"), [("scara", 952, 6, 0.5), ("ur5", 901, 6, 0.7)])
-def test_re_plans_where_the_path_acceleration_binds_between_nodes(model, seed, index, frac):
+@pytest.mark.parametrize(("model", "seed", "index", "frac", "binds"),
+                         [("scara", 952, 6, 0.5, True), ("ur5", 901, 6, 0.7, True),
+                          ("panda", 951, 2, 0.3, False), ("arm6", 900, 2, 0.1, False)])
+def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds):
     """Chains through sharp corners (the random chains of ``test_robot_jerk``, drawn
-    from ``seed``) re-planned from their own state at ``frac`` of the duration, where
-    the tool's acceleration (tangential and normal) binds: between two nodes it
-    went over its limit by 5e-5 of it. With a moving state that cannot be a
-    uniform slow-down, and the path's acceleration was not lowered locally, so
-    every round found the same excess and the re-plan raised InfeasibleError
-    (14 of 275 such re-plans of 60 random chains on five arms). Now the limit is
-    lowered at the nodes of the pieces above it. The re-plan keeps the tool's
-    acceleration limit (its own samples, 200 per piece), every joint limit, and
-    takes the time the first timing had left to within 0.1 %."""
+    from ``seed``) re-planned from their own state at ``frac`` of the duration; each
+    raised InfeasibleError (28 of 275 such re-plans of 54 random chains on five
+    arms did):
+
+    - where the tool's acceleration (tangential and normal) binds (``binds``):
+      between two nodes it went over its limit by 5e-5 of it. With a moving
+      state that cannot be a uniform slow-down, and the path's acceleration was
+      not lowered locally, so every round found the same excess (14 of the 28).
+      Now that limit is lowered at the nodes of the pieces above it;
+    - an excess of the path's jerk of 2e-9 of its limit (Panda), of a joint's
+      jerk of 8.5e-8 (arm6), left after the last round: lowered locally, such
+      an excess, the round-off of the linearised rows, turned up in another
+      piece in the next round. Now it lowers that limit everywhere by ten times
+      itself, and a moving state gets eight rounds (were six).
+
+    The re-plan keeps every joint limit and the tool's acceleration limit (on
+    the exact derivatives at 40 points of every piece) and takes the time the
+    first timing had left to within 0.2 %."""
     from test_robot_jerk import HOME, _random_start, _robot, _sharp_chain
     from test_timing import LIMIT_RTOL, _dense_use
 
@@ -523,7 +534,11 @@ def test_re_plans_where_the_path_acceleration_binds_between_nodes(model, seed, i
     robot = _robot(model)
     rng = np.random.default_rng(seed)
     for _ in range(index + 1):  # the chain drawn index-th (drawing is cheap; planning is not)
-        q0 = HOME["ur5"] + rng.uniform(-0.3, 0.3, 6) if model == "ur5" else _random_start(robot, rng)
+        if model in ("ur5", "panda"):
+            q0 = HOME[model] + rng.uniform(-0.3, 0.3, 6) if model == "ur5" else (
+                HOME[model] + rng.uniform(-0.2, 0.2, 7))
+        else:
+            q0 = _random_start(robot, rng)
         mots = _sharp_chain(robot, rng, q0)
     path = run_motions(robot, mots, q0).segments[0].chain.path
 
@@ -537,11 +552,11 @@ def test_re_plans_where_the_path_acceleration_binds_between_nodes(model, seed, i
     s0, v0, a0, _ = tm.sample(t0)[:, 0]
     rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
     assert rest.info["status"] == "Solved" and rest.time_scale == 1.0
-    assert rest.duration == pytest.approx(tm.duration - t0, rel=1e-3)
-    assert max(_dense_use(rest)) <= 1 + LIMIT_RTOL
-    t = (rest.t[:-1, None] + np.diff(rest.t)[:, None] * np.linspace(0.0, 1.0, 200)[None, :]).ravel()
+    assert rest.duration == pytest.approx(tm.duration - t0, rel=2e-3)
+    assert max(_dense_use(rest, 40)) <= 1 + LIMIT_RTOL
+    t = (rest.t[:-1, None] + np.diff(rest.t)[:, None] * np.linspace(0.0, 1.0, 40)[None, :]).ravel()
     ss, sd, sdd, _ = rest.sample(t)
     tool = np.hypot(sdd, _tool_curvature(path, ss + s0) * sd * sd)
     assert tool.max() <= robot.cartesian_accel * (1 + LIMIT_RTOL)
-    assert tool.max() >= 0.999 * robot.cartesian_accel  # (it binds)
+    assert (tool.max() >= 0.999 * robot.cartesian_accel) == binds
     np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, v0, a0], rtol=0, atol=1e-12)

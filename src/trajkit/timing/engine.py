@@ -269,7 +269,7 @@ TIGHTEN_ABOVE = 1e-6
 #: With a moving boundary state no uniform slow-down is possible (it would
 #: change that state): every excess above CHECK_RTOL is lowered locally, in up
 #: to this many rounds, and the rounds' check is as dense as the final one.
-MAX_TIGHTEN_MOVING = 6
+MAX_TIGHTEN_MOVING = 8
 
 #: A timing that had to be slowed down uniformly counts this fraction longer
 #: when the attempts are compared.
@@ -285,6 +285,13 @@ TIGHTEN_ROUNDS = 3
 
 #: Margin kept under a limit that was lowered locally (fraction).
 TIGHTEN_MARGIN = 1e-4
+
+#: With a moving boundary state, an excess of at most this fraction of a limit
+#: left after a round (the round-off of the linearised rows: lowered locally, it
+#: turns up in another piece in the next round) lowers that limit everywhere by
+#: ROUNDOFF_LOWER times the excess.
+ROUNDOFF_EXCESS = 1e-6
+ROUNDOFF_LOWER = 10.0
 
 #: Relative slack of the final check (round-off).
 CHECK_RTOL = 1e-9
@@ -1981,6 +1988,17 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     f = (1.0 - TIGHTEN_MARGIN) / ratio[over]
                     for node in (c, c + 1):
                         np.minimum.at(apath_scale, node, np.minimum(1.0, f * apath_scale[node]))
+                if moving and use.worst <= 1.0 + ROUNDOFF_EXCESS:
+                    # an excess at the round-off of the linearised rows moves from piece
+                    # to piece between rounds: that limit lowered everywhere, by
+                    # ROUNDOFF_LOWER times the excess
+                    for ratio_max, scale in ((use.velocity.max(initial=0.0), scale_v),
+                                             (use.acceleration.max(initial=0.0), scale_a),
+                                             (use.jerk.max(initial=0.0), scale_j),
+                                             (use.path_acceleration, apath_scale),
+                                             (use.path_jerk, jpath_scale)):
+                        if ratio_max > 1.0 + CHECK_RTOL:
+                            scale *= 1.0 - ROUNDOFF_LOWER * (float(ratio_max) - 1.0)
         except (RuntimeError, ValueError):  # the optimisation failed: the fallback below
             best = None
 
