@@ -502,10 +502,11 @@ def test_re_plans_of_the_benchmark_lins_from_their_own_states(motion, frac):
     assert np.abs(qd).max() == 0.0 and np.abs(qdd).max() == 0.0
 
 
-@pytest.mark.parametrize(("model", "seed", "index", "frac", "binds"),
-                         [("scara", 952, 6, 0.5, True), ("ur5", 901, 6, 0.7, True),
-                          ("panda", 951, 2, 0.3, False), ("arm6", 900, 2, 0.1, False)])
-def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds):
+@pytest.mark.parametrize(("model", "seed", "index", "frac", "binds", "longer"),
+                         [("scara", 952, 6, 0.5, True, 1e-3), ("ur5", 901, 6, 0.7, True, 1e-3),
+                          ("panda", 951, 2, 0.3, False, 2e-3), ("arm6", 900, 2, 0.1, False, 1e-3),
+                          ("ur5", 901, 1, 0.5, False, 7e-3)])
+def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds, longer):
     """Chains through sharp corners (the random chains of ``test_robot_jerk``, drawn
     from ``seed``) re-planned from their own state at ``frac`` of the duration; each
     raised InfeasibleError (28 of 275 such re-plans of 54 random chains on five
@@ -520,11 +521,16 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds)
       jerk of 8.5e-8 (arm6), left after the last round: lowered locally, such
       an excess, the round-off of the linearised rows, turned up in another
       piece in the next round. Now it lowers that limit everywhere by ten times
-      itself, and a moving state gets eight rounds (were six).
+      itself, and a moving state gets eight rounds (were six);
+    - a timing within the limits found in a later round, passed over for an
+      earlier, shorter one 0.32 % above a joint's jerk limit (UR5), which a
+      moving state cannot slow down uniformly. With a moving state a timing
+      within the limits now comes before any other (6 of the 28).
 
     The re-plan keeps every joint limit and the tool's acceleration limit (on
-    the exact derivatives at 40 points of every piece) and takes the time the
-    first timing had left to within 0.2 %."""
+    the exact derivatives at 40 points of every piece), is at most ``longer``
+    (a fraction) longer than the time the first timing had left and at most
+    0.2 % shorter (the first timing planned with 99.8 % of the jerk limits)."""
     from test_robot_jerk import HOME, _random_start, _robot, _sharp_chain
     from test_timing import LIMIT_RTOL, _dense_use
 
@@ -552,7 +558,7 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds)
     s0, v0, a0, _ = tm.sample(t0)[:, 0]
     rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
     assert rest.info["status"] == "Solved" and rest.time_scale == 1.0
-    assert rest.duration == pytest.approx(tm.duration - t0, rel=2e-3)
+    assert (1 - 2e-3) * (tm.duration - t0) <= rest.duration <= (1 + longer) * (tm.duration - t0)
     assert max(_dense_use(rest, 40)) <= 1 + LIMIT_RTOL
     t = (rest.t[:-1, None] + np.diff(rest.t)[:, None] * np.linspace(0.0, 1.0, 40)[None, :]).ravel()
     ss, sd, sdd, _ = rest.sample(t)

@@ -283,6 +283,11 @@ FALLBACK_ABOVE = 1.1
 #: Rounds of a solve after a limit was lowered locally (it starts from the previous one).
 TIGHTEN_ROUNDS = 3
 
+#: The score of an attempt above a limit with a moving boundary state, per unit of
+#: its largest ratio: above that of any timing within the limits (which is its
+#: duration, at most MAX_DURATION).
+MOVING_EXCESS_SCORE = 1e30
+
 #: Margin kept under a limit that was lowered locally (fraction).
 TIGHTEN_MARGIN = 1e-4
 
@@ -1918,6 +1923,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 # a timing that needs no uniform slow-down keeps its exact cruise speeds:
                 # preferred unless a slowed one is clearly faster
                 score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
+                if moving and k > 1.0:
+                    # (with a moving state no uniform slow-down: a timing within the
+                    # limits before any other, then the one closest to them)
+                    score = MOVING_EXCESS_SCORE * use.worst
                 if best is None or score < best[0]:
                     # (the cells close to a limit: the final check corrects them first)
                     best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), close)
