@@ -1703,9 +1703,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     # needs to resolve the motion, not to interpolate the derivatives exactly
     cheap = bool(getattr(path, "cheap_derivatives", False))
     exact = path if cheap else None
-    # the derivatives just before every breakpoint (the checks interpolate towards
-    # them in the cell that ends there)
-    # (the refinement's too, cheap or not)
+    # the derivatives just before every breakpoint: the refinement interpolates
+    # towards them in the cell that ends there, as do the checks (those of a path
+    # without cheap derivatives)
     below = path.derivatives(np.nextafter(breaks, -np.inf))[1:] if breaks.size else None
     left = None if cheap else below
     grid_rtol = GRID_RTOL_CHEAP if cheap else GRID_RTOL
@@ -1812,7 +1812,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 # derivatives are evaluated only where it comes within VERIFY_ABOVE)
                 s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn,
                                                        breaks, grid_rtol, ~(cell_err <= grid_rtol),
-                                                       below)
+                                                       left=below)
                 _finite_derivatives(der)
                 q, d1, d2, d3 = der
                 cap, vcap, kappa = on_grid(s, d1)
@@ -1852,7 +1852,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 parent = np.searchsorted(s, s_new[:-1], side="right") - 1
                 s_new, der_new, unresolved, _ = _refine(cached, s_new, der_new, vlim, alim, jlim, cap_fn,
                                                         breaks, grid_rtol, ~(cell_err[parent] <= grid_rtol),
-                                                        below)
+                                                        left=below)
                 _finite_derivatives(der_new)
             regrid = s_new.size > s.size  # (the new grid holds the old one)
             if regrid:
