@@ -256,6 +256,12 @@ VERIFY_FULL_ABOVE = 1e-3
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
 
+#: ... up to this many while the best timing so far would still need a uniform
+#: slow-down by more than SLOW_SCALE (a uniform slow-down costs its factor over the
+#: whole motion; the local lowering only where the excess is).
+MAX_TIGHTEN_SLOW = 6
+SLOW_SCALE = 1.005
+
 #: An excess above this fraction means the grid is too coarse where it happens:
 #: the cells around it are split in two and the problem solved again (at most
 #: MAX_SPLITS times) before any limit is lowered.
@@ -1875,7 +1881,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             init_settled = False  # init is a solution of the same grid
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
-            while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN):
+            while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN_SLOW
+                              if best is not None and best[5] > SLOW_SCALE else MAX_TIGHTEN):
                 prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                    a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                                    j_acc=jacc[None, :] * scale_j * margin,
