@@ -72,6 +72,16 @@ def _random_start(robot, rng):
     return q0
 
 
+def _chain_start(robot, model, rng):
+    """The start of a random chain: near the home pose for the arms from URDF
+    (UR5, Panda), else :func:`_random_start`."""
+    if model == "panda":
+        return HOME["panda"] + rng.uniform(-0.2, 0.2, 7)
+    if model == "ur5":
+        return HOME["ur5"] + rng.uniform(-0.3, 0.3, 6)
+    return _random_start(robot, rng)
+
+
 def cp_jerk_ratio(run, dt):
     """Largest |third difference of IK joints| / dt^3 / j_max per joint over the CP segments."""
     jmax = _jmax(run.robot)
@@ -295,12 +305,7 @@ def test_random_sharp_corner_chains_keep_joint_limits(model):
     for _ in range(6 * n):
         if ok >= n:
             break
-        if model == "panda":
-            q0 = HOME["panda"] + rng.uniform(-0.2, 0.2, 7)
-        elif model == "ur5":
-            q0 = HOME["ur5"] + rng.uniform(-0.3, 0.3, 6)
-        else:
-            q0 = _random_start(robot, rng)
+        q0 = _chain_start(robot, model, rng)
         mots = _sharp_chain(robot, rng, q0)
         try:
             run = run_motions(robot, mots, q0)
@@ -334,7 +339,7 @@ def test_a_chain_the_local_lowering_leaves_far_over_a_limit_gets_more_rounds():
                                j_max_decel=0.5 * lm.j_max, position_min=lm.position_min,
                                position_max=lm.position_max, name=lm.name) for lm in robot.limits]
     rng = np.random.default_rng(401)
-    q0 = HOME["panda"] + rng.uniform(-0.2, 0.2, 7)
+    q0 = _chain_start(robot, "panda", rng)
     tm = run_motions(robot, _sharp_chain(robot, rng, q0), q0).segments[0].chain.timing
     assert tm.time_scale <= engine.SLOW_SCALE and tm.info["tightened"] > engine.MAX_TIGHTEN
     assert tm.duration < 1.94

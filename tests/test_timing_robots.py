@@ -531,7 +531,7 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds,
     the exact derivatives at 40 points of every piece), is at most ``longer``
     (a fraction) longer than the time the first timing had left and at most
     0.2 % shorter (the first timing planned with 99.8 % of the jerk limits)."""
-    from test_robot_jerk import HOME, _random_start, _robot, _sharp_chain
+    from test_robot_jerk import _chain_start, _robot, _sharp_chain
     from test_timing import LIMIT_RTOL, _dense_use
 
     from trajkit.robot._cartesian import _tool_curvature
@@ -540,11 +540,7 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds,
     robot = _robot(model)
     rng = np.random.default_rng(seed)
     for _ in range(index + 1):  # the chain drawn index-th (drawing is cheap; planning is not)
-        if model in ("ur5", "panda"):
-            q0 = HOME[model] + rng.uniform(-0.3, 0.3, 6) if model == "ur5" else (
-                HOME[model] + rng.uniform(-0.2, 0.2, 7))
-        else:
-            q0 = _random_start(robot, rng)
+        q0 = _chain_start(robot, model, rng)
         mots = _sharp_chain(robot, rng, q0)
     path = run_motions(robot, mots, q0).segments[0].chain.path
 

@@ -1881,8 +1881,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             init_settled = False  # init is a solution of the same grid
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
-            while attempt <= (MAX_TIGHTEN_MOVING if moving else MAX_TIGHTEN_SLOW
-                              if best is not None and best[5] > SLOW_SCALE else MAX_TIGHTEN):
+            while attempt <= (MAX_TIGHTEN_MOVING if moving
+                              else MAX_TIGHTEN_SLOW if best is not None and best[5] > SLOW_SCALE
+                              else MAX_TIGHTEN):
                 prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
                                    a_acc=aacc[None, :] * scale_a, a_dec=adec[None, :] * scale_a,
                                    j_acc=jacc[None, :] * scale_j * margin,
