@@ -1680,7 +1680,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         """The factor on the path's jerk limit (JERK_MARGIN of it) in every interval of
         the grid, times ``local`` (n - 1,) (the lowering where the check found an
         excess); None where it is 1 everywhere."""
-        out = margin / JERK_MARGIN if local is None else (margin / JERK_MARGIN) * local
+        out = margin / JERK_MARGIN * (1.0 if local is None else local)
         if np.all(out == 1.0):
             return None
         return np.broadcast_to(out, (s.size - 1,)).astype(float)
