@@ -505,7 +505,7 @@ def test_re_plans_of_the_benchmark_lins_from_their_own_states(motion, frac):
 @pytest.mark.parametrize(("model", "seed", "index", "frac", "binds", "longer"),
                          [("scara", 952, 6, 0.5, True, 1e-3), ("ur5", 901, 6, 0.7, True, 1e-3),
                           ("panda", 951, 2, 0.3, False, 2e-3), ("arm6", 900, 2, 0.1, False, 1e-3),
-                          ("ur5", 901, 1, 0.5, False, 7e-3)])
+                          ("ur5", 901, 1, 0.5, False, 2e-2)])
 def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds, longer):
     """Chains through sharp corners (the random chains of ``test_robot_jerk``, drawn
     from ``seed``) re-planned from their own state at ``frac`` of the duration; each
@@ -531,11 +531,24 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds,
     the exact derivatives at 40 points of every piece), is at most ``longer``
     (a fraction) longer than the time the first timing had left and at most
     0.2 % shorter (the first timing planned with 99.8 % of the jerk limits)."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state(model, seed, index, frac)
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    tool = _check_sharp_re_plan(rest, path, s0, (v0, a0), left, longer, a_tool)
+    assert (tool >= 0.999 * a_tool) == binds
+
+
+def _sharp_chain_state(model, seed, index, frac):
+    """The ``index``-th random sharp-corner chain of ``seed`` on ``model`` (the
+    chains of ``test_robot_jerk``), planned from rest: ``(plan, path, a_tool, left,
+    (s0, v0, a0))`` with ``plan(jp, s0=0.0, **state)`` the chain's planning call on
+    ``jp`` (a re-plan from ``s0``), the tool's acceleration limit, the time left after
+    ``frac`` of the duration and the path state there."""
     from test_robot_jerk import _chain_start, _robot, _sharp_chain
-    from test_timing import LIMIT_RTOL, _dense_use
 
     from trajkit.robot._cartesian import _tool_curvature
-    from trajkit.timing import PathRest, plan_path_timing
+    from trajkit.timing import plan_path_timing
 
     robot = _robot(model)
     rng = np.random.default_rng(seed)
@@ -552,13 +565,46 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds,
     tm = plan(path)
     t0 = frac * tm.duration
     s0, v0, a0, _ = tm.sample(t0)[:, 0]
-    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    return plan, path, robot.cartesian_accel, tm.duration - t0, (s0, v0, a0)
+
+
+def _check_sharp_re_plan(rest, path, s0, start, left, longer, a_tool):
+    """A re-plan from ``s0`` in the state ``start`` (speed, acceleration) is solved
+    without a uniform slow-down, keeps every joint limit and the tool's acceleration
+    limit ``a_tool`` (on the exact derivatives at 40 points of every piece), starts in
+    that state and takes between 0.998 and ``1 + longer`` times ``left``; returns the
+    tool's largest acceleration."""
+    from test_timing import LIMIT_RTOL, _dense_use
+
+    from trajkit.robot._cartesian import _tool_curvature
+
     assert rest.info["status"] == "Solved" and rest.time_scale == 1.0
-    assert (1 - 2e-3) * (tm.duration - t0) <= rest.duration <= (1 + longer) * (tm.duration - t0)
+    assert (1 - 2e-3) * left <= rest.duration <= (1 + longer) * left
     assert max(_dense_use(rest, 40)) <= 1 + LIMIT_RTOL
     t = (rest.t[:-1, None] + np.diff(rest.t)[:, None] * np.linspace(0.0, 1.0, 40)[None, :]).ravel()
     ss, sd, sdd, _ = rest.sample(t)
     tool = np.hypot(sdd, _tool_curvature(path, ss + s0) * sd * sd)
-    assert tool.max() <= robot.cartesian_accel * (1 + LIMIT_RTOL)
-    assert (tool.max() >= 0.999 * robot.cartesian_accel) == binds
-    np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, v0, a0], rtol=0, atol=1e-12)
+    assert tool.max() <= a_tool * (1 + LIMIT_RTOL)
+    np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, *start], rtol=0, atol=1e-12)
+    return float(tool.max())
+
+
+def test_re_plans_from_start_states_a_round_off_apart_agree():
+    """A re-plan of a sharp-corner chain (UR5, the one of the test above whose
+    timing within the limits came after a shorter one above them) from its state
+    at half its duration, and from two states that differ from it by about 1e-13
+    (relative, in speed and acceleration): within the limits, and none more than
+    2 % longer than the time left. Their rounds of local lowering differed: the
+    second one's timing was 10 % longer (1.101 of the time left; the others
+    1.006 and 1.0034; the state with 20 such offsets: 1.0034 to 1.101), after an
+    attempt whose linearised rounds went astray (a joint's jerk 4.35 times its
+    limit) had its limits lowered by that ratio. With a moving state no limit is
+    now lowered in one round by more than the least excess of the attempts
+    before (1.0022 to 1.0115 over those 20)."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("ur5", 901, 1, 0.5)
+    for dv, da in ((0.0, 0.0), (-2.71116248e-13, -1.88901325e-13), (9.05355867e-14, 4.46374572e-14)):
+        start = (v0 * (1 + dv), a0 * (1 + da))
+        rest = plan(PathRest(path, s0), s0, start_speed=start[0], start_accel=start[1])
+        _check_sharp_re_plan(rest, path, s0, start, left, 2e-2, a_tool)

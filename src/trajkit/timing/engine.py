@@ -1878,6 +1878,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             jpath_scale = np.ones(s.size - 1)  # (lowered only with a moving state, see below)
             apath_scale = np.ones(s.size)  # (the same)
             attempt = 0
+            least_worst = math.inf  # the least excess of the attempts so far
             init_settled = False  # init is a solution of the same grid
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
@@ -1965,22 +1966,28 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     cap, vcap, kappa = on_grid(s, d1)
                     x_cap = np.minimum(x_cap, cap ** 2)
                     splits += 1
+                    least_worst = min(least_worst, use.worst)
                     continue
                 tightened += 1
                 attempt += 1
+                # with a moving state, an attempt further above a limit than an earlier
+                # one (its linearised rounds went astray): solved again from it, no
+                # limit lowered; and no limit lowered by more than the least excess
+                top = max(least_worst, 1.0 + SPLIT_ABOVE) if moving else math.inf
+                least_worst = min(least_worst, use.worst)
                 for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
                     over = ratio > 1.0 + CHECK_RTOL
                     if not over.any():
                         continue
                     rows, cols = np.nonzero(over)
                     c = cell[rows]
-                    f = (1.0 - TIGHTEN_MARGIN) / ratio[rows, cols]
+                    f = (1.0 - TIGHTEN_MARGIN) / np.minimum(ratio[rows, cols], top)
                     for node in (c, c + 1):
                         np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
                 over = rs > 1.0 + CHECK_RTOL
                 if over.any():
                     c = cell[over]
-                    f = ((1.0 - TIGHTEN_MARGIN) / rs[over]) ** 2
+                    f = ((1.0 - TIGHTEN_MARGIN) / np.minimum(rs[over], top)) ** 2
                     for node in (c, c + 1):
                         np.minimum.at(x_cap, node, f * x_cap[node])
                     np.minimum.at(xmid_scale, c, f * xmid_scale[c])
@@ -1990,7 +1997,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     over = np.abs(jk) > j_path * (1.0 + CHECK_RTOL)
                     if over.any():
                         c = piv[over]
-                        f = (1.0 - TIGHTEN_MARGIN) * j_path / np.abs(jk[over])
+                        f = (1.0 - TIGHTEN_MARGIN) / np.minimum(np.abs(jk[over]) / j_path, top)
                         np.minimum.at(jpath_scale, c, f * jpath_scale[c])
                 if moving and math.isfinite(a_path) and use.path_acceleration > 1.0 + CHECK_RTOL:
                     # ... and its acceleration, lowered at the nodes of the pieces above it
@@ -2002,7 +2009,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         over = ratio == ratio.max()
                         ratio[over] = use.path_acceleration
                     c = piv[over]
-                    f = (1.0 - TIGHTEN_MARGIN) / ratio[over]
+                    f = (1.0 - TIGHTEN_MARGIN) / np.minimum(ratio[over], top)
                     for node in (c, c + 1):
                         np.minimum.at(apath_scale, node, np.minimum(1.0, f * apath_scale[node]))
                 if moving and use.worst <= 1.0 + ROUNDOFF_EXCESS:
