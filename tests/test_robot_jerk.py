@@ -323,6 +323,15 @@ def test_random_sharp_corner_chains_keep_joint_limits(model):
     assert ok >= n, (ok, n)
 
 
+def _with_legs(robot):
+    """``robot`` with separate legs: deceleration 0.6 of the acceleration limit, its
+    jerk 0.5 of the jerk limit."""
+    robot.limits = [AxisLimits(lm.v_max, lm.a_max, lm.j_max, a_max_decel=0.6 * lm.a_max,
+                               j_max_decel=0.5 * lm.j_max, position_min=lm.position_min,
+                               position_max=lm.position_max, name=lm.name) for lm in robot.limits]
+    return robot
+
+
 def test_a_chain_the_local_lowering_leaves_far_over_a_limit_gets_more_rounds():
     """A Panda chain through sharp corners (drawn by a random sweep) with separate
     legs (deceleration 0.6 of the acceleration, jerk 0.5): after the two rounds of
@@ -334,16 +343,37 @@ def test_a_chain_the_local_lowering_leaves_far_over_a_limit_gets_more_rounds():
 
     from trajkit.timing import engine
 
-    robot = _robot("panda")
-    robot.limits = [AxisLimits(lm.v_max, lm.a_max, lm.j_max, a_max_decel=0.6 * lm.a_max,
-                               j_max_decel=0.5 * lm.j_max, position_min=lm.position_min,
-                               position_max=lm.position_max, name=lm.name) for lm in robot.limits]
+    robot = _with_legs(_robot("panda"))
     rng = np.random.default_rng(401)
     q0 = _chain_start(robot, "panda", rng)
     tm = run_motions(robot, _sharp_chain(robot, rng, q0), q0).segments[0].chain.timing
     assert tm.time_scale <= engine.SLOW_SCALE and tm.info["tightened"] > engine.MAX_TIGHTEN
     assert tm.duration < 1.94
     assert max(_dense_use(tm, 40)) <= 1 + LIMIT_RTOL
+
+
+def test_the_final_check_takes_the_true_derivatives_at_its_largest_values():
+    """A palletizer chain through sharp corners (drawn by a random sweep) with
+    separate legs, whose joint C reaches its braking jerk limit between two of the
+    final check's points: the largest value its zoom found, on the corrected
+    interpolation of the derivatives, was within the limit, the true one 1.26e-7
+    above it (on the exact derivatives at 30 points of every piece). The largest
+    values the zoom finds close to a limit are now evaluated with the true
+    derivatives too. Every joint limit with its legs kept on the exact derivatives
+    at 30 and at 40 points of every piece."""
+    from test_timing import _dense_use
+
+    robot = _with_legs(_robot("palletizer"))
+    rng = np.random.default_rng(902)
+    for _ in range(17):  # the chain drawn 17th
+        q0 = _chain_start(robot, "palletizer", rng)
+        mots = _sharp_chain(robot, rng, q0)
+    tm = run_motions(robot, mots, q0).segments[0].chain.timing
+    assert tm.info["status"] == "Solved"
+    for n in (30, 40):
+        use = _dense_use(tm, n)
+        assert max(use) <= 1 + LIMIT_RTOL, (n, use)
+    assert use[2] > 1 - 1e-6  # (the braking jerk at its limit)
 
 
 def test_the_final_check_sees_a_corner_blends_largest_joint_jerk():

@@ -293,6 +293,7 @@ def _plan_both(monkeypatch, path, lims, **kw):
     with monkeypatch.context() as mp:
         mp.setattr(engine, "_check", functools.partial(_check, compiled=False))
         mp.setattr(engine, "_zoom", functools.partial(_zoom, compiled=False))
+        mp.setattr(engine, "_use_at", functools.partial(engine._use_at, compiled=False))
         reference = plan_path_timing(path, lims, **kw)
     return compiled, reference
 

@@ -253,6 +253,10 @@ VERIFY_ABOVE = 1e-2
 VERIFY_POINTS = (0.25, 0.5, 0.75)
 VERIFY_FULL_ABOVE = 1e-3
 
+#: The largest values the final check's zoom finds within this fraction of a limit
+#: are evaluated again with the path's true derivatives.
+EXACT_PEAK_ABOVE = 1e-5
+
 #: Rounds of lowering a limit locally after the check found an excess.
 MAX_TIGHTEN = 2
 
@@ -1397,6 +1401,15 @@ def _evaluate_compiled(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt):
     return use, cell, rv, ra, rj, rs, worst
 
 
+def _use_at(s_grid, der, t, st, jerk, lim: _Limits, path, piece, dt,
+            compiled: bool = _checks.AVAILABLE) -> LimitUse:
+    """The :class:`LimitUse` of the samples at the times ``t[piece] + dt`` of the
+    pieces (derivatives from ``path`` as for :func:`_check`)."""
+    if compiled:
+        return _evaluate_compiled(s_grid, der, t, st, jerk, lim, path, piece, dt)[0]
+    return _use_of(lim, *_evaluate(s_grid, der, t, st, jerk, lim, path, piece, dt)[:6])
+
+
 def _reversals(s_grid, der, t, st, jerk, lim: _Limits, path,
                compiled: bool = _checks.AVAILABLE) -> LimitUse:
     """The limit ratios on both sides of every joint reversal inside the motion.
@@ -1517,7 +1530,8 @@ def _recheck(prev: tuple, cells: np.ndarray, s_grid, der, t, st, jerk, lim: _Lim
 
 
 def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp: int,
-          compiled: bool = _checks.AVAILABLE, samples: list | None = None) -> LimitUse:
+          compiled: bool = _checks.AVAILABLE, samples: list | None = None,
+          peaks: list | None = None) -> LimitUse:
     """The largest limit ratios inside the pieces that come close to a limit, found by
     repeated bracketing around their largest sampled values.
 
@@ -1530,7 +1544,9 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
     tiny fraction of the piece's duration. A bracket whose largest value is at an
     end of its piece stops there (the value at the end is exact). ``compiled`` as
     for :func:`_check`. ``samples``: a list that gets the grid cell and the
-    ratios ``rv, ra, rj`` (n, m) and ``rs`` (n,) of every level's samples.
+    ratios ``rv, ra, rj`` (n, m) and ``rs`` (n,) of every level's samples;
+    ``peaks``: a list that gets, for the brackets that end at a level, their piece,
+    the time in it of their largest value and that value (each (k,)).
     """
     k = jerk.size
     m = lim.vlim.size
@@ -1578,6 +1594,10 @@ def _zoom(s_grid, der, t, st, jerk, lim: _Limits, path, ratios: np.ndarray, npp:
         # points: done (the same largest ratios on 54 arm motions and the 200
         # speed-dip lines of the feed sweep as with every level)
         keep = (centre > 0.0) & (centre < 1.0)
+        if peaks is not None:
+            done = ~keep if _level < ZOOM_LEVELS - 1 else np.ones(keep.size, dtype=bool)
+            top = worst.reshape(pieces.size, ZOOM_POINTS)[rows, best]
+            peaks.append((pieces[done], (dur * centre)[done], top[done]))
         if not keep.any():
             break
         pieces, centre, half, dur = pieces[keep], centre[keep], half[keep], dur[keep]
@@ -1793,9 +1813,17 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         use, worst = res[0], res[6]
         # the pieces that come close to a limit, again: the largest value inside a
         # piece, not only at the sampled points
-        zu = _zoom(s, der, t, st, jk, lim, src, worst, per_piece + 2)
+        peaks: list = []
+        use = _max_use(use, _zoom(s, der, t, st, jk, lim, src, worst, per_piece + 2, peaks=peaks))
+        if exact is None and peaks:
+            # ... there with the path's true derivatives (the corrected interpolation's
+            # error left, about 1e-7 of a limit, could hide an excess)
+            pc, dt, top = (np.concatenate(a) for a in zip(*peaks))
+            near = top > 1.0 - EXACT_PEAK_ABOVE
+            if near.any():
+                use = _max_use(use, _use_at(s, der, t, st, jk, lim, cached, pc[near], dt[near]))
         # ... and both sides of every joint reversal (where the leg changes)
-        return _max_use(_max_use(use, zu), _reversals(s, der, t, st, jk, lim, src))
+        return _max_use(use, _reversals(s, der, t, st, jk, lim, src))
 
     def s_curve_states(dur: np.ndarray, jk: np.ndarray):
         """Times and states ``(s, sdot, sddot)`` of an S-curve of ``s`` (its piece
