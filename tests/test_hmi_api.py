@@ -178,6 +178,30 @@ def test_one_run_at_a_time_and_estop(client):
     assert wait_state(client, "idle") == "idle"
 
 
+def test_estop_latency_counts_from_the_queueing(client, monkeypatch):
+    """An emergency stop is applied in the first control period after it is
+    queued, and its latency counts from there: the request thread building the
+    command can lose the interpreter to the run loop, which then runs periods
+    the command is not in yet (here made to happen: building it waits 25 ms,
+    two and a half periods of this job). Stamped before it was built, the stop showed 11 ms of latency
+    with a period of 2 ms in a loaded test run."""
+    from trajkit.hmi import engine
+
+    assert client.post("/api/job", json=FAST_SADDLE).status_code == 200
+    job = client.session.job
+    assert client.post("/api/run/start").json()["state"] == "running"
+
+    class SlowCommand(engine._Command):
+        def __init__(self, *args, **kwargs):
+            time.sleep(0.025)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "_Command", SlowCommand)
+    client.post("/api/run/estop")
+    assert wait_state(client, "fault") == "fault"
+    assert 0.0 <= client.session.last_estop_latency_s <= job.period
+
+
 def test_estop_at_rest_latches_a_fault(client):
     assert client.post("/api/run/estop").json()["state"] == "fault"
     assert "reset first" in error_of(client.post("/api/jog", json={"joint": "J1", "step": 5}), 409)

@@ -484,17 +484,21 @@ class Session:
         """Queue an emergency stop without waiting for anything; return its command.
 
         A machine with a run (or the rest of one) gets the stop in the first
-        control period that starts after ``arrival`` (the command's ``done``
+        control period that starts after ``arrival`` (by default the time the
+        command is queued; the command's ``done``
         is set then); a machine at rest without one latches the fault at once
         (returns None). Never blocks on the session lock, so no other request
         can hold it up.
         """
-        arrival = self._clock() if arrival is None else arrival
         if self.drive is not None:
-            cmd = _Command("estop", arrival)
+            cmd = _Command("estop", math.nan)
+            # (stamped as it is queued: building the command, with its event, is not
+            # part of the wait for a control period)
+            cmd.arrival = self._clock() if arrival is None else arrival
             self._cmds.append(cmd)  # deque.append is atomic
             self._wake.set()
             return cmd
+        arrival = self._clock() if arrival is None else arrival
         with self._lock:
             if self.drive is None:
                 self.state = "fault"
