@@ -1998,9 +1998,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     continue
                 tightened += 1
                 attempt += 1
-                # with a moving state, an attempt further above a limit than an earlier
-                # one (its linearised rounds went astray): solved again from it, no
-                # limit lowered; and no limit lowered by more than the least excess
+                # with a moving state no limit is lowered by more than the least excess
+                # of the attempts so far (at least SPLIT_ABOVE): an attempt further above
+                # a limit than an earlier one had its linearised rounds go astray, and
+                # its ratios overstate what that limit needs
                 top = max(least_worst, 1.0 + SPLIT_ABOVE) if moving else math.inf
                 least_worst = min(least_worst, use.worst)
                 for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
