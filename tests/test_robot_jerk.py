@@ -82,6 +82,16 @@ def _chain_start(robot, model, rng):
     return _random_start(robot, rng)
 
 
+def _nth_chain(robot, model, seed, index):
+    """The start and motions of the ``index``-th random sharp-corner chain drawn
+    from ``seed`` (drawing is cheap; planning is not)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(index + 1):
+        q0 = _chain_start(robot, model, rng)
+        mots = _sharp_chain(robot, rng, q0)
+    return q0, mots
+
+
 def cp_jerk_ratio(run, dt):
     """Largest |third difference of IK joints| / dt^3 / j_max per joint over the CP segments."""
     jmax = _jmax(run.robot)
@@ -364,10 +374,7 @@ def test_the_final_check_takes_the_true_derivatives_at_its_largest_values():
     from test_timing import _dense_use
 
     robot = _with_legs(_robot("palletizer"))
-    rng = np.random.default_rng(902)
-    for _ in range(17):  # the chain drawn 17th
-        q0 = _chain_start(robot, "palletizer", rng)
-        mots = _sharp_chain(robot, rng, q0)
+    q0, mots = _nth_chain(robot, "palletizer", 902, 16)
     tm = run_motions(robot, mots, q0).segments[0].chain.timing
     assert tm.info["status"] == "Solved"
     for n in (30, 40):

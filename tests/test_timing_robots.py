@@ -545,16 +545,13 @@ def _sharp_chain_state(model, seed, index, frac):
     (s0, v0, a0))`` with ``plan(jp, s0=0.0, **state)`` the chain's planning call on
     ``jp`` (a re-plan from ``s0``), the tool's acceleration limit, the time left after
     ``frac`` of the duration and the path state there."""
-    from test_robot_jerk import _chain_start, _robot, _sharp_chain
+    from test_robot_jerk import _nth_chain, _robot
 
     from trajkit.robot._cartesian import _tool_curvature
     from trajkit.timing import plan_path_timing
 
     robot = _robot(model)
-    rng = np.random.default_rng(seed)
-    for _ in range(index + 1):  # the chain drawn index-th (drawing is cheap; planning is not)
-        q0 = _chain_start(robot, model, rng)
-        mots = _sharp_chain(robot, rng, q0)
+    q0, mots = _nth_chain(robot, model, seed, index)
     path = run_motions(robot, mots, q0).segments[0].chain.path
 
     def plan(jp, s0=0.0, **state):

@@ -1957,6 +1957,12 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                                                              exact if cheap else _Interp(s, der, breaks, left))
                     close = (cell, near)
                 k = _uniform_scale(use)
+                # with a moving state no limit is lowered by more than the least excess
+                # of the attempts before this one (at least SPLIT_ABOVE): an attempt
+                # further above a limit than an earlier one had its linearised rounds go
+                # astray, and its ratios overstate what that limit needs
+                top = max(least_worst, 1.0 + SPLIT_ABOVE) if moving else math.inf
+                least_worst = min(least_worst, use.worst)
                 # a timing that needs no uniform slow-down keeps its exact cruise speeds:
                 # preferred unless a slowed one is clearly faster
                 score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
@@ -1994,16 +2000,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     cap, vcap, kappa = on_grid(s, d1)
                     x_cap = np.minimum(x_cap, cap ** 2)
                     splits += 1
-                    least_worst = min(least_worst, use.worst)
                     continue
                 tightened += 1
                 attempt += 1
-                # with a moving state no limit is lowered by more than the least excess
-                # of the attempts so far (at least SPLIT_ABOVE): an attempt further above
-                # a limit than an earlier one had its linearised rounds go astray, and
-                # its ratios overstate what that limit needs
-                top = max(least_worst, 1.0 + SPLIT_ABOVE) if moving else math.inf
-                least_worst = min(least_worst, use.worst)
                 for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
                     over = ratio > 1.0 + CHECK_RTOL
                     if not over.any():
