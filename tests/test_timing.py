@@ -928,6 +928,89 @@ def test_the_rest_of_a_path_is_the_path_shifted():
             PathRest(LinearJointPath([0.0], [2.0]), bad)
 
 
+class _TwoCubics:
+    """A one-joint path of two cubics meeting at ``b`` with continuous ``q``, its
+    first and second derivatives (``q(s) = s + s^3 / 6`` before ``b``): third
+    derivative 1 before ``b``, -1 from ``b`` on."""
+
+    n_joints = 1
+    cheap_derivatives = True
+
+    def __init__(self, b: float, length: float) -> None:
+        self.b, self.length = b, length
+        self.breakpoints = np.array([b])
+
+    def derivatives(self, s):
+        s = np.asarray(s, dtype=float)
+        b = self.b
+        before = s < b
+        h = s - b
+        q = np.where(before, s + s**3 / 6, b + b**3 / 6 + (1 + b * b / 2) * h + b / 2 * h * h - h**3 / 6)
+        d1 = np.where(before, 1 + s * s / 2, 1 + b * b / 2 + b * h - h * h / 2)
+        d2 = np.where(before, s, b - h)
+        d3 = np.where(before, 1.0, -1.0)
+        return tuple(a[:, None] for a in (q, d1, d2, d3))
+
+
+def test_the_rest_of_a_path_keeps_every_point_on_its_own_piece():
+    """Shifting by the start rounds: here the point just before the shifted
+    breakpoint, plus the start, is the breakpoint itself (where the next piece's
+    third derivative begins). PathRest evaluates it on the piece before the
+    breakpoint, the breakpoint on the piece after it, and everything within
+    [start, end] (a part that ends before the path does)."""
+    s0, b = 0.10314816799553742, 0.12153781923421983
+    path = _TwoCubics(b, 0.2)
+    rest = PathRest(path, s0)
+    br = float(rest.breakpoints[0])
+    below = np.nextafter(br, -np.inf)
+    assert below + s0 == b  # (the round-off this guards against)
+    d3 = rest.derivatives(np.array([0.0, below, br, rest.length]))[3][:, 0]
+    np.testing.assert_array_equal(d3, [1.0, 1.0, -1.0, -1.0])
+    q = rest.derivatives(np.array([0.0, below, br]))[0][:, 0]
+    np.testing.assert_allclose(q, path.derivatives(np.array([s0, b, b]))[0][:, 0], rtol=1e-15)
+    part = PathRest(path, s0, 0.15)
+    assert part.length == 0.15 - s0 and part.end == 0.15
+    np.testing.assert_array_equal(part.breakpoints, rest.breakpoints)
+    got = part.derivatives(np.array([-1.0, 0.0, part.length, 1.0]))[0][:, 0]
+    np.testing.assert_array_equal(got, path.derivatives(np.array([s0, s0, 0.15, 0.15]))[0][:, 0])
+    assert PathRest(path, s0, 0.11).breakpoints.size == 0
+    for bad in (s0, 0.0, 0.3, math.nan):
+        with pytest.raises(InvalidInputError, match=r"end must lie in \(0, 0\.2\]|start must lie"):
+            PathRest(path, s0, bad)
+
+
+def test_joint_states_take_a_piece_s_own_side_of_a_breakpoint():
+    """A timing's piece that ends at a breakpoint, where the path's third
+    derivative steps: a time inside it whose ``s(t)`` rounds onto the breakpoint
+    (or past it) takes the derivatives from before it, as the rest of the
+    piece does (with those after it the joint's jerk mixed the next piece's
+    third derivative with this piece's path jerk: a random sweep found such a
+    sample 2.5e-8 over a jerk limit that no motion reaches). The piece after
+    it starts with the derivatives after it."""
+    b = 0.12153781923421983
+    path = _TwoCubics(b, 0.2)
+    tm = plan_path_timing(path, [AxisLimits(1.0, 2.0, 10.0)])
+    k = int(np.flatnonzero(tm.state[1:, 0] == b)[0])  # (the piece that ends there)
+    t_in = 0.5 * (tm.t[k] + tm.t[k + 1])
+    real = tm.sample
+    _, d1, d2, d3 = path.derivatives(np.array([np.nextafter(b, -np.inf), b]))
+    for s_at in (b, np.nextafter(b, np.inf)):
+        def onto(time, s_at=s_at):
+            out = real(time)
+            out[0] = s_at
+            return out
+        tm.sample = onto
+        _, v, a, j = onto(t_in)[:, 0]
+        jerk = tm.joint_states(t_in)[3][0, 0]
+        assert jerk == pytest.approx(d3[0, 0] * v**3 + 3 * d2[0, 0] * v * a + d1[0, 0] * j, rel=1e-14)
+        assert d3[0, 0] == 1.0 and d3[1, 0] == -1.0
+    tm.sample = real
+    _, v, a, j = real(tm.t[k + 1])[:, 0]
+    assert real(tm.t[k + 1])[0, 0] == b
+    jerk = tm.joint_states(tm.t[k + 1])[3][0, 0]
+    assert jerk == pytest.approx(-(v**3) + 3 * d2[1, 0] * v * a + d1[1, 0] * j, rel=1e-14)
+
+
 def test_a_line_is_planned_again_from_a_state_of_its_own_timing():
     """The rest of a joint-space line, planned again from the state of its own
     timing at 20 %, 50 % and 80 % of its duration: the one-axis state-to-state

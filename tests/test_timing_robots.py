@@ -505,7 +505,7 @@ def test_re_plans_of_the_benchmark_lins_from_their_own_states(motion, frac):
 @pytest.mark.parametrize(("model", "seed", "index", "frac", "binds", "longer"),
                          [("scara", 952, 6, 0.5, True, 1e-3), ("ur5", 901, 6, 0.7, True, 1e-3),
                           ("panda", 951, 2, 0.3, False, 2e-3), ("arm6", 900, 2, 0.1, False, 1e-3),
-                          ("ur5", 901, 1, 0.5, False, 2e-2)])
+                          ("ur5", 901, 1, 0.5, False, 1e-3)])
 def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds, longer):
     """Chains through sharp corners (the random chains of ``test_robot_jerk``, drawn
     from ``seed``) re-planned from their own state at ``frac`` of the duration; each
@@ -539,18 +539,19 @@ def test_re_plans_of_random_sharp_corner_chains(model, seed, index, frac, binds,
     assert (tool >= 0.999 * a_tool) == binds
 
 
-def _sharp_chain_state(model, seed, index, frac):
+def _sharp_chain_state(model, seed, index, frac, legs=False):
     """The ``index``-th random sharp-corner chain of ``seed`` on ``model`` (the
     chains of ``test_robot_jerk``), planned from rest: ``(plan, path, a_tool, left,
     (s0, v0, a0))`` with ``plan(jp, s0=0.0, **state)`` the chain's planning call on
     ``jp`` (a re-plan from ``s0``), the tool's acceleration limit, the time left after
-    ``frac`` of the duration and the path state there."""
-    from test_robot_jerk import _nth_chain, _robot
+    ``frac`` of the duration and the path state there. ``legs``: the robot with
+    separate legs (``test_robot_jerk._with_legs``)."""
+    from test_robot_jerk import _nth_chain, _robot, _with_legs
 
     from trajkit.robot._cartesian import _tool_curvature
     from trajkit.timing import plan_path_timing
 
-    robot = _robot(model)
+    robot = _with_legs(_robot(model)) if legs else _robot(model)
     q0, mots = _nth_chain(robot, model, seed, index)
     path = run_motions(robot, mots, q0).segments[0].chain.path
 
@@ -586,22 +587,54 @@ def _check_sharp_re_plan(rest, path, s0, start, left, longer, a_tool):
     return float(tool.max())
 
 
+def test_a_re_plan_with_separate_legs_past_a_corner_blend():
+    """An arm6 chain through sharp corners with separate legs (deceleration 0.6 of
+    the acceleration limit, its jerk 0.5), re-planned from its state at half its
+    duration, raised InfeasibleError twice over:
+
+    - ``PathRest`` shifts the engine's points by the start, and the sum
+      rounded the point just before a corner blend's breakpoint onto the
+      breakpoint: the derivatives the engine takes from the piece that ends
+      there came from the blend after it (a joint's third derivative 400221
+      instead of -3021), and the check with the true derivatives found that
+      joint's jerk 25 % over its limit, in every attempt;
+    - with that mended, an attempt 0.25 % above a limit was followed by
+      attempts twice over the joint's braking jerk limit, which the rounds of
+      local lowering lowered by at most 1 % each (1.05 left after eight).
+      That bound now grows with every attempt in a row above the least excess.
+
+    The re-plan keeps every limit and takes the time the first timing had
+    left to within 0.2 % (0.9996 of it)."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("arm6", 900, 7, 0.5, legs=True)
+    assert np.any(np.abs(np.asarray(path.breakpoints) - s0 - 0.018) < 1e-3)
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 2e-3, a_tool)
+
+
 def test_re_plans_from_start_states_a_round_off_apart_agree():
     """A re-plan of a sharp-corner chain (UR5, the one of the test above whose
     timing within the limits came after a shorter one above them) from its state
     at half its duration, and from two states that differ from it by about 1e-13
-    (relative, in speed and acceleration): within the limits, and none more than
-    2 % longer than the time left. Their rounds of local lowering differed: the
-    second one's timing was 10 % longer (1.101 of the time left; the others
-    1.006 and 1.0034; the state with 20 such offsets: 1.0034 to 1.101), after an
-    attempt whose linearised rounds went astray (a joint's jerk 4.35 times its
-    limit) had its limits lowered by that ratio. With a moving state no limit is
-    now lowered in one round by more than the least excess of the attempts
-    before (1.0022 to 1.0115 over those 20)."""
+    (relative, in speed and acceleration): within the limits, no more than 0.1 %
+    longer than the time left, and the same to 1e-6. Their rounds of local
+    lowering differed: the second one's timing was 10 % longer (1.101 of the
+    time left; the others 1.006 and 1.0034; the state with 20 such offsets:
+    1.0034 to 1.101), after an attempt whose linearised rounds went astray (a
+    joint's jerk 4.35 times its limit) had its limits lowered by that ratio;
+    with a moving state no limit is now lowered in one round by more than the
+    least excess of the attempts before (1.0022 to 1.0115 over those 20).
+    ``PathRest`` evaluated the point just before a corner's breakpoint on the
+    piece after it, as the shift by the start rounded onto the breakpoint: with
+    that mended, all 20 give 0.99809 of the time left."""
     from trajkit.timing import PathRest
 
     plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("ur5", 901, 1, 0.5)
+    durations = []
     for dv, da in ((0.0, 0.0), (-2.71116248e-13, -1.88901325e-13), (9.05355867e-14, 4.46374572e-14)):
         start = (v0 * (1 + dv), a0 * (1 + da))
         rest = plan(PathRest(path, s0), s0, start_speed=start[0], start_accel=start[1])
-        _check_sharp_re_plan(rest, path, s0, start, left, 2e-2, a_tool)
+        _check_sharp_re_plan(rest, path, s0, start, left, 1e-3, a_tool)
+        durations.append(rest.duration)
+    assert max(durations) <= min(durations) * (1 + 1e-6), durations

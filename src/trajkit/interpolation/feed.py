@@ -344,23 +344,6 @@ def plan_feed(
     return FeedPlan(path, F, A, J, motion, slowdowns, stops, profiles, names)
 
 
-class _Shifted:
-    """A joint path restricted to ``[s0, s1]`` of another (re-based at 0)."""
-
-    def __init__(self, base: Any, s0: float, s1: float) -> None:
-        self.base = base
-        self.s0 = s0
-        self.length = s1 - s0
-        self.n_joints = base.n_joints
-        bp = np.asarray(getattr(base, "breakpoints", np.zeros(0)), dtype=float)
-        self.breakpoints = bp[(bp > s0) & (bp < s1)] - s0
-        self.cheap_derivatives = bool(getattr(base, "cheap_derivatives", False))
-
-    def derivatives(self, s: np.ndarray):
-        return self.base.derivatives(np.clip(self.s0 + np.asarray(s, dtype=float), self.s0,
-                                             self.s0 + self.length))
-
-
 class _ArcLength:
     """The path parameter itself as the one joint (``q = s``): the tangential limits."""
 
@@ -381,7 +364,7 @@ class _ArcLength:
 
 def _engine_stretch(path: Path, s0: float, s1: float, F: float, A: float, J: float, cap, axes):
     """The stretch [s0, s1] (rest to rest) timed by the path-timing engine."""
-    from ..timing import plan_path_timing
+    from ..timing import PathRest, plan_path_timing
 
     def speed(s):
         return np.minimum(F, cap(s0 + np.asarray(s))[0]) if cap is not None else np.full(np.size(s), F)
@@ -390,7 +373,7 @@ def _engine_stretch(path: Path, s0: float, s1: float, F: float, A: float, J: flo
         jp, lims = _ArcLength(s1 - s0), [AxisLimits(math.inf, A, J, name="path")]
         return plan_path_timing(jp, lims, speed=speed)
     base, lims, _names = axes
-    return plan_path_timing(_Shifted(base, s0, s1), list(lims), speed=speed, accel=A, jerk=J)
+    return plan_path_timing(PathRest(base, s0, s1), list(lims), speed=speed, accel=A, jerk=J)
 
 
 def ramp_mask(v: np.ndarray) -> np.ndarray:

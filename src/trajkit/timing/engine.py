@@ -281,6 +281,13 @@ TIGHTEN_ABOVE = 1e-6
 #: to this many rounds, and the rounds' check is as dense as the final one.
 MAX_TIGHTEN_MOVING = 8
 
+#: With a moving boundary state an attempt further above a limit than the least
+#: excess of the attempts before it has that limit lowered by at most that least
+#: excess (at least SPLIT_ABOVE), times this factor for every attempt in a row
+#: before it that was above it too (an excess that persists is the motion's
+#: own, not rounds gone astray).
+CLIP_GROWTH = 1.5
+
 #: A timing that had to be slowed down uniformly counts this fraction longer
 #: when the attempts are compared.
 SCALED_PENALTY = 2e-3
@@ -438,8 +445,20 @@ class PathTiming:
 
     def joint_states(self, time: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Joint position, velocity, acceleration and jerk at ``time`` (each (n, m)), from
-        the path's derivatives at ``s(t)`` and the chain rule."""
+        the path's derivatives at ``s(t)`` and the chain rule.
+
+        A time inside a piece that ends at one of the path's breakpoints takes the
+        derivatives from before the breakpoint, where ``s(t)`` rounds onto it (or
+        past it): the path's higher derivatives may step there, and the piece's
+        own path jerk belongs to the side before it."""
         s, v, a, j = self.sample(time)
+        bp = np.asarray(getattr(self.path, "breakpoints", np.zeros(0)), dtype=float)
+        if bp.size and self.jerk.size:
+            tt = np.atleast_1d(np.asarray(time, dtype=np.float64))
+            k = np.searchsorted(self.t[1:-1], tt, side="right")  # (the piece of every time)
+            end = self.state[k + 1, 0]
+            before = np.isin(end, bp) & (tt < self.t[k + 1]) & (s >= end)
+            s = np.where(before, np.nextafter(end, -np.inf), s)
         q, d1, d2, d3 = self.path.derivatives(s)
         qd = d1 * v[:, None]
         qdd = d2 * (v * v)[:, None] + d1 * a[:, None]
@@ -1907,6 +1926,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             apath_scale = np.ones(s.size)  # (the same)
             attempt = 0
             least_worst = math.inf  # the least excess of the attempts so far
+            above_least = 0  # attempts in a row above it
             init_settled = False  # init is a solution of the same grid
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
@@ -1960,8 +1980,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 # with a moving state no limit is lowered by more than the least excess
                 # of the attempts before this one (at least SPLIT_ABOVE): an attempt
                 # further above a limit than an earlier one had its linearised rounds go
-                # astray, and its ratios overstate what that limit needs
-                top = max(least_worst, 1.0 + SPLIT_ABOVE) if moving else math.inf
+                # astray, and its ratios overstate what that limit needs; that bound
+                # grows by CLIP_GROWTH with every attempt in a row above it
+                top = (max(least_worst, 1.0 + SPLIT_ABOVE) * CLIP_GROWTH**above_least
+                       if moving else math.inf)
+                above_least = above_least + 1 if use.worst >= least_worst else 0
                 least_worst = min(least_worst, use.worst)
                 # a timing that needs no uniform slow-down keeps its exact cruise speeds:
                 # preferred unless a slowed one is clearly faster

@@ -101,19 +101,28 @@ class LinearJointPath:
 
 
 class PathRest:
-    """The rest of a joint path from ``start`` on, parameterised from 0: what an
-    online re-plan times from the state of a running timing.
+    """The part of a joint path from ``start`` on (to ``end``), parameterised from 0:
+    what an online re-plan times from the state of a running timing.
 
-    ``s`` of this path is ``s - start`` of ``path``; its length is ``path.length
-    - start``, its breakpoints those of ``path`` beyond ``start``. A path
-    callable of the original's ``s`` (a speed cap, the tool path's curvature)
-    needs the same shift.
+    ``s`` of this path is ``s - start`` of ``path``; its length is ``end -
+    start``, its breakpoints those of ``path`` between ``start`` and ``end``. A
+    path callable of the original's ``s`` (a speed cap, the tool path's
+    curvature) needs the same shift.
+
+    The shift keeps every point on its own piece of ``path``: ``s + start`` can
+    round onto a breakpoint from below (``s`` just before a shifted breakpoint,
+    where the engine takes the derivatives of the piece that ends there), so a
+    point before (at or after) a shifted breakpoint is evaluated before (at or
+    after) the original one.
 
     Parameters
     ----------
     path : JointPath
     start : float
-        Where the rest begins, in ``[0, path.length)`` [path unit].
+        Where this part begins, in ``[0, end)`` [path unit].
+    end : float, optional
+        Where it ends, in ``(start, path.length]`` [path unit]; the path's end
+        by default.
 
     Examples
     --------
@@ -124,20 +133,29 @@ class PathRest:
     ...                         start_speed=v0, start_accel=a0)
     """
 
-    def __init__(self, path: JointPath, start: float) -> None:
+    def __init__(self, path: JointPath, start: float, end: float | None = None) -> None:
         L = float(path.length)
+        s1 = L if end is None else float(end)
+        if not (math.isfinite(s1) and 0.0 < s1 <= L):
+            raise InvalidInputError(f"end must lie in (0, {L!r}], got {end!r}")
         s0 = float(start)
-        if not (math.isfinite(s0) and 0.0 <= s0 < L):
-            raise InvalidInputError(f"start must lie in [0, {L!r}), got {start!r}")
+        if not (math.isfinite(s0) and 0.0 <= s0 < s1):
+            raise InvalidInputError(f"start must lie in [0, {s1!r}), got {start!r}")
         self.path = path
         self.start = s0
-        self.length = L - s0
+        self.end = s1
+        self.length = s1 - s0
         self.n_joints = int(path.n_joints)
-        b = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float) - s0
-        self.breakpoints = b[(b > 0.0) & (b < self.length)]
+        b = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
+        b = b[(b > s0) & (b < s1)]
+        self.breakpoints = b - s0
+        # the range of the original s on every piece: [a breakpoint, just before the next]
+        self._lo = np.concatenate([[s0], b])
+        self._hi = np.concatenate([np.nextafter(b, -np.inf), [s1]])
         self.cheap_derivatives = bool(getattr(path, "cheap_derivatives", False))
 
     def derivatives(self, s: np.ndarray):
         """``q``, ``dq/ds``, ``d2q/ds2``, ``d3q/ds3`` at ``s`` (n,) of this path, each (n, m)."""
-        ss = np.minimum(np.asarray(s, dtype=float) + self.start, float(self.path.length))
-        return self.path.derivatives(ss)
+        s = np.asarray(s, dtype=float)
+        k = np.searchsorted(self.breakpoints, s, side="right")
+        return self.path.derivatives(np.clip(s + self.start, self._lo[k], self._hi[k]))
