@@ -1946,6 +1946,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 sol = first if reuse else solve_grid(
                     prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
                     settled=init_settled, near=init_near, duals=init_duals)
+                if sol.status == RELAXED and best is None:
+                    # (a moving state whose first solve on this grid, from the coarser
+                    # grid's solution, ended relaxed: solved again from the jerk-free
+                    # round, as that grid was)
+                    sol = solve_grid(prob, max_rounds=MAX_ROUNDS)
                 if sol.status == RELAXED:  # (no timing: its rounds ended relaxed)
                     if best is None:
                         raise RuntimeError("path timing: the grid problem ended in a relaxed round")
