@@ -590,7 +590,7 @@ def _check_sharp_re_plan(rest, path, s0, start, left, longer, a_tool, shorter=2e
 def test_a_re_plan_with_separate_legs_past_a_corner_blend():
     """An arm6 chain through sharp corners with separate legs (deceleration 0.6 of
     the acceleration limit, its jerk 0.5), re-planned from its state at half its
-    duration, raised InfeasibleError twice over:
+    duration, raised InfeasibleError for two reasons:
 
     - ``PathRest`` shifts the engine's points by the start, and the sum
       rounded the point just before a corner blend's breakpoint onto the
