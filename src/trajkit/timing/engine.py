@@ -2031,19 +2031,24 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     continue
                 tightened += 1
                 attempt += 1
+
+                def lowered(ratio: np.ndarray, top: float = top) -> np.ndarray:
+                    """The factor on a limit whose use is ``ratio`` (> 1), bounded by ``top``."""
+                    return (1.0 - TIGHTEN_MARGIN) / np.minimum(ratio, top)
+
                 for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
                     over = ratio > 1.0 + CHECK_RTOL
                     if not over.any():
                         continue
                     rows, cols = np.nonzero(over)
                     c = cell[rows]
-                    f = (1.0 - TIGHTEN_MARGIN) / np.minimum(ratio[rows, cols], top)
+                    f = lowered(ratio[rows, cols])
                     for node in (c, c + 1):
                         np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
                 over = rs > 1.0 + CHECK_RTOL
                 if over.any():
                     c = cell[over]
-                    f = ((1.0 - TIGHTEN_MARGIN) / np.minimum(rs[over], top)) ** 2
+                    f = lowered(rs[over]) ** 2
                     for node in (c, c + 1):
                         np.minimum.at(x_cap, node, f * x_cap[node])
                     np.minimum.at(xmid_scale, c, f * xmid_scale[c])
@@ -2053,7 +2058,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     over = np.abs(jk) > j_path * (1.0 + CHECK_RTOL)
                     if over.any():
                         c = piv[over]
-                        f = (1.0 - TIGHTEN_MARGIN) / np.minimum(np.abs(jk[over]) / j_path, top)
+                        f = lowered(np.abs(jk[over]) / j_path)
                         np.minimum.at(jpath_scale, c, f * jpath_scale[c])
                 if moving and math.isfinite(a_path) and use.path_acceleration > 1.0 + CHECK_RTOL:
                     # ... and its acceleration, lowered at the nodes of the pieces above it
@@ -2065,7 +2070,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         over = ratio == ratio.max()
                         ratio[over] = use.path_acceleration
                     c = piv[over]
-                    f = (1.0 - TIGHTEN_MARGIN) / np.minimum(ratio[over], top)
+                    f = lowered(ratio[over])
                     for node in (c, c + 1):
                         np.minimum.at(apath_scale, node, np.minimum(1.0, f * apath_scale[node]))
                 if moving and use.worst <= 1.0 + ROUNDOFF_EXCESS:
