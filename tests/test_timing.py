@@ -979,6 +979,58 @@ def test_the_rest_of_a_path_keeps_every_point_on_its_own_piece():
             PathRest(path, s0, bad)
 
 
+@pytest.mark.parametrize("b", [2e-4, 0.2 - 2e-4, 1e-14, 0.2 - 1e-14])
+def test_a_breakpoint_next_to_an_end_keeps_the_whole_path(b):
+    """A breakpoint (and its twin node) within a quarter of the regular grid
+    spacing of the path's start or end (here 0.1 % of the length from it): the
+    regular nodes that close to it are dropped, and the start and end nodes
+    were among them, so the timing ran from the twin node on (or stopped short
+    of the end) instead of over the whole path. One within round-off of an end
+    (1e-14 here) is not a breakpoint of the grid at all. Every timing runs from
+    0 to the path's length, with the path's own joint positions at both ends."""
+    path = _TwoCubics(b, 0.2)
+    tm = plan_path_timing(path, [AxisLimits(1.0, 2.0, 10.0)])
+    assert tm.grid[0] == 0.0 and tm.grid[-1] == 0.2
+    np.testing.assert_array_equal(tm.state[0], [0.0, 0.0, 0.0])
+    np.testing.assert_allclose(tm.sample(tm.duration)[:3, 0], [0.2, 0.0, 0.0], rtol=0, atol=1e-12)
+    q = tm.joint_states([0.0, tm.duration])[0][:, 0]
+    np.testing.assert_allclose(q, path.derivatives(np.array([0.0, 0.2]))[0][:, 0], rtol=0, atol=1e-12)
+    assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+
+
+def test_the_first_grid_runs_from_the_start_to_the_end_and_holds_every_breakpoint():
+    """Random path lengths and breakpoints, many of them next to the path's ends
+    (within a quarter of the grid's regular spacing, down to 1e-9 of the
+    length): the first grid starts at 0 and ends at the length, increases,
+    and holds every breakpoint (as the engine passes them: more than 1e-9 of
+    the length from either end)."""
+    rng = np.random.default_rng(7)
+    for _ in range(sweep_size(2000)):
+        L = 10.0 ** rng.uniform(-6, 3)
+        h = L / engine.GRID_START
+        near = 10.0 ** rng.uniform(-8.9, 0.0, size=rng.integers(0, 4)) * 0.25 * h
+        pts = np.concatenate([rng.uniform(0.0, L, size=rng.integers(0, 6)), near, L - near])
+        gap = engine.BREAK_END_GAP * L
+        breaks = np.unique(pts[(pts > gap) & (pts < L - gap)])
+        breaks = breaks[np.diff(breaks, prepend=-np.inf) > gap]
+        grid = engine._initial_grid(L, breaks)
+        assert grid[0] == 0.0 and grid[-1] == L
+        assert np.all(np.diff(grid) > 0.0)
+        assert np.isin(breaks, grid).all()
+
+
+@pytest.mark.parametrize("cut", [slice(1, None), slice(None, -1)])
+def test_a_timing_that_misses_an_end_of_the_path_is_never_returned(monkeypatch, cut):
+    """The last guard before a timing is returned: its motion starts at the
+    path's start and ends at its end. A grid without its first or last node
+    (the defect above) raises instead of returning a motion over part of the
+    path."""
+    grid = engine._initial_grid
+    monkeypatch.setattr(engine, "_initial_grid", lambda L, breaks: grid(L, breaks)[cut])
+    with pytest.raises(RuntimeError, match=r"not over the whole path \[0, 3\.0\]"):
+        plan_path_timing(LinearJointPath([0.0], [3.0]), [AxisLimits(1.0, 2.0, 8.0)])
+
+
 def test_joint_states_take_a_piece_s_own_side_of_a_breakpoint():
     """A timing's piece that ends at a breakpoint, where the path's third
     derivative steps: a time inside it whose ``s(t)`` rounds onto the breakpoint

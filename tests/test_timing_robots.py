@@ -632,6 +632,51 @@ def test_a_re_plan_whose_first_solve_on_the_fine_grid_ends_relaxed():
     _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=4e-3)
 
 
+def test_a_chain_whose_last_line_is_short_reaches_its_target():
+    """An arm6 chain of a 300 mm line and a 1.5 mm one, with a 0.5 mm zone: the
+    blend's last breakpoint lies 1 mm before the path's end, within a quarter of
+    the grid's regular spacing, and the end node was dropped with the regular
+    nodes that close to it: the timing ended at the breakpoint and the tool
+    stopped 1 mm short of its target. It now ends at the path's end, the tool at
+    its target, within every joint limit."""
+    robot = default_arm6()
+    q0 = np.array([0.0, 0.3, 0.5, 0.0, 0.6, 0.0])
+    p0 = robot.fk(q0)
+
+    def at(d):
+        return Pose.trusted(p0.position + np.asarray(d, dtype=float), p0.rotation)
+
+    target = at([0.0, 0.3, 0.0015])
+    run = run_motions(robot, [Lin(CartesianTarget(at([0.0, 0.3, 0.0])), 1.0, 0.0005),
+                              Lin(CartesianTarget(target), 1.0, 0.0)], q0)
+    (seg,) = [sg for sg in run.segments if sg.kind == "CP"]
+    path, tm = seg.chain.path, seg.chain.timing
+    assert path.length - path.breakpoints[-1] < 0.25 * path.length / engine.GRID_START
+    assert tm.grid[-1] == path.length
+    assert tm.sample(tm.duration)[0, 0] == pytest.approx(path.length, rel=1e-12)
+    q_end = seg.chain.sample(np.array([seg.duration]))["q"][-1]
+    np.testing.assert_allclose(robot.fk(q_end).position, target.position, rtol=0, atol=1e-9)
+    assert tm.limit_use.worst <= 1 + 1e-9
+
+
+def test_a_re_plan_that_starts_just_before_a_corner_blend():
+    """A palletizer chain through sharp corners with separate legs, re-planned
+    from its state at 30 % of its duration, 0.47 mm before a corner blend's
+    breakpoint (braking hard at low speed: 0.10 m/s, -2.2 m/s^2). The grid's
+    regular nodes within a quarter of its spacing of a breakpoint are dropped,
+    and the start node was one of them: the grid problem started the motion at
+    the breakpoint's twin node, a start its rounds could not keep (InfeasibleError
+    after every relaxed round). The re-plan keeps every limit and takes the time
+    the first timing had left to within 0.1 %."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("palletizer", 950, 6, 0.3, legs=True)
+    assert np.any(np.abs(np.asarray(path.breakpoints) - s0 - 4.7e-4) < 1e-5)
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    assert rest.grid[0] == 0.0
+    _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool)
+
+
 def test_re_plans_from_start_states_a_round_off_apart_agree():
     """A re-plan of a sharp-corner chain (UR5, the one of the test above whose
     timing within the limits came after a shorter one above them) from its state

@@ -120,6 +120,16 @@ BREAK_TWIN = 1e-3
 #: The first of them, as a fraction of the regular spacing.
 END_FIRST = 0.02
 
+#: A breakpoint within this fraction of the path's length of its start or end is
+#: not a breakpoint of the grid (its twin and itself would make intervals of
+#: round-off length next to the end node; that node's derivatives are the short
+#: end piece's own).
+BREAK_END_GAP = 1e-9
+
+#: The timing's motion ends within this fraction of the path's length of its end
+#: (round-off; checked before a timing is returned).
+END_RTOL = 1e-9
+
 #: Rounds of the first solve (it only finds where the jerk phases are and
 #: where the second solve starts from).
 FIRST_ROUNDS = 3
@@ -528,7 +538,8 @@ def _initial_grid(L: float, breaks: np.ndarray) -> np.ndarray:
     at = np.searchsorted(special, pts)
     gap = np.minimum(np.abs(pts - special[np.maximum(at - 1, 0)]),
                      np.abs(pts - special[np.minimum(at, special.size - 1)]))
-    near = (gap < 0.25 * h) & ~np.isin(pts, special)
+    # (the path's ends are nodes whatever lies near them)
+    near = (gap < 0.25 * h) & ~np.isin(pts, special) & (pts > 0.0) & (pts < L)
     return pts[~near]
 
 
@@ -1736,7 +1747,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         return cc, _speed_caps(dd1, vlim, cc), kk
 
     breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
-    breaks = np.unique(breaks[(breaks > 0.0) & (breaks < L)])
+    gap = BREAK_END_GAP * L
+    breaks = np.unique(breaks[(breaks > gap) & (breaks < L - gap)])
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
         s = _add_nodes(s, _cap_edges(cap_fn, L), CAP_MERGE * L / (CAP_GRID - 1))
@@ -2150,6 +2162,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         raise InfeasibleError(
             f"the timing {states} still exceeds a limit by {100 * (use.worst - 1):.3g} % after "
             f"{FINAL_ATTEMPTS} final checks")
+    if not (st[0, 0] == 0.0 and abs(st[-1, 0] - L) <= END_RTOL * L):
+        # (an invariant: the grid runs from the path's start to its end)
+        raise RuntimeError(f"path timing: the motion runs from s = {float(st[0, 0])!r} to {float(st[-1, 0])!r}, "
+                           f"not over the whole path [0, {L!r}]")
     if sol is None:
         tt = np.linspace(0.0, t[-1], 20 * s.size)
         sv = _sample_pieces(t, st, jk, tt)
