@@ -120,11 +120,14 @@ BREAK_TWIN = 1e-3
 #: The first of them, as a fraction of the regular spacing.
 END_FIRST = 0.02
 
-#: A breakpoint within this fraction of the path's length of its start or end is
-#: not a breakpoint of the grid (its twin and itself would make intervals of
-#: round-off length next to the end node; that node's derivatives are the short
-#: end piece's own).
-BREAK_END_GAP = 1e-9
+#: A piece of the path shorter than this fraction of its length at its start or
+#: end is planned as the extension of the piece next to it (see ``_ShortEnds``):
+#: the grid's regular spacing refined 12 times is 5e-6 of the length, and such a
+#: piece (a re-plan's start state just before a breakpoint) made cells of
+#: round-off length there, or a first node whose third derivative the rest of
+#: its cell does not have (up to 8 % slower, the fallback, within 1e-7 of the
+#: length).
+END_PIECE = 1e-6
 
 #: The timing's motion ends within this fraction of the path's length of its end
 #: (round-off; checked before a timing is returned).
@@ -315,8 +318,14 @@ TIGHTEN_ROUNDS = 3
 #: duration, at most MAX_DURATION).
 MOVING_EXCESS_SCORE = 1e30
 
-#: Margin kept under a limit that was lowered locally (fraction).
+#: Margin kept under a limit that was lowered locally (fraction) ...
 TIGHTEN_MARGIN = 1e-4
+
+#: ... but a joint's limit with a moving start at most this many times the excess:
+#: the start cannot move, and a start at a joint's limit (cruising at its velocity
+#: limit) could not keep a small excess next to it lowered by the whole margin
+#: (no later attempt found a timing).
+JOINT_MARGIN_RATIO = 10.0
 
 #: With a moving boundary state, an excess of at most this fraction of a limit
 #: left after a round (the round-off of the linearised rows: lowered locally, it
@@ -597,6 +606,49 @@ def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
     h01 = -2 * t**3 + 3 * t**2
     h11 = t**3 - t**2
     return h00 * f0 + h10 * h * g0 + h01 * f1 + h11 * h * g1
+
+
+class _ShortEnds:
+    """The path with a short piece at its start (before ``lo``) and at its end
+    (from ``hi`` on) replaced by the cubic extension of the piece next to it: its
+    position and first three derivatives at ``lo`` (from after it) and just
+    before ``hi``. ``None``: that end as it is.
+
+    Pieces shorter than :data:`END_PIECE` of the path's length only: the joint
+    path differs from the original there by the jump of its third derivative
+    times the piece's length (in the second derivative), near a rest end where
+    the path speed is close to zero (and its cube far closer)."""
+
+    def __init__(self, path: JointPath, lo: float | None, hi: float | None) -> None:
+        self.path = path
+        self.length = path.length
+        self.n_joints = path.n_joints
+        self.cheap_derivatives = bool(getattr(path, "cheap_derivatives", False))
+        b = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
+        keep = np.ones(b.size, dtype=bool)
+        # (where, which side is replaced, the Taylor coefficients of the piece next to it)
+        self.ends: list[tuple[float, int, tuple]] = []
+        if lo is not None:
+            keep &= b > lo
+            self.ends.append((lo, -1, tuple(d[0] for d in path.derivatives(np.array([lo])))))
+        if hi is not None:
+            keep &= b < hi
+            below = np.nextafter(hi, -np.inf)
+            self.ends.append((hi, 1, tuple(d[0] for d in path.derivatives(np.array([below])))))
+        self.breakpoints = b[keep]
+
+    def derivatives(self, s: np.ndarray):
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        q, d1, d2, d3 = (np.array(v, dtype=float) for v in self.path.derivatives(s))
+        for at, side, (q0, a1, a2, a3) in self.ends:
+            out = s < at if side < 0 else s >= at
+            if out.any():
+                h = (s[out] - at)[:, None]
+                q[out] = q0 + h * (a1 + h * (0.5 * a2 + h * a3 / 6.0))
+                d1[out] = a1 + h * (a2 + 0.5 * h * a3)
+                d2[out] = a2 + h * a3
+                d3[out] = a3
+        return q, d1, d2, d3
 
 
 class _Cached:
@@ -1747,23 +1799,30 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
         return cc, _speed_caps(dd1, vlim, cc), kk
 
     breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
-    gap = BREAK_END_GAP * L
-    breaks = np.unique(breaks[(breaks > gap) & (breaks < L - gap)])
+    breaks = np.unique(breaks[(breaks > 0.0) & (breaks < L)])
+    # a piece shorter than END_PIECE at either end: planned as its neighbour's extension
+    model = path
+    short = END_PIECE * L
+    if breaks.size and (breaks[0] < short or breaks[-1] > L - short):
+        head, tail = breaks[breaks < short], breaks[breaks > L - short]
+        model = _ShortEnds(path, float(head[-1]) if head.size else None,
+                           float(tail[0]) if tail.size else None)
+        breaks = breaks[(breaks >= short) & (breaks <= L - short)]
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
         s = _add_nodes(s, _cap_edges(cap_fn, L), CAP_MERGE * L / (CAP_GRID - 1))
-    cached = _Cached(path)
+    cached = _Cached(model)
     der = cached.derivatives(s)
     alim = np.minimum(aacc, adec)
     jlim = np.minimum(jacc, jdec)
     # a path with cheap exact derivatives is checked with them: its grid only
     # needs to resolve the motion, not to interpolate the derivatives exactly
     cheap = bool(getattr(path, "cheap_derivatives", False))
-    exact = path if cheap else None
+    exact = model if cheap else None
     # the derivatives just before every breakpoint: the refinement interpolates
     # towards them in the cell that ends there, as do the checks (those of a path
     # without cheap derivatives)
-    below = path.derivatives(np.nextafter(breaks, -np.inf))[1:] if breaks.size else None
+    below = model.derivatives(np.nextafter(breaks, -np.inf))[1:] if breaks.size else None
     left = None if cheap else below
     grid_rtol = GRID_RTOL_CHEAP if cheap else GRID_RTOL
     s, der, unresolved, cell_err = _refine(cached, s, der, vlim, alim, jlim, cap_fn, breaks,
@@ -2044,9 +2103,14 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 tightened += 1
                 attempt += 1
 
-                def lowered(ratio: np.ndarray, top: float = top) -> np.ndarray:
-                    """The factor on a limit whose use is ``ratio`` (> 1), bounded by ``top``."""
-                    return (1.0 - TIGHTEN_MARGIN) / np.minimum(ratio, top)
+                def lowered(ratio: np.ndarray, top: float = top, joint: bool = False) -> np.ndarray:
+                    """The factor on a limit whose use is ``ratio`` (> 1), bounded by ``top``;
+                    a ``joint``'s with a moving start: its margin at most JOINT_MARGIN_RATIO
+                    times the excess."""
+                    margin = np.full(np.shape(ratio), TIGHTEN_MARGIN)
+                    if joint and not rest0:
+                        margin = np.minimum(margin, JOINT_MARGIN_RATIO * (ratio - 1.0))
+                    return (1.0 - margin) / np.minimum(ratio, top)
 
                 for ratio, scale in ((rv, scale_v), (ra, scale_a), (rj, scale_j)):
                     over = ratio > 1.0 + CHECK_RTOL
@@ -2054,7 +2118,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         continue
                     rows, cols = np.nonzero(over)
                     c = cell[rows]
-                    f = lowered(ratio[rows, cols])
+                    f = lowered(ratio[rows, cols], joint=True)
                     for node in (c, c + 1):
                         np.minimum.at(scale, (node, cols), np.minimum(1.0, f * scale[node, cols]))
                 over = rs > 1.0 + CHECK_RTOL
