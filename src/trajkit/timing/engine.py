@@ -614,10 +614,10 @@ class _ShortEnds:
     position and first three derivatives at ``lo`` (from after it) and just
     before ``hi``. ``None``: that end as it is.
 
-    Pieces shorter than :data:`END_PIECE` of the path's length only: the joint
-    path differs from the original there by the jump of its third derivative
-    times the piece's length (in the second derivative), near a rest end where
-    the path speed is close to zero (and its cube far closer)."""
+    For pieces shorter than :data:`END_PIECE` of the path's length only: there
+    the second derivative differs from the original's by the jump of the third
+    times the piece's length, and the third by that jump, which the joints'
+    jerk sees times the path speed cubed (next to a rest end close to zero)."""
 
     def __init__(self, path: JointPath, lo: float | None, hi: float | None) -> None:
         self.path = path
@@ -2105,8 +2105,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
 
                 def lowered(ratio: np.ndarray, top: float = top, joint: bool = False) -> np.ndarray:
                     """The factor on a limit whose use is ``ratio`` (> 1), bounded by ``top``;
-                    a ``joint``'s with a moving start: its margin at most JOINT_MARGIN_RATIO
-                    times the excess."""
+                    on a joint's limit (``joint``) with a moving start the margin below the
+                    excess is at most JOINT_MARGIN_RATIO times the excess."""
                     margin = np.full(np.shape(ratio), TIGHTEN_MARGIN)
                     if joint and not rest0:
                         margin = np.minimum(margin, JOINT_MARGIN_RATIO * (ratio - 1.0))
