@@ -609,33 +609,34 @@ def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
 
 
 class _ShortEnds:
-    """The path with a short piece at its start (before ``lo``) and at its end
-    (from ``hi`` on) replaced by the cubic extension of the piece next to it: its
-    position and first three derivatives at ``lo`` (from after it) and just
-    before ``hi``. ``None``: that end as it is.
+    """The path with its pieces within ``short`` of its start or end (those that
+    end before ``short``, begin after ``length - short``) replaced by the cubic
+    extension of the piece next to them: its position and first three
+    derivatives at the first breakpoint kept (from after it) and just before
+    the last one kept. ``breaks``: the path's breakpoints inside it (sorted);
+    :attr:`breakpoints` are those kept.
 
     For pieces shorter than :data:`END_PIECE` of the path's length only: there
     the second derivative differs from the original's by the jump of the third
     times the piece's length, and the third by that jump, which the joints'
     jerk sees times the path speed cubed (next to a rest end close to zero)."""
 
-    def __init__(self, path: JointPath, lo: float | None, hi: float | None) -> None:
+    def __init__(self, path: JointPath, breaks: np.ndarray, short: float) -> None:
         self.path = path
-        self.length = path.length
+        self.length = L = float(path.length)
         self.n_joints = path.n_joints
         self.cheap_derivatives = bool(getattr(path, "cheap_derivatives", False))
-        b = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
-        keep = np.ones(b.size, dtype=bool)
+        head, tail = breaks[breaks < short], breaks[breaks > L - short]
         # (where, which side is replaced, the Taylor coefficients of the piece next to it)
         self.ends: list[tuple[float, int, tuple]] = []
-        if lo is not None:
-            keep &= b > lo
+        if head.size:
+            lo = float(head[-1])
             self.ends.append((lo, -1, tuple(d[0] for d in path.derivatives(np.array([lo])))))
-        if hi is not None:
-            keep &= b < hi
+        if tail.size:
+            hi = float(tail[0])
             below = np.nextafter(hi, -np.inf)
             self.ends.append((hi, 1, tuple(d[0] for d in path.derivatives(np.array([below])))))
-        self.breakpoints = b[keep]
+        self.breakpoints = breaks[(breaks >= short) & (breaks <= L - short)]
 
     def derivatives(self, s: np.ndarray):
         s = np.atleast_1d(np.asarray(s, dtype=float))
@@ -1804,10 +1805,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
     model = path
     short = END_PIECE * L
     if breaks.size and (breaks[0] < short or breaks[-1] > L - short):
-        head, tail = breaks[breaks < short], breaks[breaks > L - short]
-        model = _ShortEnds(path, float(head[-1]) if head.size else None,
-                           float(tail[0]) if tail.size else None)
-        breaks = breaks[(breaks >= short) & (breaks <= L - short)]
+        model = _ShortEnds(path, breaks, short)
+        breaks = model.breakpoints
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
         s = _add_nodes(s, _cap_edges(cap_fn, L), CAP_MERGE * L / (CAP_GRID - 1))
