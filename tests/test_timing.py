@@ -961,6 +961,27 @@ def _TwoCubics(b: float, length: float) -> _PiecewiseCubic:
     return _PiecewiseCubic(length, [b], [0.0], [1.0], [0.0], [[1.0], [-1.0]])
 
 
+def test_node_states_that_pieces_cannot_join_are_named_interval_by_interval():
+    """hermite_pieces raises UnjoinableError (a ValueError) with every grid
+    interval whose node states no two constant-jerk pieces join (a speed too
+    low for the acceleration's change over the interval), and the interval at
+    rest whose other node has no acceleration; the engine splits the grid
+    around them."""
+    from trajkit.timing._hermite import UnjoinableError, hermite_pieces
+
+    s = np.array([0.0, 1.0, 2.0, 3.0])
+    x = np.full(4, 0.01)
+    with pytest.raises(UnjoinableError, match="grid interval 0 cannot be joined") as err:
+        hermite_pieces(s, x, np.array([0.0, 10.0, 10.0, 20.0]), False, False)
+    np.testing.assert_array_equal(err.value.intervals, [0, 2])
+    assert isinstance(err.value, ValueError)
+    dur, jerk, iv = hermite_pieces(s, x, np.array([0.0, 0.001, 0.001, 0.0]), False, False)
+    assert np.all(dur > 0) and np.array_equal(iv, [0, 0, 1, 1, 2, 2])
+    with pytest.raises(UnjoinableError, match="grid interval 0 at rest has no acceleration") as err:
+        hermite_pieces(s, np.array([0.0, 0.01, 0.01, 0.01]), np.zeros(4), True, False)
+    np.testing.assert_array_equal(err.value.intervals, [0])
+
+
 def test_the_rest_of_a_path_keeps_every_point_on_its_own_piece():
     """Shifting by the start rounds: here the point just before the shifted
     breakpoint, plus the start, is the breakpoint itself (where the next piece's
@@ -1115,6 +1136,83 @@ def test_a_re_plan_that_starts_at_a_velocity_limit_keeps_a_round_off_excess_smal
     rest = plan_path_timing(PathRest(path, s0), lim, start_speed=v0, start_accel=a0)
     assert rest.time_scale == 1.0 and max(_dense_use(rest)) <= 1 + LIMIT_RTOL
     assert rest.duration == pytest.approx(tm.duration - t0, rel=1e-3)
+    np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, v0, a0], rtol=0, atol=1e-12)
+
+
+#: Paths of cubic pieces (drawn by the random sweep below) whose re-plan from their
+#: own timing's state found no timing: (length, breakpoints, q, q', q'' at 0, third
+#: derivatives, limits per joint (v, a, j[, a_decel, j_decel]), fraction of the
+#: duration at which the re-plan starts).
+_HARD_RE_PLANS = {
+    # braking hard (0.25 /s at -3.0 /s^2): the second grid's first solve, from the
+    # first grid's solution, stalled (its time 4e7 times the first grid's)
+    "the second grid stalls": (
+        0.07748387111937294, [0.04406391268441102, 0.055908473527024466, 0.06315355274587277,
+                              0.07748385440883623],
+        [-0.9397079984637572], [-0.9528465272960562], [7.474672169998269],
+        [[-207.9505106452602], [10.932437500965207], [-104.46729583759941], [8.11627091510276],
+         [-49.39695792017964]],
+        [(0.8126404956240946, 9.288502033839919, 29.940926552126665)], 0.7),
+    # braking (0.53 /s at -1.9 /s^2): the first grid's solve ended relaxed, the second
+    # grid's stalled, and solved again from its jerk-free round it ends relaxed too
+    "the second grid stalls and its restart ends relaxed": (
+        0.44604708812855326, [0.07135694943688844, 0.21052564175410185, 0.31219540799765105],
+        [-1.1820707358866025, 0.7400956798987274], [1.1686878129727738, -1.3515523109953784],
+        [0.20535628499585426, -0.5052051137658345],
+        [[-0.13327824995591495, 2.9244653625200634], [0.2265443651489642, -2.2975212080466045],
+         [-5.461788273977554, 0.8425544985658523], [1.7337603757326132, -1.2985627297203248]],
+        [(1.6171207638055491, 2.2921710307914456, 58.331859630088694),
+         (1.5412558296382457, 9.335412932013321, 41.53433629266249)], 0.7),
+    # braking hard (0.47 /s at -4.3 /s^2): every solve on both grids ends relaxed
+    "every solve ends relaxed": (
+        0.1539473726378198, [3.9653748168201e-11, 0.11052658794007388, 0.13023717225618706,
+                             0.13994927139063928],
+        [1.262861050940575], [-0.7724070802115466], [0.15070119076705063],
+        [[-9.437339730906], [5.321875370958353], [-42.210095350764604], [28.50372895844018],
+         [-30.126629810047902]],
+        [(1.8691954121610819, 3.097663256840085, 75.05351715449292)], 0.7),
+    # one cubic, separate legs: the second grid's restart ends relaxed, and the
+    # relaxed solution's node states cannot be joined by constant-jerk pieces
+    "a relaxed solution cannot be joined": (
+        0.9873125879835922, [], [-0.5871942603400888], [0.5839384563839164], [-0.03953194589393489],
+        [[-1.9579481391361697]],
+        [(0.8940111653471298, 2.0743231498488788, 62.67663901923715, 1.3196211395740496,
+          54.79134643644775)], 0.7),
+    # speeding up (0.17 /s at +1.7 /s^2), separate legs: both grids' solves stall, and
+    # the second's node states cannot be joined
+    "a stalled solution cannot be joined": (
+        0.03838995974416178, [0.015249848233345497],
+        [0.16656105809062502, -0.5599055705617537], [1.4356502184725333, -1.1435021848948326],
+        [6.061529222137743, 15.388181874566113],
+        [[479.3867122901562, 184.51342641455975], [803.212570170034, 691.488845165198]],
+        [(0.833657123387044, 6.061132171858959, 51.48784413016966, 5.17417808697148, 41.56205144267837),
+         (1.1415171939374167, 2.2496980820148735, 42.75647638494115, 2.0803225713787556,
+          35.57222743873152)], 0.3),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_HARD_RE_PLANS))
+def test_a_re_plan_whose_grid_problem_stalls_or_ends_relaxed_is_found(case):
+    """Re-planned from its own timing's state: on the grid next to the start the
+    grid problem's rounds stall (a near-stop) or end relaxed, and with no
+    timing the fallback (which cannot start in such a state) raised
+    InfeasibleError. A solve from the coarser grid's solution that stalls or
+    ends relaxed is now solved again from its jerk-free round, and a relaxed or
+    stalled solution goes on to the check, which splits the grid where it
+    exceeds a limit or cannot be joined by pieces; the problem is then solved
+    again from it. The re-plan starts in the state, keeps every limit on the
+    true derivatives and takes the time the first timing had left to within
+    0.1 % (up to 0.2 % less with separate legs)."""
+    L, br, q, d1, d2, d3, lims, frac = _HARD_RE_PLANS[case]
+    path = _PiecewiseCubic(L, br, q, d1, d2, d3)
+    limits = [AxisLimits(*lim[:3], a_max_decel=lim[3], j_max_decel=lim[4]) if len(lim) > 3
+              else AxisLimits(*lim) for lim in lims]
+    tm = plan_path_timing(path, limits)
+    t0 = frac * tm.duration
+    s0, v0, a0, _ = tm.sample(t0)[:, 0]
+    rest = plan_path_timing(PathRest(path, s0), limits, start_speed=v0, start_accel=a0)
+    assert rest.time_scale == 1.0 and max(_dense_use(rest)) <= 1 + LIMIT_RTOL
+    assert (1 - 2e-3) * (tm.duration - t0) <= rest.duration <= (1 + 1e-3) * (tm.duration - t0)
     np.testing.assert_allclose(rest.sample(0.0)[:3, 0], [0.0, v0, a0], rtol=0, atol=1e-12)
 
 

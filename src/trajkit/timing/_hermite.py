@@ -18,7 +18,21 @@ import math
 
 import numpy as np
 
-__all__ = ["hermite_pieces", "time_to_reach"]
+__all__ = ["hermite_pieces", "time_to_reach", "UnjoinableError"]
+
+
+class UnjoinableError(ValueError):
+    """Node states that pieces of constant jerk cannot join.
+
+    Attributes
+    ----------
+    intervals : ndarray of int
+        The grid intervals that cannot be joined.
+    """
+
+    def __init__(self, intervals: np.ndarray, what: str = "cannot be joined by constant-jerk pieces") -> None:
+        self.intervals = np.asarray(intervals, dtype=int)
+        super().__init__(f"grid interval {int(self.intervals[0])} {what}")
 
 
 def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
@@ -42,8 +56,9 @@ def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
 
     Raises
     ------
-    ValueError
-        When two node states cannot be joined (no positive duration).
+    UnjoinableError
+        When node states cannot be joined (no positive duration), with every
+        such interval.
     """
     D = np.diff(s)
     N = D.size
@@ -64,8 +79,7 @@ def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
         special[-1] = True
     bad = ~special & ((disc < 0.0) | ~np.isfinite(tau) | (tau <= 0.0))
     if bad.any():
-        i = int(np.nonzero(bad)[0][0])
-        raise ValueError(f"grid interval {i} cannot be joined by constant-jerk pieces")
+        raise UnjoinableError(np.nonzero(bad)[0])
     dur = np.column_stack([h, h]).ravel()
     jerk = np.column_stack([J1, J2]).ravel()
     keep = np.ones(2 * N, dtype=bool)
@@ -79,7 +93,7 @@ def hermite_pieces(s: np.ndarray, x: np.ndarray, u: np.ndarray, rest0: bool,
             tr = math.sqrt(6.0 * (float(D[i]) / a))
             Jr = a / tr
         else:  # no acceleration at the neighbour node: constant speed is impossible from rest
-            raise ValueError(f"grid interval {i} at rest has no acceleration")
+            raise UnjoinableError(np.array([i]), "at rest has no acceleration")
         dur[2 * i], jerk[2 * i] = tr, Jr  # from rest up, or down to rest: jerk > 0 both
         keep[2 * i + 1] = False
     interval = np.repeat(np.arange(N), 2)

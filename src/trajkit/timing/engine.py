@@ -62,8 +62,8 @@ from ..profiles._pieces import eval_pieces
 from ..profiles._range import check_limits_range
 from ..profiles.state import plan_state_to_state
 from . import _checks
-from ._hermite import hermite_pieces, time_to_reach
-from ._socp import MAX_ROUNDS, RELAXED, ROUND_RTOL, GridProblem, GridSolution, _rest_jerk, solve_grid
+from ._hermite import UnjoinableError, hermite_pieces, time_to_reach
+from ._socp import MAX_ROUNDS, RELAXED, ROUND_RTOL, STALL_FACTOR, GridProblem, GridSolution, _rest_jerk, solve_grid
 from .paths import JointPath
 
 __all__ = ["PathTiming", "plan_path_timing", "CHECK_PER_PIECE", "MAX_TIGHTEN", "LimitUse"]
@@ -2016,71 +2016,94 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 sol = first if reuse else solve_grid(
                     prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
                     settled=init_settled, near=init_near, duals=init_duals)
-                if sol.status == RELAXED and best is None:
+                if best is None and not reuse and (sol.status == RELAXED or (
+                        moving and not sol.time <= STALL_FACTOR * first.time)):
                     # (a moving state whose first solve on this grid, from the coarser
-                    # grid's solution, ended relaxed: solved again from the jerk-free
-                    # round, as that grid was)
-                    sol = solve_grid(prob, max_rounds=MAX_ROUNDS)
+                    # grid's solution, ended relaxed or stalled, far slower than that
+                    # grid's: solved again from the jerk-free round, as that grid was;
+                    # where that ends relaxed, a stalled solution is kept: its check
+                    # splits the grid where it went wrong, see below)
+                    cold = solve_grid(prob, max_rounds=MAX_ROUNDS)
+                    if cold.status != RELAXED or sol.status == RELAXED:
+                        sol = cold
                 if sol.status == RELAXED:  # (no timing: its rounds ended relaxed)
-                    if best is None:
+                    if best is not None:
+                        break
+                    if not (moving and splits < MAX_SPLITS):
                         raise RuntimeError("path timing: the grid problem ended in a relaxed round")
-                    break
+                    # (with a moving state, a relaxed solution goes on to the check, as a
+                    # stalled one does: the grid is split where it exceeds a limit by
+                    # more than SPLIT_ABOVE, or where its node states cannot be joined,
+                    # and the problem solved again from it; it is returned only where
+                    # the final check finds it within every limit)
                 init = (sol.x, sol.u)  # a tightened attempt starts from this one
                 init_settled = True  # (on the same grid)
                 init_duals = sol.duals
                 try:
                     dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
-                except ValueError:
-                    if best is None:
+                    unjoined = None
+                except UnjoinableError as err:
+                    if best is not None:
+                        break
+                    if not (moving and splits < MAX_SPLITS and s.size < GRID_MAX):
                         raise
-                    break
-                t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
-                lim = limits_for(st)
-                if moving:
-                    # as the final check, which cannot slow it down: its zoom's samples
-                    # too, where it finds an excess between the check points
-                    (use, cell, rv, ra, rj, rs, near), src_t = true_check(t, st, jk, lim, None,
-                                                                          FINAL_CHECK_PER_PIECE)
-                    zoomed: list = []
-                    use = _max_use(use, _zoom(s, der, t, st, jk, lim, src_t, near,
-                                              FINAL_CHECK_PER_PIECE + 2, samples=zoomed))
-                    close = (cell, near)
-                    cell, rv, ra, rj, rs = (np.concatenate([a, *(z[i] for z in zoomed)])
-                                            for i, a in enumerate((cell, rv, ra, rj, rs)))
-                else:
-                    use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
-                                                             exact if cheap else _Interp(s, der, breaks, left))
-                    close = (cell, near)
-                k = _uniform_scale(use)
-                # with a moving state no limit is lowered by more than the least excess
-                # of the attempts before this one (at least SPLIT_ABOVE): an attempt
-                # further above a limit than an earlier one had its linearised rounds go
-                # astray, and its ratios overstate what that limit needs; that bound
-                # grows by CLIP_GROWTH with every attempt in a row above it
-                top = (max(least_worst, 1.0 + SPLIT_ABOVE) * CLIP_GROWTH**above_least
-                       if moving else math.inf)
-                above_least = above_least + 1 if use.worst >= least_worst else 0
-                least_worst = min(least_worst, use.worst)
-                # a timing that needs no uniform slow-down keeps its exact cruise speeds:
-                # preferred unless a slowed one is clearly faster
-                score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
-                if moving and k > 1.0:
-                    # (with a moving state no uniform slow-down: a timing within the
-                    # limits before any other, then the one closest to them)
-                    score = MOVING_EXCESS_SCORE * use.worst
-                if best is None or score < best[0]:
-                    # (the cells close to a limit: the final check corrects them first)
-                    best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), close)
-                if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
-                    break  # a small excess costs less as a uniform slow-down than as another round
-                if use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS and s.size < GRID_MAX:
+                    # (a relaxed or stalled solution of a moving state: the grid is
+                    # split around the intervals it cannot join, as around a large
+                    # excess below)
+                    unjoined = err.intervals
+                    dur = jk = piv = np.zeros(0)  # (no pieces)
+                if unjoined is None:
+                    t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
+                    lim = limits_for(st)
+                    if moving:
+                        # as the final check, which cannot slow it down: its zoom's samples
+                        # too, where it finds an excess between the check points
+                        (use, cell, rv, ra, rj, rs, near), src_t = true_check(t, st, jk, lim, None,
+                                                                              FINAL_CHECK_PER_PIECE)
+                        zoomed: list = []
+                        use = _max_use(use, _zoom(s, der, t, st, jk, lim, src_t, near,
+                                                  FINAL_CHECK_PER_PIECE + 2, samples=zoomed))
+                        close = (cell, near)
+                        cell, rv, ra, rj, rs = (np.concatenate([a, *(z[i] for z in zoomed)])
+                                                for i, a in enumerate((cell, rv, ra, rj, rs)))
+                    else:
+                        use, cell, rv, ra, rj, rs, near = _check(s, der, t, st, jk, lim,
+                                                                 exact if cheap else _Interp(s, der, breaks, left))
+                        close = (cell, near)
+                    k = _uniform_scale(use)
+                    # with a moving state no limit is lowered by more than the least excess
+                    # of the attempts before this one (at least SPLIT_ABOVE): an attempt
+                    # further above a limit than an earlier one had its linearised rounds go
+                    # astray, and its ratios overstate what that limit needs; that bound
+                    # grows by CLIP_GROWTH with every attempt in a row above it
+                    top = (max(least_worst, 1.0 + SPLIT_ABOVE) * CLIP_GROWTH**above_least
+                           if moving else math.inf)
+                    above_least = above_least + 1 if use.worst >= least_worst else 0
+                    least_worst = min(least_worst, use.worst)
+                    # a timing that needs no uniform slow-down keeps its exact cruise speeds:
+                    # preferred unless a slowed one is clearly faster
+                    score = t[-1] * k * (1.0 + SCALED_PENALTY if k > 1.0 else 1.0)
+                    if moving and k > 1.0:
+                        # (with a moving state no uniform slow-down: a timing within the
+                        # limits before any other, then the one closest to them)
+                        score = MOVING_EXCESS_SCORE * use.worst
+                    if best is None or score < best[0]:
+                        # (the cells close to a limit: the final check corrects them first)
+                        best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), close)
+                    if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
+                        break  # a small excess costs less as a uniform slow-down than as another round
+                if unjoined is not None or (use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS
+                                            and s.size < GRID_MAX):
                     # a large excess: the grid is too coarse for the motion there (the
                     # pieces' jerks differ from the interval's mean): split the cells
                     # around it and solve again from this solution
                     bad = np.zeros(s.size - 1, dtype=bool)
-                    for ratio in (rv, ra, rj):
-                        bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
-                    bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
+                    if unjoined is not None:
+                        bad[unjoined] = True
+                    else:
+                        for ratio in (rv, ra, rj):
+                            bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
+                        bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
                     bad[:-1] |= bad[1:].copy()
                     bad[1:] |= bad[:-1].copy()
                     cells = np.nonzero(bad)[0][:max(GRID_MAX - s.size, 0)]
