@@ -1219,14 +1219,15 @@ def test_a_re_plan_whose_grid_problem_stalls_or_ends_relaxed_is_found(case):
 def test_random_piecewise_cubic_paths_and_re_plans_from_their_own_states():
     """Random paths of one to three joints, each of cubic pieces whose third
     derivatives step at their breakpoints, half of them with a breakpoint next
-    to the start or the end (1e-10 to 0.1 of the length from it), symmetric
-    limits: every timing from rest is found and every re-plan from its state at
-    30 % and 70 % of its duration either is found or raises InfeasibleError
-    (a start that brakes hard can leave the grid problem no solution; at least
-    95 % are found). Every timing found runs from the path's start to its end,
-    starts in the state it was given, keeps every limit on the path's true
-    derivatives, and a re-plan takes at most 1 % longer than the time its
-    first timing had left."""
+    to the start or the end (1e-10 to 0.1 of the length from it), half of them
+    with separate legs (0.6 to 1 times the acceleration and 0.5 to 1 times the
+    jerk while slowing down): every timing from rest is found and every
+    re-plan from its state at 30 % and 70 % of its duration either is found or
+    raises InfeasibleError (a start that brakes hard can leave the grid
+    problem no solution; at least 95 % are found). Every timing found runs
+    from the path's start to its end, starts in the state it was given, keeps
+    every limit on the path's true derivatives, and a re-plan takes at most
+    1 % longer than the time its first timing had left."""
     rng = np.random.default_rng(2027)
     found = tried = 0
     for _ in range(sweep_size(40)):
@@ -1238,8 +1239,9 @@ def test_random_piecewise_cubic_paths_and_re_plans_from_their_own_states():
         br = np.unique([b for b in br if 0.0 < b < L])
         path = _PiecewiseCubic(L, br, rng.normal(0, 1, m), rng.choice([-1, 1], m) * rng.uniform(0.5, 1.5, m),
                                rng.normal(0, 0.3, m) / L, rng.normal(0, 1, (br.size + 1, m)) / L**2)
-        lims = [AxisLimits(v, a, j) for v, a, j in
-                zip(rng.uniform(0.5, 2, m), rng.uniform(2, 10, m), rng.uniform(20, 100, m))]
+        legs = (rng.uniform(0.6, 1, m), rng.uniform(0.5, 1, m)) if rng.random() < 0.5 else (np.ones(m),) * 2
+        lims = [AxisLimits(v, a, j, a_max_decel=fa * a, j_max_decel=fj * j) for v, a, j, fa, fj in
+                zip(rng.uniform(0.5, 2, m), rng.uniform(2, 10, m), rng.uniform(20, 100, m), *legs)]
         tm = plan_path_timing(path, lims)
         timings = [(tm, L, (0.0, 0.0), math.inf)]
         for frac in (0.3, 0.7):
