@@ -129,6 +129,14 @@ END_FIRST = 0.02
 #: length).
 END_PIECE = 1e-6
 
+#: The same at an end in rest: a piece shorter than two of the grid's finest
+#: cells. A breakpoint between END_PIECE and this before a rest end made the
+#: timing from rest up to 1.2 % slower, and re-plans from states braking into
+#: such an end raised (5 of 900 re-plans; 1 with this); next to a rest end the
+#: path speed is close to zero, and with it the joints' jerk from the step of
+#: the third derivative.
+END_PIECE_REST = 1e-5
+
 #: The timing's motion ends within this fraction of the path's length of its end
 #: (round-off; checked before a timing is returned).
 END_RTOL = 1e-9
@@ -609,24 +617,25 @@ def _hermite_interp(s0, s1, f0, f1, g0, g1, sm):
 
 
 class _ShortEnds:
-    """The path with its pieces within ``short`` of its start or end (those that
-    end before ``short``, begin after ``length - short``) replaced by the cubic
-    extension of the piece next to them: its position and first three
-    derivatives at the first breakpoint kept (from after it) and just before
-    the last one kept. ``breaks``: the path's breakpoints inside it (sorted);
-    :attr:`breakpoints` are those kept.
+    """The path with its pieces within ``short`` of its start and ``short_end``
+    of its end (those that end before ``short``, begin after ``length -
+    short_end``) replaced by the cubic extension of the piece next to them: its
+    position and first three derivatives at the first breakpoint kept (from
+    after it) and just before the last one kept. ``breaks``: the path's
+    breakpoints inside it (sorted); :attr:`breakpoints` are those kept.
 
-    For pieces shorter than :data:`END_PIECE` of the path's length only: there
-    the second derivative differs from the original's by the jump of the third
-    times the piece's length, and the third by that jump, which the joints'
-    jerk sees times the path speed cubed (next to a rest end close to zero)."""
+    For pieces shorter than :data:`END_PIECE` of the path's length only
+    (:data:`END_PIECE_REST` at an end in rest): there the second derivative
+    differs from the original's by the jump of the third times the piece's
+    length, and the third by that jump, which the joints' jerk sees times the
+    path speed cubed (next to a rest end close to zero)."""
 
-    def __init__(self, path: JointPath, breaks: np.ndarray, short: float) -> None:
+    def __init__(self, path: JointPath, breaks: np.ndarray, short: float, short_end: float) -> None:
         self.path = path
         self.length = L = float(path.length)
         self.n_joints = path.n_joints
         self.cheap_derivatives = bool(getattr(path, "cheap_derivatives", False))
-        head, tail = breaks[breaks < short], breaks[breaks > L - short]
+        head, tail = breaks[breaks < short], breaks[breaks > L - short_end]
         # (where, which side is replaced, the Taylor coefficients of the piece next to it)
         self.ends: list[tuple[float, int, tuple]] = []
         if head.size:
@@ -636,7 +645,7 @@ class _ShortEnds:
             hi = float(tail[0])
             below = np.nextafter(hi, -np.inf)
             self.ends.append((hi, 1, tuple(d[0] for d in path.derivatives(np.array([below])))))
-        self.breakpoints = breaks[(breaks >= short) & (breaks <= L - short)]
+        self.breakpoints = breaks[(breaks >= short) & (breaks <= L - short_end)]
 
     def derivatives(self, s: np.ndarray):
         s = np.atleast_1d(np.asarray(s, dtype=float))
@@ -1801,11 +1810,12 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
 
     breaks = np.asarray(getattr(path, "breakpoints", np.zeros(0)), dtype=float)
     breaks = np.unique(breaks[(breaks > 0.0) & (breaks < L)])
-    # a piece shorter than END_PIECE at either end: planned as its neighbour's extension
+    # a piece shorter than END_PIECE at either end (END_PIECE_REST at a rest end):
+    # planned as its neighbour's extension
     model = path
-    short = END_PIECE * L
-    if breaks.size and (breaks[0] < short or breaks[-1] > L - short):
-        model = _ShortEnds(path, breaks, short)
+    short, short_end = ((END_PIECE_REST if rest else END_PIECE) * L for rest in (rest0, restN))
+    if breaks.size and (breaks[0] < short or breaks[-1] > L - short_end):
+        model = _ShortEnds(path, breaks, short, short_end)
         breaks = model.breakpoints
     s = _initial_grid(L, breaks)
     if callable(speed):  # nodes on both sides of every step of the speed cap
