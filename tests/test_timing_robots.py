@@ -632,6 +632,25 @@ def test_a_re_plan_whose_first_solve_on_the_fine_grid_ends_relaxed():
     _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=4e-3)
 
 
+def test_a_re_plan_whose_split_grid_ends_relaxed_again():
+    """A Panda chain through sharp corners with separate legs, re-planned from
+    its state at 70 % of its duration (0.07 m/s, braking): on the second grid
+    the solve from the first grid's solution ended relaxed and its restart
+    from the jerk-free round stalled (1e7 s); the check split the grid there,
+    the split grid's solve from that stalled solution ended relaxed, and the
+    stalled solution (4600 times over a jerk limit) was the only attempt left:
+    InfeasibleError. Until an attempt comes within 1 % of the limits, a solve
+    that ends relaxed or stalls is solved again from its jerk-free round,
+    whatever was tried before. The re-plan keeps every limit and takes the
+    time the first timing had left to within 0.1 %."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("panda", 951, 1, 0.7, legs=True)
+    assert v0 < 0.1 and a0 < -0.4
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=1e-3)
+
+
 def test_a_chain_whose_last_line_is_short_reaches_its_target():
     """An arm6 chain of a 300 mm line and a 1.5 mm one, with a 0.5 mm zone: the
     blend's last breakpoint lies 1 mm before the path's end, within a quarter of

@@ -2026,26 +2026,26 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 sol = first if reuse else solve_grid(
                     prob, max_rounds=TIGHTEN_ROUNDS if attempt else MAX_ROUNDS, init=init,
                     settled=init_settled, near=init_near, duals=init_duals)
-                if best is None and not reuse and (sol.status == RELAXED or (
+                # until an attempt comes within SPLIT_ABOVE of the limits (a timing
+                # found), a moving state's solve from a given point that ends relaxed or
+                # stalls (far slower than the first grid's) is solved again from the
+                # jerk-free round, as the first grid was; where that ends relaxed, a
+                # stalled solution is kept. A relaxed or stalled solution goes on to the
+                # check: the grid is split where it exceeds a limit by more than
+                # SPLIT_ABOVE, or where its node states cannot be joined by pieces, and
+                # the problem solved again from it (it is returned only where the final
+                # check finds it within every limit)
+                found = best is not None and best[4].worst <= 1.0 + SPLIT_ABOVE
+                split_left = moving and splits < MAX_SPLITS
+                if not found and not reuse and (sol.status == RELAXED or (
                         moving and not sol.time <= STALL_FACTOR * first.time)):
-                    # (a moving state whose first solve on this grid, from the coarser
-                    # grid's solution, ended relaxed or stalled, far slower than that
-                    # grid's: solved again from the jerk-free round, as that grid was;
-                    # where that ends relaxed, a stalled solution is kept: its check
-                    # splits the grid where it went wrong, see below)
                     cold = solve_grid(prob, max_rounds=MAX_ROUNDS)
                     if cold.status != RELAXED or sol.status == RELAXED:
                         sol = cold
-                if sol.status == RELAXED:  # (no timing: its rounds ended relaxed)
-                    if best is not None:
-                        break
-                    if not (moving and splits < MAX_SPLITS):
+                if sol.status == RELAXED and (found or not split_left):
+                    if best is None:
                         raise RuntimeError("path timing: the grid problem ended in a relaxed round")
-                    # (with a moving state, a relaxed solution goes on to the check, as a
-                    # stalled one does: the grid is split where it exceeds a limit by
-                    # more than SPLIT_ABOVE, or where its node states cannot be joined,
-                    # and the problem solved again from it; it is returned only where
-                    # the final check finds it within every limit)
+                    break
                 init = (sol.x, sol.u)  # a tightened attempt starts from this one
                 init_settled = True  # (on the same grid)
                 init_duals = sol.duals
@@ -2053,14 +2053,11 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                     dur, jk, piv = hermite_pieces(s, sol.x, sol.u, rest0, restN)
                     unjoined = None
                 except UnjoinableError as err:
-                    if best is not None:
+                    if found or not (split_left and s.size < GRID_MAX):
+                        if best is None:
+                            raise
                         break
-                    if not (moving and splits < MAX_SPLITS and s.size < GRID_MAX):
-                        raise
-                    # (a relaxed or stalled solution of a moving state: the grid is
-                    # split around the intervals it cannot join, as around a large
-                    # excess below)
-                    unjoined = err.intervals
+                    unjoined = err.intervals  # (split around them, as around an excess)
                     dur = jk = piv = np.zeros(0)  # (no pieces)
                 if unjoined is None:
                     t, st = _node_states(s, sol.x, sol.u, dur, jk, piv)
