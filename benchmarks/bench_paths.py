@@ -119,6 +119,12 @@ def arm_suite(name: str):
     out.append(("LIN 0.16 m short", q0, [lin(at([0.0, 0.15, 0.05]))], None))
     turn = rot_z(math.pi / 2) @ rot_x(math.pi / 6)
     out.append(("LIN with 90 + 30 deg turn", q0, [lin(at([0.05, 0.25, 0.0], turn))], None))
+    if name == "ur5":
+        # the TCP starts at the shoulder offset's y (d4): along x at that y the wrist
+        # passes the base axis, the shoulder singularity (the Jacobian's smallest
+        # singular value 0.006 at x = -9 mm); this line runs 16 mm beside it
+        out.append(("LIN 0.8 m, 16 mm from shoulder singularity", q0,
+                    [lin(at([-0.4 - pos[0], 0.016, 0.0]))], at([0.4 - pos[0], 0.016, 0.0])))
     radial = pos * np.array([1.0, 1.0, 0.0])
     out.append(("LIN radial toward reach", q0, [lin(at(0.12 * radial / np.linalg.norm(radial)))], None))
     out.append(("CIRC half circle", q0, [Circ(CartesianTarget(at([0.15, 0.15, 0.0])),
@@ -305,12 +311,12 @@ def run_waypoints(quick: bool):
 def _table(title, rows, ref):
     print(f"\n{title}")
     bounds = "jerk_bound" in rows[0]
-    head = f"{'motion':40s} {'trajkit [s]':>11s} {ref:>12s} {'ratio':>6s}"
+    head = f"{'motion':48s} {'trajkit [s]':>11s} {ref:>12s} {'ratio':>6s}"
     if bounds:
         head += f" {'jerk bound':>10s} {'/bound':>6s} {'saturated':>9s}"
     print(head + f" {'plan [s]':>9s} {'peer [s]':>9s} {'nodes':>6s}")
     for r in rows:
-        line = f"{r['label']:40s} {r['t']:11.4f} {r['ref']:12.4f} {r['ratio']:6.3f}"
+        line = f"{r['label']:48s} {r['t']:11.4f} {r['ref']:12.4f} {r['ratio']:6.3f}"
         if bounds:
             line += f" {r['jerk_bound']:10.4f} {r['to_bound']:6.3f} {100 * r['saturated']:8.1f}%"
         print(line + f" {r['plan']:9.3f} {r['peer']:9.3f} {r['nodes']:6d}")

@@ -429,7 +429,7 @@ def main(argv=None) -> int:
                     help="comma-separated starts of the NLP: trajkit (its timing), toppra (jerk-free)")
     ap.add_argument("--verbose", action="store_true", help="IPOPT's iterations")
     args = ap.parse_args(argv)
-    print(f"{'motion':34s} {'TOPP-RA':>8s} {'trajkit':>8s} {'NLP':>8s} {'tk/NLP':>7s} "
+    print(f"{'motion':48s} {'TOPP-RA':>8s} {'trajkit':>8s} {'NLP':>8s} {'tk/NLP':>7s} "
           f"{'NLP raw':>8s} {'NLP fd v/a/j':>17s} {'trajkit fd v/a/j':>17s} {'start':>8s} "
           f"{'IPOPT [s]':>9s}")
     ratios = []
@@ -442,7 +442,7 @@ def main(argv=None) -> int:
         u, w = res["use"], tk_use
         ratio = tm.duration / res["T"]
         ratios.append(ratio)
-        print(f"{label:34s} {res['toppra']:8.4f} {tm.duration:8.5f} {res['T']:8.5f} {ratio:7.4f} "
+        print(f"{label:48s} {res['toppra']:8.4f} {tm.duration:8.5f} {res['T']:8.5f} {ratio:7.4f} "
               f"{res['T_raw']:8.4f} {u['v']:5.3f}/{u['a']:5.3f}/{u['j']:5.3f} "
               f"{w['v']:5.3f}/{w['a']:5.3f}/{w['j']:5.3f} {res['start']:>8s} "
               f"{sum(r['secs'] for r in res['all']):9.1f}", flush=True)

@@ -34,8 +34,8 @@ def _cells(row: str) -> list[str]:
 
 def test_every_table_row_has_its_header_s_columns():
     """Every row of every Markdown table in the README and docs/ has as many cells as
-    its header, and a second row of dashes. (A table of the docs once had its rows
-    replaced by another table's, with nine cells under a five-column header.)"""
+    its header, and a second row of dashes (a table whose rows were replaced by
+    another table's shows nine cells under a five-column header)."""
     assert DOCS
     tables = 0
     for path in [README, *DOCS]:
