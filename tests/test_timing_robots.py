@@ -676,6 +676,25 @@ def test_a_re_plan_whose_split_grid_ends_relaxed_again():
     _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=1e-3)
 
 
+def test_a_re_plan_from_a_near_stop_braking_start():
+    """A palletizer chain through sharp corners with separate legs, re-planned from
+    its state at 70 % of its duration: 0.033 m/s braking at -1.2 m/s^2, on its way
+    to a near-stop (the first timing's speed dips to 0.0165 m/s). The first jerk
+    round is linearised at the start's recovery: at the jerk of the start alone
+    it came to 0.00015 m/s, every solve on every grid ended relaxed and
+    InfeasibleError was raised; node by node, at the jerk the joints allow in
+    each cell's state, the recovery ends at 0.018 m/s. The re-plan keeps every
+    limit and takes 0.5 % less than the time the first timing had left to 0.1 %
+    more (0.995 of it: with separate legs the rest of a timing from rest is not
+    always the shortest from one of its states)."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("palletizer", 950, 8, 0.7, legs=True)
+    assert v0 < 0.04 and a0 < -1.0
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=6e-3)
+
+
 def test_a_chain_whose_last_line_is_short_reaches_its_target():
     """An arm6 chain of a 300 mm line and a 1.5 mm one, with a 0.5 mm zone: the
     blend's last breakpoint lies 1 mm before the path's end, within a quarter of
