@@ -132,6 +132,12 @@ BIND_RTOL = 0.999
 #: tangent planes (guards a division near a stop in the path's interior).
 TINY_X = 1e-12
 
+#: Newton steps of a braking start's recovery through one cell (see
+#: ``_cell_time``; from 0 they approach the time from below, 4-6 to round-off),
+#: and the relative step that ends them.
+CELL_NEWTON = 30
+CELL_NEWTON_RTOL = 1e-13
+
 #: A new solution's jerk row (linearised at it, with its own legs) exceeded by
 #: more than this (the rows are normalised) where the row that bounded it took
 #: the looser leg: that interval takes the tighter leg from then on.
@@ -505,10 +511,24 @@ def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
         s1 = ds[k] + t1 * (v + t1 * (0.5 * u + t1 * J / 6.0))
         if k == n - 1 or s1 < ds[k + 1]:
             break
-        t = float(time_to_reach(0.0, v, u, J, np.array([ds[k + 1] - ds[k]]), t1)[0])
+        t = _cell_time(v, u, J, ds[k + 1] - ds[k], t1)
         v, u, k = v + t * (u + 0.5 * t * J), u + t * J, k + 1
     inside = np.arange(n) <= k
     return np.minimum(x, np.where(inside, speed * speed, v_low * v_low - 2.0 * u0 * (ds - s1)))
+
+
+def _cell_time(v: float, u: float, J: float, length: float, t_max: float) -> float:
+    """The time a piece of jerk ``J`` from speed ``v`` and acceleration ``u < 0`` takes
+    to run ``length``, reached before ``t_max = -u / J`` (where its speed, still
+    positive, is lowest): Newton's method from 0, which approaches the root from
+    below (the distance is concave in the time up to ``t_max``)."""
+    t = 0.0
+    for _ in range(CELL_NEWTON):
+        step = (length - t * (v + t * (0.5 * u + t * J / 6.0))) / (v + t * (u + 0.5 * t * J))
+        t = min(t + step, t_max)
+        if step <= CELL_NEWTON_RTOL * t:
+            break
+    return t
 
 
 def _recovery_jerk(p: GridProblem, k: int, v: float, u: float, d1: np.ndarray,
