@@ -132,6 +132,10 @@ BIND_RTOL = 0.999
 #: tangent planes (guards a division near a stop in the path's interior).
 TINY_X = 1e-12
 
+#: A braking start whose recovery at the start's jerk comes to below this fraction
+#: of its speed is followed node by node (see ``_braking_start``).
+NEAR_STOP = 0.1
+
 #: Newton steps of a braking start's recovery through one cell (see
 #: ``_cell_time``; from 0 they approach the time from below, 4-6 to round-off),
 #: and the relative step that ends them.
@@ -463,21 +467,21 @@ def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
     fastest recovery: the first jerk round's linearisation point.
 
     A start that slows down (``u0 < 0``) keeps slowing down until its
-    acceleration is back at zero, at best at the largest path jerk its joints
-    allow. The jerk-free round turns the acceleration around at once and runs
-    much faster there; the jerk rows' tangent planes (of ``j / v``, convex in
-    the speed) taken at its speeds are then far below the limit at the speeds
-    the braking start has to pass, and made the round infeasible (11 of 300
-    random moving starts). The recovery runs node by node, each cell at the
-    jerk of :func:`_recovery_jerk` at its first node (the joints' braking jerk
-    limits less their terms in the speed and acceleration): with the start's
-    jerk over the whole recovery, a palletizer start at 0.033 m/s braking at
-    -1.2 m/s^2 was taken to come to a near-stop where its joints allow a
-    recovery at 0.018 m/s, and no round had a solution. Below the end of that
-    recovery, ``x`` is at most its speeds; after it, at most the speed
-    regained at the start's deceleration. Where a node's jerk is not
-    positive, or the recovery would stop, the start's jerk is taken over the
-    whole recovery (:func:`_braking_start_at`).
+    acceleration is back at zero, at best at the jerk limit ``J`` of the leg
+    (the joints' braking jerk over ``|q'|`` at the start, the path's jerk):
+    its speed falls to ``v0 - u0^2 / (2 J)``. The jerk-free round turns the
+    acceleration around at once and runs much faster there; the jerk rows'
+    tangent planes (of ``j / v``, convex in the speed) taken at its speeds
+    are then far below the limit at the speeds the braking start has to
+    pass, and made the round infeasible (11 of 300 random moving starts).
+    Below the end of that recovery, ``x`` is at most its speeds; after it,
+    at most the speed regained at the start's deceleration.
+
+    Where that recovery comes to a near-stop (below :data:`NEAR_STOP` of the
+    start's speed), it runs node by node instead (:func:`_node_recovery`):
+    the jerk the joints allow changes along it (a palletizer start at 0.033
+    m/s braking at -1.2 m/s^2 came to 0.00015 m/s at the start's jerk, where
+    its joints recover at 0.018 m/s, and no round had a solution).
 
     Parameters
     ----------
@@ -495,26 +499,47 @@ def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
     ndarray, shape (n,)
     """
     v0, u0 = math.sqrt(p.x0), p.u0
+    J = _rest_jerk(np.abs(d1[0]), j_dec[0], p.j_path)
+    if not (math.isfinite(J) and J > 0.0):
+        return x
+    t1 = -u0 / J  # the recovery's duration, its length and the lowest speed
+    s1 = t1 * (v0 + t1 * (0.5 * u0 + t1 * J / 6.0))
+    v_low = v0 + t1 * (u0 + 0.5 * t1 * J)
+    ds = p.s - p.s[0]
+    if v_low < NEAR_STOP * v0 and (nodes := _node_recovery(p, d1, j_dec)) is not None:
+        k, speed, s1, v_low = nodes
+        return np.minimum(x, np.where(np.arange(ds.size) <= k, speed * speed,
+                                      v_low * v_low - 2.0 * u0 * (ds - s1)))
+    tt = time_to_reach(0.0, v0, u0, J, ds, t1)  # (every node inside the recovery)
+    v = v0 + tt * (u0 + 0.5 * tt * J)
+    return np.minimum(x, np.where(ds <= s1, v * v, v_low * v_low - 2.0 * u0 * (ds - s1)))
+
+
+def _node_recovery(p: GridProblem, d1: np.ndarray,
+                   j_dec: np.ndarray) -> tuple[int, np.ndarray, float, float] | None:
+    """A braking start's recovery (its acceleration back at zero) node by node, each
+    cell at the jerk of :func:`_recovery_jerk` at its first node: ``(k, speed, s1,
+    v_low)``, the last node inside it, the speeds at the nodes up to it (n,), its
+    length and its lowest speed; None where a node's jerk is not positive or the
+    speed would reach zero first."""
     ds = p.s - p.s[0]
     n = ds.size
-    speed = np.empty(n)  # the recovery's speed at the nodes it passes
-    v, u, k = v0, u0, 0
+    speed = np.empty(n)
+    v, u, k = math.sqrt(p.x0), p.u0, 0
     while True:
         speed[k] = v
         J = _recovery_jerk(p, k, v, u, d1, j_dec)
         if not (math.isfinite(J) and J > 0.0):
-            return _braking_start_at(p, x, d1, j_dec)
+            return None
         t1 = -u / J
         v_low = v + t1 * (u + 0.5 * t1 * J)
         if not v_low > 0.0:
-            return _braking_start_at(p, x, d1, j_dec)
+            return None
         s1 = ds[k] + t1 * (v + t1 * (0.5 * u + t1 * J / 6.0))
         if k == n - 1 or s1 < ds[k + 1]:
-            break
+            return k, speed, s1, v_low
         t = _cell_time(v, u, J, ds[k + 1] - ds[k], t1)
         v, u, k = v + t * (u + 0.5 * t * J), u + t * J, k + 1
-    inside = np.arange(n) <= k
-    return np.minimum(x, np.where(inside, speed * speed, v_low * v_low - 2.0 * u0 * (ds - s1)))
 
 
 def _cell_time(v: float, u: float, J: float, length: float, t_max: float) -> float:
@@ -541,24 +566,6 @@ def _recovery_jerk(p: GridProblem, k: int, v: float, u: float, d1: np.ndarray,
     with np.errstate(divide="ignore", invalid="ignore"):
         bound = np.where(q1 > 0.0, (jl - c) / q1, np.where(q1 < 0.0, (jl + c) / -q1, np.inf))
     return min(float(np.min(bound)), p.j_path)
-
-
-def _braking_start_at(p: GridProblem, x: np.ndarray, d1: np.ndarray,
-                      j_dec: np.ndarray) -> np.ndarray:
-    """:func:`_braking_start` with the start's jerk ``J`` (its joints' braking jerk
-    over ``|q'|``, the path's jerk) over the whole recovery: the speed falls to
-    ``v0 - u0^2 / (2 J)``."""
-    v0, u0 = math.sqrt(p.x0), p.u0
-    J = _rest_jerk(np.abs(d1[0]), j_dec[0], p.j_path)
-    if not (math.isfinite(J) and J > 0.0):
-        return x
-    t1 = -u0 / J  # the recovery's duration, its length and the lowest speed
-    s1 = t1 * (v0 + t1 * (0.5 * u0 + t1 * J / 6.0))
-    v_low = v0 + t1 * (u0 + 0.5 * t1 * J)
-    ds = p.s - p.s[0]
-    tt = time_to_reach(0.0, v0, u0, J, ds, t1)  # (every node inside the recovery)
-    v = v0 + tt * (u0 + 0.5 * tt * J)
-    return np.minimum(x, np.where(ds <= s1, v * v, v_low * v_low - 2.0 * u0 * (ds - s1)))
 
 
 def _leg_limits(sig: np.ndarray, d1: np.ndarray, d2: np.ndarray, x: np.ndarray, u: np.ndarray,
