@@ -507,12 +507,13 @@ def _braking_start(p: GridProblem, x: np.ndarray, d1: np.ndarray,
     v_low = v0 + t1 * (u0 + 0.5 * t1 * J)
     ds = p.s - p.s[0]
     if v_low < NEAR_STOP * v0 and (nodes := _node_recovery(p, d1, j_dec)) is not None:
-        k, speed, s1, v_low = nodes
-        return np.minimum(x, np.where(np.arange(ds.size) <= k, speed * speed,
-                                      v_low * v_low - 2.0 * u0 * (ds - s1)))
-    tt = time_to_reach(0.0, v0, u0, J, ds, t1)  # (every node inside the recovery)
-    v = v0 + tt * (u0 + 0.5 * tt * J)
-    return np.minimum(x, np.where(ds <= s1, v * v, v_low * v_low - 2.0 * u0 * (ds - s1)))
+        k, v, s1, v_low = nodes
+        inside = np.arange(ds.size) <= k
+    else:
+        tt = time_to_reach(0.0, v0, u0, J, ds, t1)  # (every node inside the recovery)
+        v = v0 + tt * (u0 + 0.5 * tt * J)
+        inside = ds <= s1
+    return np.minimum(x, np.where(inside, v * v, v_low * v_low - 2.0 * u0 * (ds - s1)))
 
 
 def _node_recovery(p: GridProblem, d1: np.ndarray,
