@@ -695,6 +695,22 @@ def test_a_re_plan_from_a_near_stop_braking_start():
     _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=6e-3)
 
 
+def test_a_re_plan_just_before_a_speed_dip():
+    """A Panda chain through sharp corners, re-planned from its state 3 ms before a
+    speed minimum (0.026 m/s braking at -0.089 m/s^2): one cell's jerk excess
+    (0.16 %, below the split threshold) stayed the same through every local
+    lowering of the limits, and the last attempt ended 0.0093 % over a joint's
+    jerk limit: InfeasibleError. A cell whose excess a lowering does not halve is
+    now split. The re-plan keeps every limit and takes the time the first timing
+    had left to within 0.3 % less and 0.1 % more (0.9981 of it)."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("panda", 951, 3, 0.7030015304568528)
+    assert v0 < 0.03 and a0 < -0.05
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=3e-3)
+
+
 def test_a_chain_whose_last_line_is_short_reaches_its_target():
     """An arm6 chain of a 300 mm line and a 1.5 mm one, with a 0.5 mm zone: the
     blend's last breakpoint lies 1 mm before the path's end, within a quarter of

@@ -302,6 +302,10 @@ TIGHTEN_ABOVE = 1e-6
 #: to this many rounds, and the rounds' check is as dense as the final one.
 MAX_TIGHTEN_MOVING = 8
 
+#: With a moving state, a cell whose excess after a local lowering is still at
+#: least this fraction of the one before is split (the lowering did not reach it).
+STUBBORN_EXCESS = 0.5
+
 #: With a moving boundary state an attempt further above a limit than the least
 #: excess of the attempts before it has that limit lowered by at most that least
 #: excess (at least SPLIT_ABOVE), times this factor for every attempt in a row
@@ -2010,6 +2014,7 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             init_settled = False  # init is a solution of the same grid
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
+            prev_excess = None  # (moving state) every cell's excess in the attempt before
             while attempt <= (MAX_TIGHTEN_MOVING if moving
                               else MAX_TIGHTEN_SLOW if best is not None and best[5] > SLOW_SCALE
                               else MAX_TIGHTEN):
@@ -2099,8 +2104,21 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         best = (score, sol, dur, jk, use, k, piv, (s, der, cap, kappa, vcap), close)
                     if use.worst <= 1.0 + (CHECK_RTOL if moving else TIGHTEN_ABOVE):
                         break  # a small excess costs less as a uniform slow-down than as another round
-                if unjoined is not None or (use.worst > 1.0 + SPLIT_ABOVE and splits < MAX_SPLITS
-                                            and s.size < GRID_MAX):
+                stubborn = None
+                if moving and unjoined is None:
+                    # a cell whose excess a local lowering did not halve: the lowering
+                    # does not reach it (the grid is too coarse there), split it as
+                    # around a large excess
+                    excess = np.zeros(s.size - 1)
+                    for ratio in (rv, ra, rj):
+                        np.maximum.at(excess, cell, ratio.max(axis=1, initial=0.0) - 1.0)
+                    if prev_excess is not None and prev_excess.size == excess.size:
+                        stubborn = ((excess > CHECK_RTOL) & (prev_excess > CHECK_RTOL)
+                                    & (excess >= STUBBORN_EXCESS * prev_excess))
+                        stubborn = stubborn if stubborn.any() else None
+                    prev_excess = excess
+                if (unjoined is not None or stubborn is not None or use.worst > 1.0 + SPLIT_ABOVE) \
+                        and splits < MAX_SPLITS and s.size < GRID_MAX:
                     # a large excess: the grid is too coarse for the motion there (the
                     # pieces' jerks differ from the interval's mean): split the cells
                     # around it and solve again from this solution
@@ -2111,6 +2129,9 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                         for ratio in (rv, ra, rj):
                             bad[cell[(ratio > 1.0 + SPLIT_ABOVE).any(axis=1)]] = True
                         bad[cell[rs > 1.0 + SPLIT_ABOVE]] = True
+                        if stubborn is not None:
+                            bad |= stubborn
+                    prev_excess = None
                     bad[:-1] |= bad[1:].copy()
                     bad[1:] |= bad[:-1].copy()
                     cells = np.nonzero(bad)[0][:max(GRID_MAX - s.size, 0)]
