@@ -69,7 +69,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _ipm, _jerk_jit
-from ._hermite import time_to_reach
+from ._hermite import time_to_reach, time_to_reach_one
 
 __all__ = ["GridProblem", "GridSolution", "solve_grid"]
 
@@ -135,12 +135,6 @@ TINY_X = 1e-12
 #: A braking start whose recovery at the start's jerk comes to below this fraction
 #: of its speed is followed node by node (see ``_braking_start``).
 NEAR_STOP = 0.1
-
-#: Newton steps of a braking start's recovery through one cell (see
-#: ``_cell_time``; from 0 they approach the time from below, 4-6 to round-off),
-#: and the relative step that ends them.
-CELL_NEWTON = 30
-CELL_NEWTON_RTOL = 1e-13
 
 #: A new solution's jerk row (linearised at it, with its own legs) exceeded by
 #: more than this (the rows are normalised) where the row that bounded it took
@@ -539,22 +533,8 @@ def _node_recovery(p: GridProblem, d1: np.ndarray,
         s1 = ds[k] + t1 * (v + t1 * (0.5 * u + t1 * J / 6.0))
         if k == n - 1 or s1 < ds[k + 1]:
             return k, speed, s1, v_low
-        t = _cell_time(v, u, J, ds[k + 1] - ds[k], t1)
+        t = time_to_reach_one(v, u, J, ds[k + 1] - ds[k], t1)
         v, u, k = v + t * (u + 0.5 * t * J), u + t * J, k + 1
-
-
-def _cell_time(v: float, u: float, J: float, length: float, t_max: float) -> float:
-    """The time a piece of jerk ``J`` from speed ``v`` and acceleration ``u < 0`` takes
-    to run ``length``, reached before ``t_max = -u / J`` (where its speed, still
-    positive, is lowest): Newton's method from 0, which approaches the root from
-    below (the distance is concave in the time up to ``t_max``)."""
-    t = 0.0
-    for _ in range(CELL_NEWTON):
-        step = (length - t * (v + t * (0.5 * u + t * J / 6.0))) / (v + t * (u + 0.5 * t * J))
-        t = min(t + step, t_max)
-        if step <= CELL_NEWTON_RTOL * t:
-            break
-    return t
 
 
 def _recovery_jerk(p: GridProblem, k: int, v: float, u: float, d1: np.ndarray,
