@@ -5,8 +5,8 @@ Run::
     python examples/10_waypoints.py --out /tmp/trajkit-examples
 
 1. plans a 6-axis motion through 7 taught joint positions of the 6-axis arm
-   four ways: a spline through every waypoint, the least-bending spline
-   passing each inner waypoint within 0.05 rad, and straight lines with
+   four ways: a spline through every waypoint, a spline passing each
+   inner waypoint within 0.05 rad, and straight lines with
    0.2 and 0.05 rad blends (blends so tight that passing them would take
    longer than stopping: the motion then stops at each waypoint, never
    slower); and, for comparison, a jerk-limited rest-to-rest move between

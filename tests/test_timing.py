@@ -21,7 +21,7 @@ from conftest import sweep_size
 from trajkit import AxisLimits, InfeasibleError, InvalidInputError, plan_move, plan_ptp, plan_state_to_state
 from trajkit.timing import LinearJointPath, PathRest, _socp, engine, plan_path_timing, plan_waypoints
 from trajkit.timing._shaped import MAX_SHAPED_WAYPOINTS, ShapedJointPath, shaped_path
-from trajkit.timing.waypoints import STOP_ALL_MARGIN, SplineJointPath
+from trajkit.timing.waypoints import STOP_ALL_MARGIN, SplineJointPath, _least_bending
 
 LIMIT_RTOL = 1e-9
 
@@ -327,6 +327,36 @@ def test_a_joint_reversal_is_a_grid_node():
     assert not np.any(d1[:-1] * d1[1:] < 0.0)
 
 
+#: A least-bending spline (blend 0.1) of random far-apart waypoints: joint 1 may brake
+#: at 0.0068 rad/s^2 and speed up at 0.032, and reverses twice.
+_FAR_REVERSAL = ([[0.48976207002660543, 0.7546232339227836], [0.36317387200518714, 1.3118586419497553],
+                  [0.363535747853036, 1.191083509174415], [0.14017670625661308, 0.4180550368490182],
+                  [0.14785908502373177, 0.39356149869320733], [0.29826496233072636, 0.3867516466339409],
+                  [0.7609902114710463, 0.7959708282961329]],
+                 [0.0, 0.6650631351676968, 0.9432172216193249, 1.806236306735264, 1.8614646674015365,
+                  2.184065842344283, 2.77414374812226],
+                 [(math.inf, 362.884670370636, 1001.6554926825734, 362.884670370636, 147.01292232989593),
+                  (7867.785240663739, 0.03242112452858909, 1.8173160857198283, 0.006758080020287063,
+                   1.8173160857198283)])
+
+
+def test_a_joint_brakes_within_its_leg_beside_its_reversal_node():
+    """At a reversal node ``q'`` is zero: the node's row bounds ``q'' x`` only and
+    leaves the path acceleration ``u`` there free. Without rows in the middle of
+    the two neighbouring cells the path braked hard through the node, and the
+    ``q' u`` term just before it took joint 1 14.5 % past its braking limit: the
+    attempts never got below it and a uniform slow-down of 1.145 was left. With
+    them: within 0.5 %, every limit kept."""
+    pts, knots, L = _FAR_REVERSAL
+    path = SplineJointPath(np.array(pts), np.array(knots))
+    tm = plan_path_timing(path, [AxisLimits(*lm) for lm in L])
+    assert tm.info["status"] != "fallback" and tm.time_scale <= 1.005
+    assert max(_dense_use(tm)) <= 1 + LIMIT_RTOL
+    # the reversals of joint 1 are nodes (at both of them)
+    d1 = tm.grid_derivatives[1][:, 1]
+    assert np.count_nonzero(d1[1:-1] == 0.0) == 2
+
+
 _FAR_100 = ([[0.9088979234023151, 0.7089588992703566, -0.4494291376081456, -0.07335439753932316,
               -0.11036999843934381, 0.5391405388159791],
              [0.7443686887241419, 0.41371975890142587, -0.27413132937750073, 0.06672030400549245,
@@ -348,25 +378,33 @@ _FAR_100 = ([[0.9088979234023151, 0.7089588992703566, -0.4494291376081456, -0.07
 
 
 def test_a_first_jerk_round_without_solution_is_solved_again_from_slower_speeds(monkeypatch):
-    """Set 100 of the far-apart waypoints (blend 0.05): the jerk-limited timing
-    takes twice the jerk-free one, and the first jerk round, linearised at the
-    jerk-free round's speeds, has no solution on the grid with its reversal
-    nodes. Solved again from that timing slowed down uniformly, the path is
-    timed (within 1.3 % of the timing on the grid without those nodes, which
-    happens to solve at once); without the retries it went to the fallback
-    (2.5 times slower) and the motion stopped at its middle waypoint."""
+    """Set 100 of the far-apart waypoints, its least-bending spline within 0.05 rad:
+    the jerk-limited timing takes twice the jerk-free one. Before the joints'
+    accelerations beside their reversal nodes had rows, the first jerk round,
+    linearised at the jerk-free round's speeds, had no solution on the grid with
+    those nodes. Solved again from that timing slowed down uniformly, the path
+    was timed (within 1.3 % of the timing on the grid without those nodes, which
+    happens to solve at once); without the retries it went to the fallback (2.9
+    times slower). With the rows it is timed directly."""
     W, L = _FAR_100
+    W = np.array(W)
     lims = [AxisLimits(*lm) for lm in L]
-    tm = plan_waypoints(np.array(W), lims, blend=0.05)
-    assert len(tm.segments) == 1 and tm.segments[0].info["status"] != "fallback"
-    assert max(_dense_use(tm.segments[0])) <= 1 + LIMIT_RTOL
+    knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))])
+    path = SplineJointPath(_least_bending(W, knots, 0.05), knots)
+    now = plan_path_timing(path, lims)
+    assert now.info["status"] == "Solved" and now.time_scale == 1.0
+    assert max(_dense_use(now)) <= 1 + LIMIT_RTOL
+    # the grid problem without those rows: the retries are what times it
+    monkeypatch.setattr(_socp, "_reversal_rows", lambda *args: None)
+    tm = plan_path_timing(path, lims)
+    assert tm.info["status"] == "Solved" and max(_dense_use(tm)) <= 1 + LIMIT_RTOL
     with monkeypatch.context() as mp:  # the grid without the reversal nodes
         mp.setattr(engine, "_reversal_nodes", lambda cached, s, der, err, legs: (s, der, err))
-        plain = plan_waypoints(np.array(W), lims, blend=0.05)
-    assert len(plain.segments) == 1 and tm.duration <= 1.02 * plain.duration
+        plain = plan_path_timing(path, lims)
+    assert tm.duration <= 1.02 * plain.duration
     monkeypatch.setattr(_socp, "SLOWER_RETRIES", 0)
-    slow = plan_waypoints(np.array(W), lims, blend=0.05)
-    assert len(slow.segments) == 2 and slow.duration > 1.1 * tm.duration
+    slow = plan_path_timing(path, lims)
+    assert slow.info["status"] == "fallback" and slow.duration > 2.0 * tm.duration
 
 
 def test_a_braking_start_is_planned_from_the_speeds_of_its_recovery():
@@ -651,17 +689,49 @@ def test_shaped_path_keeps_the_joint_ranges_and_has_a_size_bound():
 def test_least_bending_spline_uses_the_tolerance_and_bends_less():
     rng = np.random.default_rng(8)
     W = np.cumsum(rng.uniform(-0.6, 0.6, (9, 3)), axis=0)
-    lims = AxisLimits(2.0, 10.0, 100.0)
-    exact = plan_waypoints(W, lims)
-    loose = plan_waypoints(W, lims, blend=0.1)
-    assert loose.deviation.max() <= 0.1 * (1 + 1e-12) and loose.deviation.max() > 0.05
+    knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))])
+    moved = _least_bending(W, knots, 0.1)
+    dev = np.linalg.norm(moved - W, axis=1)
+    assert dev.max() <= 0.1 * (1 + 1e-12) and dev.max() > 0.05
+    np.testing.assert_array_equal(moved[[0, -1]], W[[0, -1]])
 
     def bending(path):
         s = np.linspace(0.0, path.length, 20001)
         return float(np.sum(path.derivatives(s)[2] ** 2) * (s[1] - s[0]))
 
-    assert bending(loose.segments[0].path) < 0.8 * bending(exact.segments[0].path)
-    assert loose.duration < exact.duration
+    assert bending(SplineJointPath(moved, knots)) < 0.8 * bending(SplineJointPath(W, knots))
+    lims = AxisLimits(2.0, 10.0, 100.0)
+    assert plan_waypoints(W, lims, blend=0.1).duration < plan_waypoints(W, lims).duration
+
+
+@pytest.mark.parametrize("seed", [2026, 8])
+def test_shaped_path_within_a_tolerance_uses_it_and_beats_the_least_bending_spline(seed):
+    """With a tolerance the shaped path passes every inner waypoint within it (a cone
+    per waypoint in the program), exactly through the points it reports, C2, and is
+    timed faster than the least-bending spline within the same tolerance."""
+    rng = np.random.default_rng(seed)
+    W = np.cumsum(rng.uniform(-0.6, 0.6, (8, 6)), axis=0)
+    lims = [AxisLimits(2.0, 10.0, 100.0)] * 6
+    path = shaped_path(W, lims, 0.1)
+    assert isinstance(path, ShapedJointPath)
+    dev = np.linalg.norm(path.points - W, axis=1)
+    assert dev[0] == dev[-1] == 0.0
+    assert dev.max() <= 0.1 * (1 + 1e-12) and dev.min(initial=1.0, where=dev > 0) > 0.05
+    np.testing.assert_allclose(path.derivatives(path.knots)[0], path.points, rtol=0, atol=1e-12)
+    eps = 1e-9
+    for order in (0, 1, 2):
+        left = path.derivatives(path.breakpoints - eps)[order]
+        right = path.derivatives(path.breakpoints + eps)[order]
+        np.testing.assert_allclose(left, right, atol=1e-5 * (1 + np.abs(left).max()))
+    knots = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(W, axis=0), axis=1))])
+    shaped = plan_path_timing(path, lims)
+    spline = plan_path_timing(SplineJointPath(_least_bending(W, knots, 0.1), knots), lims)
+    assert max(_dense_use(shaped, 64)) <= 1 + LIMIT_RTOL
+    assert shaped.duration < 0.96 * spline.duration, (shaped.duration, spline.duration)
+    tr = plan_waypoints(W, lims, blend=0.1)
+    assert isinstance(tr.segments[0].path, ShapedJointPath)
+    assert tr.duration == pytest.approx(shaped.duration, rel=1e-12)
+    np.testing.assert_array_equal(tr.deviation, dev)
 
 
 def test_spline_waypoints_stop_where_the_spline_would_leave_a_joint_range():

@@ -711,6 +711,23 @@ def test_a_re_plan_just_before_a_speed_dip():
     _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool, shorter=3e-3)
 
 
+def test_a_re_plan_whose_last_attempt_ends_at_the_round_off():
+    """A Panda chain with separate legs, re-planned from its state at a tenth of its
+    duration (0.20 m/s speeding up at 1.5 m/s^2): its eight local lowerings went
+    astray (32 % over a joint's jerk limit) and came back, and the last one ended
+    4e-8 over a limit: at the round-off of the linearised rows, but with a moving
+    start there is no uniform slow-down, and the re-plan raised InfeasibleError.
+    Such an excess now gets up to two more attempts (the limit lowered everywhere
+    by ten times the excess): the re-plan keeps every limit and takes the time
+    the first timing had left to within 0.2 % less."""
+    from trajkit.timing import PathRest
+
+    plan, path, a_tool, left, (s0, v0, a0) = _sharp_chain_state("panda", 951, 0, 0.1, legs=True)
+    assert v0 > 0.15 and a0 > 1.0
+    rest = plan(PathRest(path, s0), s0, start_speed=v0, start_accel=a0)
+    _check_sharp_re_plan(rest, path, s0, (v0, a0), left, 1e-3, a_tool)
+
+
 def test_a_chain_whose_last_line_is_short_reaches_its_target():
     """An arm6 chain of a 300 mm line and a 1.5 mm one, with a 0.5 mm zone: the
     blend's last breakpoint lies 1 mm before the path's end, within a quarter of

@@ -21,6 +21,11 @@ waypoints is slowed down or sped up uniformly to its limits:
 - the stretches are then rescaled (``h_i M_i``) and the program solved again,
   :data:`ROUNDS` times.
 
+With a tolerance (a blend), the point where the path passes each inner
+waypoint is free within a ball of that radius around it: a second-order cone
+in the program (which is then a cone program), so the path cuts each corner
+where its joints gain most.
+
 The first ``tau`` of every stretch is the longest one-axis rest-to-rest
 time of its joints. The path has zero second derivative at both ends
 (``p'`` free there: the path is regular, the timing starts it from rest).
@@ -41,7 +46,7 @@ from scipy.interpolate import BSpline, PPoly, make_interp_spline
 from ..limits import AxisLimits
 from ..profiles.batch import plan_moves
 
-__all__ = ["ShapedJointPath", "shaped_path", "PIECES", "ROUNDS", "MAX_SHAPED_WAYPOINTS"]
+__all__ = ["ShapedJointPath", "shaped_path", "within_tolerance", "PIECES", "ROUNDS", "MAX_SHAPED_WAYPOINTS"]
 
 #: Cubic pieces of the path between two consecutive waypoints.
 PIECES = 8
@@ -84,7 +89,8 @@ class ShapedJointPath:
     Parameters
     ----------
     points : ndarray, shape (k, m)
-        The waypoints.
+        The points the path passes: the waypoints, or points within the
+        tolerance of them.
     knots : ndarray, shape (k,)
         Strictly increasing parameter of every waypoint, ``knots[0] = 0``.
     coeffs : ndarray, shape (4, p, m)
@@ -159,8 +165,9 @@ def _first_knots(points: np.ndarray, lims: Sequence[AxisLimits]) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(times.max(axis=1))])
 
 
-def _solve(points, knots, vlim, alim, jlim, lo, hi):
-    """One linear program; (control points (n, m), B-spline knots, stretch scales) or None."""
+def _solve(points, knots, vlim, alim, jlim, lo, hi, tol=0.0):
+    """One linear program (a cone program with ``tol`` > 0: every inner waypoint passed
+    within ``tol``); (control points (n, m), B-spline knots, stretch scales) or None."""
     k, m = points.shape
     nseg = k - 1
     inner = np.concatenate([np.linspace(knots[i], knots[i + 1], PIECES + 1)[:-1] for i in range(nseg)]
@@ -236,24 +243,35 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
                 rhs.append(np.full(n, sgn * float(bound)))
     ineq = sp.csr_matrix((np.concatenate(vals_), (np.concatenate(rows_), np.concatenate(cols_))),
                          shape=(r0, nv))
-    interp = BSpline.design_matrix(knots, t, _DEG)
+    interp = BSpline.design_matrix(knots, t, _DEG).tocsr()
     ends = d2[[0, d2.shape[0] - 1]]
-    e = sp.vstack([interp, ends]).tocsr()
-    eqs = [sp.hstack([sp.csr_matrix((e.shape[0], j * n)), e, sp.csr_matrix((e.shape[0], nv - (j + 1) * n))])
-           for j in range(m)]
-    b_eq = np.concatenate([np.concatenate([points[:, j], np.zeros(2)]) for j in range(m)])
+    # the waypoints passed exactly (with tol > 0 the ends only, the inner ones in cones)
+    passed = np.arange(k) if tol == 0.0 else np.array([0, k - 1])
+    e = sp.vstack([interp[passed], ends]).tocsr()
+
+    def on_joint(rows: sp.csr_matrix, j: int) -> sp.csr_matrix:
+        """``rows`` acting on joint ``j``'s control points."""
+        return sp.hstack([sp.csr_matrix((rows.shape[0], j * n)), rows,
+                          sp.csr_matrix((rows.shape[0], nv - (j + 1) * n))])
+
+    eqs = [on_joint(e, j) for j in range(m)]
+    b_eq = np.concatenate([np.concatenate([points[passed, j], np.zeros(2)]) for j in range(m)])
+    # (tol, waypoint - p(tau_i)) in a second-order cone for every inner waypoint
+    cone_rows = [sp.vstack([sp.csr_matrix((1, nv))] + [on_joint(interp[[i]], j) for j in range(m)])
+                 for i in range(1, k - 1)] if tol > 0.0 else []
+    b_cone = [np.concatenate([[tol], points[i]]) for i in range(1, k - 1)] if tol > 0.0 else []
     h = np.diff(knots)
     c = np.zeros(nv)
     c[i_seg:i_joint] = h
     c[i_joint:] = JOINT_WEIGHT * h.sum()
     a_eq = sp.vstack(eqs)
-    a_all = sp.vstack([a_eq, ineq]).tocsc()
+    a_all = sp.vstack([a_eq, ineq] + cone_rows).tocsc()
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = LP_TOL
-    sol = clarabel.DefaultSolver(sp.csc_matrix((nv, nv)), c, a_all, np.concatenate([b_eq] + rhs),
-                                 [clarabel.ZeroConeT(a_eq.shape[0]),
-                                  clarabel.NonnegativeConeT(a_all.shape[0] - a_eq.shape[0])],
+    sol = clarabel.DefaultSolver(sp.csc_matrix((nv, nv)), c, a_all, np.concatenate([b_eq] + rhs + b_cone),
+                                 [clarabel.ZeroConeT(a_eq.shape[0]), clarabel.NonnegativeConeT(ineq.shape[0])]
+                                 + [clarabel.SecondOrderConeT(m + 1)] * len(cone_rows),
                                  settings).solve()
     if str(sol.status).split(".")[-1] not in ("Solved", "AlmostSolved"):
         return None
@@ -265,9 +283,24 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi):
     return ctrl, t, scales
 
 
-def shaped_path(points: np.ndarray, lims: Sequence[AxisLimits]) -> ShapedJointPath | None:
+def within_tolerance(points: np.ndarray, moved: np.ndarray, tol: float) -> np.ndarray:
+    """``moved`` (k, m) with every inner point brought to at most ``tol`` from its point
+    of ``points`` (the solvers meet their cones to their tolerance) and both ends on
+    theirs."""
+    d = moved - points
+    d[0] = d[-1] = 0.0
+    dist = np.linalg.norm(d, axis=1)
+    over = dist > tol
+    d[over] *= (tol / dist[over])[:, None]
+    out = points + d
+    out[0], out[-1] = points[0], points[-1]
+    return out
+
+
+def shaped_path(points: np.ndarray, lims: Sequence[AxisLimits], tol: float = 0.0) -> ShapedJointPath | None:
     """The path through ``points`` (k, m) shaped for the joints' limits (see the module
-    notes); None where a program fails (the caller then uses another shape)."""
+    notes), passing every inner point within ``tol`` (joint-space distance, >= 0); None
+    where a program fails (the caller then uses another shape)."""
     k, m = points.shape
     if k < 3 or k > MAX_SHAPED_WAYPOINTS:
         return None
@@ -281,7 +314,7 @@ def shaped_path(points: np.ndarray, lims: Sequence[AxisLimits]) -> ShapedJointPa
         return None
     best = None
     for _ in range(ROUNDS):
-        out = _solve(points, knots, vlim, alim, jlim, lo, hi)
+        out = _solve(points, knots, vlim, alim, jlim, lo, hi, tol)
         if out is None:
             break
         best = (out, knots)
@@ -295,13 +328,16 @@ def shaped_path(points: np.ndarray, lims: Sequence[AxisLimits]) -> ShapedJointPa
     x = np.concatenate([pps[0].x[:-1][keep], pps[0].x[-1:]])
     coeffs = np.stack([pq.c[:, keep] for pq in pps], axis=2)
     pp = PPoly(coeffs, x)
-    # the program meets the waypoints to its tolerance: a natural cubic spline through
-    # the residuals (C2, as small as they are) makes the passage exact
-    resid = points - pp(knots)
+    # where the path passes: the waypoints, or with a tolerance where the program's
+    # path passes them (within it)
+    passing = points if tol == 0.0 else within_tolerance(points, pp(knots), tol)
+    # the program meets them to its tolerance: a natural cubic spline through the
+    # residuals (C2, as small as they are) makes the passage exact
+    resid = passing - pp(knots)
     corr = make_interp_spline(knots, resid, k=3, bc_type="natural")
     x0 = x[:-1]
     for order in range(4):
         coeffs[3 - order] += corr(x0, order) / [1.0, 1.0, 2.0, 6.0][order]
     start = np.searchsorted(x0, knots[:-1])
-    coeffs[3, start] = points[:-1]
-    return ShapedJointPath(points, knots, coeffs, x)
+    coeffs[3, start] = passing[:-1]
+    return ShapedJointPath(passing, knots, coeffs, x)

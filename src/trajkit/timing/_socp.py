@@ -381,6 +381,43 @@ def _clarabel_solve(clarabel, P, q, A, b, cones):
     return sol
 
 
+def _reversal_rows(static: _StaticRows, p: GridProblem, sig: np.ndarray, d1_mid: np.ndarray,
+                   D: np.ndarray) -> None:
+    """Joint accelerations in the middle of both intervals next to a reversal.
+
+    A joint with separate acceleration legs reverses at a node (``q'`` zero
+    there, see the engine's reversal nodes): its row there bounds ``q'' x``
+    only, not ``u``, while on either side ``q' u`` counts. The middle of each
+    neighbouring interval, on the leg of its other node's sign, with the
+    interval's state there from the cubic Hermite interpolation of ``x``
+    (slopes ``2 u``): ``x_mid = (x_i + x_{i+1})/2 + (u_i - u_{i+1}) D/4``,
+    ``u_mid = 3 (x_{i+1} - x_i) / (4 D) - (u_i + u_{i+1})/4``; ``q'`` there as
+    the velocity rows', ``q''`` the mean of the nodes'.
+    """
+    n, m = sig.shape
+    acc = np.broadcast_to(p.a_acc, (n, m))
+    dec = np.broadcast_to(p.a_dec, (n, m))
+    node, joint = np.nonzero((sig == 0) & (acc != dec))
+    inner = (node > 0) & (node < n - 1)
+    node, joint = node[inner], joint[inner]
+    if not node.size:
+        return
+    cell = np.concatenate([node - 1, node])
+    joint = np.concatenate([joint, joint])
+    other = np.concatenate([node - 1, node + 1])
+    sg = sig[other, joint]
+    keep = sg != 0
+    cell, joint, sg = cell[keep], joint[keep], sg[keep]
+    dd = D[cell]
+    a1 = d1_mid[cell, joint]
+    a2 = 0.5 * (p.d2[cell, joint] + p.d2[cell + 1, joint])
+    c0, c1 = sg * (0.5 * a2 - 0.75 * a1 / dd), sg * (0.5 * a2 + 0.75 * a1 / dd)
+    c2, c3 = sg * (0.25 * dd * a2 - 0.25 * a1), sg * (-0.25 * dd * a2 - 0.25 * a1)
+    # speeding up within the accel leg, slowing down within the decel leg
+    static.add(cell, c0, c1, c2, c3, np.minimum(acc[cell, joint], acc[cell + 1, joint]))
+    static.add(cell, -c0, -c1, -c2, -c3, np.minimum(dec[cell, joint], dec[cell + 1, joint]))
+
+
 def _legs(sig: np.ndarray, acc: np.ndarray, dec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Upper and lower bound of ``sigma * q_ddot`` per node and joint (sigma = sign(q'))."""
     hi = np.where(sig != 0, acc, np.minimum(acc, dec))
@@ -1159,6 +1196,7 @@ def _solve_scaled(p: GridProblem, max_rounds: int,
     sg = np.where(sig[nn, kk] != 0, sig[nn, kk], 1.0)
     static.add(nn, sg * d2[nn, kk], 0.0, sg * d1[nn, kk], 0.0, a_hi[nn, kk])
     static.add(nn, -sg * d2[nn, kk], 0.0, -sg * d1[nn, kk], 0.0, a_lo[nn, kk])
+    _reversal_rows(static, p, sig, d1_mid, D)
     if math.isfinite(p.a_path):  # (where it can bind and the curvature's rows do not bound it)
         flat = np.setdiff1d(inner[reach[inner]], kn)
         static.add(flat, 0.0, 0.0, 1.0, 0.0, ap[flat])

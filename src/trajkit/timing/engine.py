@@ -346,6 +346,11 @@ JOINT_MARGIN_RATIO = 10.0
 ROUNDOFF_EXCESS = 1e-6
 ROUNDOFF_LOWER = 10.0
 
+#: Attempts past MAX_TIGHTEN_MOVING for an excess at the round-off (the last
+#: attempt's, lowered everywhere as above): a moving state cannot be slowed down
+#: uniformly, and such a timing was refused for an excess of 4e-8 of a limit.
+ROUNDOFF_ROUNDS = 2
+
 #: Relative slack of the final check (round-off).
 CHECK_RTOL = 1e-9
 
@@ -768,7 +773,9 @@ def _reversal_nodes(cached: _Cached, s: np.ndarray, der: tuple, cell_err: np.nda
     braking leg's acceleration up to the other's before the reversal (up to
     2.8 times its limit over whole cells, which no split of the cells
     resolved: a uniform slow-down of 3 % was left). At the node both legs'
-    tighter limits hold, and on each side one leg. A reversal within
+    tighter limits hold, and on each side one leg (the grid problem bounds
+    the joint's acceleration in the middle of both neighbouring cells too,
+    see ``_socp._reversal_rows``). A reversal within
     REVERSAL_GAP of the path's length of a node is put on that node. The end
     cells are left alone (the rest intervals' one jerk phase; a joint that
     barely moves there "reverses" within 1e-7 of the path's length of its
@@ -2015,7 +2022,8 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
             init_near = False  # ... or of the grid before a split (interpolated)
             init_duals = None  # ... and its multipliers (on the same grid)
             prev_excess = None  # (moving state) every cell's excess in the attempt before
-            while attempt <= (MAX_TIGHTEN_MOVING if moving
+            roundoff_rounds = 0  # (moving state) attempts granted for a round-off excess
+            while attempt <= (MAX_TIGHTEN_MOVING + roundoff_rounds if moving
                               else MAX_TIGHTEN_SLOW if best is not None and best[5] > SLOW_SCALE
                               else MAX_TIGHTEN):
                 prob = GridProblem(s=s, d1=d1, d2=d2, d3=d3, v_max=vlim[None, :] * scale_v,
@@ -2202,7 +2210,10 @@ def plan_path_timing(path: JointPath, limits: Sequence[AxisLimits], *,
                 if moving and use.worst <= 1.0 + ROUNDOFF_EXCESS:
                     # an excess at the round-off of the linearised rows moves from piece
                     # to piece between rounds: that limit lowered everywhere, by
-                    # ROUNDOFF_LOWER times the excess
+                    # ROUNDOFF_LOWER times the excess (and solved again, past the
+                    # attempts' budget up to ROUNDOFF_ROUNDS times)
+                    if attempt > MAX_TIGHTEN_MOVING and roundoff_rounds < ROUNDOFF_ROUNDS:
+                        roundoff_rounds += 1
                     for ratio_max, scale in ((use.velocity.max(initial=0.0), scale_v),
                                              (use.acceleration.max(initial=0.0), scale_a),
                                              (use.jerk.max(initial=0.0), scale_j),

@@ -1,8 +1,8 @@
 """Moving through joint-space waypoints without stopping.
 
 :func:`plan_waypoints` joins N waypoints by a smooth path (``"spline"``: a
-path shaped for the joints' limits or a natural cubic spline through them,
-or the least-bending spline within the blend tolerance; see
+path shaped for the joints' limits or a natural cubic spline, through them
+or within the blend tolerance of them, whichever is faster; see
 :mod:`trajkit.timing._shaped`), or (``"lines"``) by straight lines in joint
 space, rounding every inner corner with a quintic blend that leaves and enters the
 lines with the same direction and zero curvature, so the path ``q(s)`` has
@@ -30,7 +30,7 @@ from ..errors import InvalidInputError
 from ..limits import AxisLimits
 from ..profiles._range import DISTANCE_ABS_MIN, POSITION_MAX, check_limits_range
 from ..sync import plan_ptp
-from ._shaped import ShapedJointPath, shaped_path
+from ._shaped import ShapedJointPath, shaped_path, within_tolerance
 from .engine import PathTiming, plan_path_timing
 from .paths import JointPath
 
@@ -276,15 +276,7 @@ def _least_bending(points: np.ndarray, knots: np.ndarray, tol: float) -> np.ndar
                                  settings).solve()
     if str(sol.status).split(".")[-1] not in ("Solved", "AlmostSolved"):
         return points.copy()
-    moved = np.asarray(sol.x)[:nv].reshape(k, m)
-    d = moved - points
-    d[0] = d[-1] = 0.0
-    dist = np.linalg.norm(d, axis=1)
-    over = dist > tol
-    d[over] *= (tol / dist[over])[:, None]
-    out = points + d
-    out[0], out[-1] = points[0], points[-1]
-    return out
+    return within_tolerance(points, np.asarray(sol.x)[:nv].reshape(k, m), tol)
 
 
 def _unit_deviation(d_in: np.ndarray, d_out: np.ndarray) -> float:
@@ -383,10 +375,11 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
         chord length) beside it: both are timed and the faster is kept (the
         spline alone beyond 64 waypoints in a stretch, or where the shaped path would leave a
         joint's range). Both have continuous velocity and acceleration. With ``blend > 0``
-        every inner waypoint may be passed up to ``blend`` away: the spline is
-        then the one of least bending (minimum integral of the squared second
-        derivative) among all that pass within the tolerance, which lowers
-        the curvature the timing has to respect. Where the path would leave a
+        every inner waypoint may be passed up to ``blend`` away: the shaped
+        path's program then chooses where it passes each (a cone of radius
+        ``blend`` around the waypoint), and the spline beside it is the one of
+        least bending (minimum integral of the squared second derivative)
+        among all that pass within the tolerance. Where the path would leave a
         joint's position range between two waypoints, the motion stops at
         both (and runs straight between them if needed).
     ``"lines"``
@@ -484,6 +477,7 @@ def plan_waypoints(waypoints: Any, limits: AxisLimits | Sequence[AxisLimits], *,
             other = plan_path_timing(path.alternative, lims)
             if other.duration < timing.duration:
                 timing = other
+                deviation[a:b + 1] = np.linalg.norm(path.alternative.points - pts[a:b + 1], axis=1)
         if b - a >= 2:
             # never slower than stopping at every waypoint of the stretch: a straight
             # joint line from rest to rest is the phase-synchronised PTP optimum, which
@@ -538,18 +532,17 @@ def _spline_paths(pts, stops, tol, lims, deviation) -> tuple[list[JointPath], li
             moved = _least_bending(sub, knots, tol)
             spline = SplineJointPath(moved, knots)
             path: ShapedJointPath | SplineJointPath = spline
-            if tol == 0.0:
-                # through every waypoint: the shaped path where it stays in the joints'
-                # ranges (the natural spline beside it where that one does)
-                shaped = shaped_path(sub, lims)
-                if shaped is not None and not (bounded and _leaves_range(shaped, lo, hi).any()):
-                    if not (bounded and _leaves_range(spline, lo, hi).any()):
-                        shaped.alternative = spline
-                    path = shaped
+            # the shaped path where it stays in the joints' ranges (the natural spline
+            # beside it where that one does)
+            shaped = shaped_path(sub, lims, tol)
+            if shaped is not None and not (bounded and _leaves_range(shaped, lo, hi).any()):
+                if not (bounded and _leaves_range(spline, lo, hi).any()):
+                    shaped.alternative = spline
+                path = shaped
             if bounded and sub.shape[0] > 2:
                 for piece in np.nonzero(_leaves_range(path, lo, hi))[0]:
                     added.update({a + int(piece), a + int(piece) + 1} - {a, b})
-            deviation[a:b + 1] = np.linalg.norm(moved - sub, axis=1)
+            deviation[a:b + 1] = np.linalg.norm(path.points - sub, axis=1)
             paths.append(path)
         if not added:
             return paths, stops
