@@ -248,30 +248,31 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi, tol=0.0):
     # the waypoints passed exactly (with tol > 0 the ends only, the inner ones in cones)
     passed = np.arange(k) if tol == 0.0 else np.array([0, k - 1])
     e = sp.vstack([interp[passed], ends]).tocsr()
-
-    def on_joint(rows: sp.csr_matrix, j: int) -> sp.csr_matrix:
-        """``rows`` acting on joint ``j``'s control points."""
-        return sp.hstack([sp.csr_matrix((rows.shape[0], j * n)), rows,
-                          sp.csr_matrix((rows.shape[0], nv - (j + 1) * n))])
-
-    eqs = [on_joint(e, j) for j in range(m)]
+    eqs = [sp.hstack([sp.csr_matrix((e.shape[0], j * n)), e, sp.csr_matrix((e.shape[0], nv - (j + 1) * n))])
+           for j in range(m)]
     b_eq = np.concatenate([np.concatenate([points[passed, j], np.zeros(2)]) for j in range(m)])
-    # (tol, waypoint - p(tau_i)) in a second-order cone for every inner waypoint
-    cone_rows = [sp.vstack([sp.csr_matrix((1, nv))] + [on_joint(interp[[i]], j) for j in range(m)])
-                 for i in range(1, k - 1)] if tol > 0.0 else []
-    b_cone = [np.concatenate([[tol], points[i]]) for i in range(1, k - 1)] if tol > 0.0 else []
+    # (tol, waypoint - p(tau_i)) in a second-order cone for every inner waypoint: its
+    # rows (0; joint j's interpolation row at tau_i for every j)
+    cones = 0 if tol == 0.0 else k - 2
+    row = interp[1:k - 1].tocoo()
+    joints = np.arange(m)[None, :]
+    a_cone = sp.csr_matrix((np.repeat(row.data, m),
+                            ((row.row[:, None] * (m + 1) + 1 + joints).ravel(),
+                             (row.col[:, None] + n * joints).ravel())),
+                           shape=(cones * (m + 1), nv)) if cones else sp.csr_matrix((0, nv))
+    b_cone = np.column_stack([np.full(cones, tol), points[1:1 + cones]]).ravel()
     h = np.diff(knots)
     c = np.zeros(nv)
     c[i_seg:i_joint] = h
     c[i_joint:] = JOINT_WEIGHT * h.sum()
     a_eq = sp.vstack(eqs)
-    a_all = sp.vstack([a_eq, ineq] + cone_rows).tocsc()
+    a_all = sp.vstack([a_eq, ineq, a_cone]).tocsc()
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = LP_TOL
-    sol = clarabel.DefaultSolver(sp.csc_matrix((nv, nv)), c, a_all, np.concatenate([b_eq] + rhs + b_cone),
+    sol = clarabel.DefaultSolver(sp.csc_matrix((nv, nv)), c, a_all, np.concatenate([b_eq] + rhs + [b_cone]),
                                  [clarabel.ZeroConeT(a_eq.shape[0]), clarabel.NonnegativeConeT(ineq.shape[0])]
-                                 + [clarabel.SecondOrderConeT(m + 1)] * len(cone_rows),
+                                 + [clarabel.SecondOrderConeT(m + 1)] * cones,
                                  settings).solve()
     if str(sol.status).split(".")[-1] not in ("Solved", "AlmostSolved"):
         return None
