@@ -254,12 +254,14 @@ def _solve(points, knots, vlim, alim, jlim, lo, hi, tol=0.0):
     # (tol, waypoint - p(tau_i)) in a second-order cone for every inner waypoint: its
     # rows (0; joint j's interpolation row at tau_i for every j)
     cones = 0 if tol == 0.0 else k - 2
-    row = interp[1:k - 1].tocoo()
-    joints = np.arange(m)[None, :]
-    a_cone = sp.csr_matrix((np.repeat(row.data, m),
-                            ((row.row[:, None] * (m + 1) + 1 + joints).ravel(),
-                             (row.col[:, None] + n * joints).ravel())),
-                           shape=(cones * (m + 1), nv)) if cones else sp.csr_matrix((0, nv))
+    a_cone = sp.csr_matrix((0, nv))
+    if cones:
+        row = interp[1:k - 1].tocoo()
+        joints = np.arange(m)[None, :]
+        a_cone = sp.csr_matrix((np.repeat(row.data, m),
+                                ((row.row[:, None] * (m + 1) + 1 + joints).ravel(),
+                                 (row.col[:, None] + n * joints).ravel())),
+                               shape=(cones * (m + 1), nv))
     b_cone = np.column_stack([np.full(cones, tol), points[1:1 + cones]]).ravel()
     h = np.diff(knots)
     c = np.zeros(nv)

@@ -348,7 +348,7 @@ ROUNDOFF_LOWER = 10.0
 
 #: Attempts past MAX_TIGHTEN_MOVING for an excess at the round-off (the last
 #: attempt's, lowered everywhere as above): a moving state cannot be slowed down
-#: uniformly, and such a timing was refused for an excess of 4e-8 of a limit.
+#: uniformly, and without them a timing 4e-8 over a limit is refused.
 ROUNDOFF_ROUNDS = 2
 
 #: Relative slack of the final check (round-off).
