@@ -277,27 +277,47 @@ def run_saddles(quick: bool):
     return rows
 
 
-def run_waypoints(quick: bool):
+#: The waypoint sets' limits, every joint alike: v [rad/s], a [rad/s^2], j [rad/s^3].
+WAYPOINT_LIMITS = (2.0, 10.0, 100.0)
+
+
+def waypoint_sets(n_sets: int = 8) -> list:
+    """The random 6-axis waypoint sets (5-20 waypoints, steps up to 0.6 rad per joint)."""
+    rng = np.random.default_rng(2026)
+    out = []
+    for _ in range(n_sets):
+        n = int(rng.integers(5, 21))
+        out.append(np.cumsum(rng.uniform(-0.6, 0.6, (n, 6)), axis=0))
+    return out
+
+
+def stopping_at_each(W: np.ndarray) -> list:
+    """ruckig's rest-to-rest trajectory between every two consecutive waypoints of ``W``
+    (n, m) under :data:`WAYPOINT_LIMITS`."""
     from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-    rng = np.random.default_rng(2026)
-    lims = [AxisLimits(2.0, 10.0, 100.0) for _ in range(6)]
+    m = W.shape[1]
+    otg = Ruckig(m)
+    out = []
+    for i in range(W.shape[0] - 1):
+        inp = InputParameter(m)
+        inp.current_position = W[i].tolist()
+        inp.target_position = W[i + 1].tolist()
+        v, a, j = WAYPOINT_LIMITS
+        inp.max_velocity, inp.max_acceleration, inp.max_jerk = [v] * m, [a] * m, [j] * m
+        traj = Trajectory(m)
+        if otg.calculate(inp, traj) not in (Result.Working, Result.Finished):
+            raise RuntimeError("ruckig failed on a rest-to-rest stretch")
+        out.append(traj)
+    return out
+
+
+def run_waypoints(quick: bool):
+    lims = [AxisLimits(*WAYPOINT_LIMITS) for _ in range(6)]
     rows = []
-    for _ in range(2 if quick else 8):
-        n = int(rng.integers(5, 21))
-        W = np.cumsum(rng.uniform(-0.6, 0.6, (n, 6)), axis=0)
-        otg = Ruckig(6)
-        stop = 0.0
-        for i in range(n - 1):
-            inp = InputParameter(6)
-            inp.current_position = W[i].tolist()
-            inp.target_position = W[i + 1].tolist()
-            inp.max_velocity = [2.0] * 6
-            inp.max_acceleration = [10.0] * 6
-            inp.max_jerk = [100.0] * 6
-            out = Trajectory(6)
-            assert otg.calculate(inp, out) in (Result.Working, Result.Finished)
-            stop += out.duration
+    for W in waypoint_sets(2 if quick else 8):
+        n = W.shape[0]
+        stop = sum(traj.duration for traj in stopping_at_each(W))
         for blend in (0.0, 0.1):
             t0 = time.perf_counter()
             tr = plan_waypoints(W, lims, blend=blend)

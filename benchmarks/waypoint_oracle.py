@@ -59,6 +59,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+from bench_paths import WAYPOINT_LIMITS, stopping_at_each, waypoint_sets  # noqa: E402
 from nlp_oracle import IPOPT_MAX_ITER, IPOPT_TOL, WARM  # noqa: E402
 
 from trajkit import AxisLimits  # noqa: E402
@@ -67,8 +68,8 @@ from trajkit.timing import plan_waypoints  # noqa: E402
 #: Equal time steps per stretch between two waypoints (one constant jerk per step).
 STEPS = 24
 
-#: The benchmark's limits (``bench_paths.run_waypoints``): every joint alike.
-V_MAX, A_MAX, J_MAX = 2.0, 10.0, 100.0
+#: The benchmark's limits (``bench_paths.WAYPOINT_LIMITS``): every joint alike.
+V_MAX, A_MAX, J_MAX = WAYPOINT_LIMITS
 
 #: The program's waypoint balls are this much smaller than ``blend`` [rad] (IPOPT meets
 #: its constraints to its tolerance; the verification then finds no miss).
@@ -76,16 +77,6 @@ BLEND_MARGIN = 1e-7
 
 #: Samples per stretch for the passing times of trajkit's trajectory (closest approach).
 PASS_SAMPLES = 2000
-
-
-def waypoint_sets(n_sets: int = 8):
-    """The benchmark's random 6-axis sets (the same generator and draws)."""
-    rng = np.random.default_rng(2026)
-    out = []
-    for _ in range(n_sets):
-        n = int(rng.integers(5, 21))
-        out.append(np.cumsum(rng.uniform(-0.6, 0.6, (n, 6)), axis=0))
-    return out
 
 
 # --------------------------------------------------------------------------- starts
@@ -119,22 +110,8 @@ def start_from_trajkit(tr, W: np.ndarray, steps: int):
 def start_from_stopping(W: np.ndarray, steps: int):
     """Stopping at every waypoint (ruckig rest-to-rest per stretch) on the program's grid,
     and its duration."""
-    from ruckig import InputParameter, Result, Ruckig, Trajectory
-
     m = W.shape[1]
-    otg = Ruckig(m)
-    trajs = []
-    for i in range(W.shape[0] - 1):
-        inp = InputParameter(m)
-        inp.current_position = W[i].tolist()
-        inp.target_position = W[i + 1].tolist()
-        inp.max_velocity = [V_MAX] * m
-        inp.max_acceleration = [A_MAX] * m
-        inp.max_jerk = [J_MAX] * m
-        out = Trajectory(m)
-        if otg.calculate(inp, out) not in (Result.Working, Result.Finished):
-            raise RuntimeError("ruckig failed on a rest-to-rest stretch")
-        trajs.append(out)
+    trajs = stopping_at_each(W)
     times = np.concatenate([[0.0], np.cumsum([tj.duration for tj in trajs])])
 
     def sample(t):
